@@ -1,0 +1,420 @@
+//! Safe wrapper over Intel Embree (3 or 4, found by build.rs) through our C
+//! shim. This is the only module allowed to contain `unsafe` code.
+//!
+//! Ownership follows the types: a [`Device`] makes a [`SceneBuilder`], which
+//! owns the triangle buffers it shares with Embree and becomes an immutable,
+//! thread-safe [`Scene`] on [`SceneBuilder::commit`]. Errors Embree reports
+//! through its error callback come back as [`EmbreeError`] results.
+#![allow(unsafe_code)]
+
+mod sys;
+
+use std::ffi::{CStr, CString};
+use std::ptr::NonNull;
+use std::sync::Arc;
+
+use glam::Vec3;
+
+/// An error reported by Embree (through the device's error callback or
+/// `rtcGetDeviceError`), or by the shim when Embree returned no object.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("Embree error {code} ({kind}) while {context}: {message}")]
+pub struct EmbreeError {
+    /// Embree's `RTCError` value.
+    pub code: i32,
+    /// Embree's name for the code.
+    pub kind: &'static str,
+    /// What lightcuts was doing.
+    pub context: &'static str,
+    /// Embree's message.
+    pub message: String,
+}
+
+fn error_kind(code: i32) -> &'static str {
+    match code {
+        1 => "RTC_ERROR_UNKNOWN",
+        2 => "RTC_ERROR_INVALID_ARGUMENT",
+        3 => "RTC_ERROR_INVALID_OPERATION",
+        4 => "RTC_ERROR_OUT_OF_MEMORY",
+        5 => "RTC_ERROR_UNSUPPORTED_CPU",
+        6 => "RTC_ERROR_CANCELLED",
+        _ => "RTC_ERROR_OTHER",
+    }
+}
+
+fn to_error(raw: &sys::LcError, context: &'static str) -> Option<EmbreeError> {
+    if raw.code == 0 {
+        return None;
+    }
+    // SAFETY: the shim always NUL-terminates `message` (copy_message writes a
+    // '\0' at its last byte, and memset/zero-initialisation fills the rest).
+    let message = unsafe { CStr::from_ptr(raw.message.as_ptr()) };
+    Some(EmbreeError {
+        code: raw.code,
+        kind: error_kind(raw.code),
+        context,
+        message: message.to_string_lossy().into_owned(),
+    })
+}
+
+/// The version of the Embree library lightcuts was built against, e.g. `(3, 13, 5)`.
+#[must_use]
+pub fn version() -> (u32, u32, u32) {
+    // SAFETY: a pure function returning a compile-time constant.
+    let v = unsafe { sys::lc_embree_version() } as u32;
+    (v / 10000, (v / 100) % 100, v % 100)
+}
+
+/// Turns on flush-to-zero and denormals-are-zero for the calling thread, as
+/// Embree's documentation recommends for every thread that traces rays (the
+/// renderer calls it from each worker thread's start handler).
+pub fn set_flush_denormals() {
+    // SAFETY: only changes the calling thread's MXCSR floating-point modes.
+    unsafe { sys::lc_set_flush_denormals() }
+}
+
+/// Whether flush-to-zero and denormals-are-zero are both on for this thread.
+#[must_use]
+pub fn flush_denormals_enabled() -> bool {
+    // SAFETY: only reads the calling thread's MXCSR.
+    unsafe { sys::lc_flush_denormals_enabled() != 0 }
+}
+
+struct DeviceHandle(NonNull<sys::LcDevice>);
+
+// SAFETY: an Embree device is thread-safe (Embree's docs: all API calls on a
+// device may come from any thread), and the shim guards the recorded error
+// with a mutex.
+unsafe impl Send for DeviceHandle {}
+// SAFETY: as for Send; shared references only call thread-safe functions.
+unsafe impl Sync for DeviceHandle {}
+
+impl Drop for DeviceHandle {
+    fn drop(&mut self) {
+        // SAFETY: the handle came from lc_device_new and is released once; every
+        // scene holds an Arc to this handle, so none outlives it.
+        unsafe { sys::lc_device_release(self.0.as_ptr()) }
+    }
+}
+
+/// An Embree device. Cheap to clone (reference-counted).
+#[derive(Clone)]
+pub struct Device {
+    handle: Arc<DeviceHandle>,
+}
+
+impl Device {
+    /// Creates a device with Embree's default configuration.
+    pub fn try_new() -> Result<Self, EmbreeError> {
+        let config = CString::new("").expect("no interior NUL");
+        let mut raw = sys::LcError::default();
+        // SAFETY: config is a valid C string; raw is a valid out-parameter.
+        let ptr = unsafe { sys::lc_device_new(config.as_ptr(), &mut raw) };
+        match NonNull::new(ptr) {
+            Some(ptr) => Ok(Self { handle: Arc::new(DeviceHandle(ptr)) }),
+            None => Err(to_error(&raw, "creating the device").unwrap_or(EmbreeError {
+                code: 1,
+                kind: error_kind(1),
+                context: "creating the device",
+                message: "rtcNewDevice returned NULL".into(),
+            })),
+        }
+    }
+
+    /// Returns the first error Embree reported since the last check, if any.
+    fn check(&self, context: &'static str) -> Result<(), EmbreeError> {
+        let mut raw = sys::LcError::default();
+        // SAFETY: the device pointer is live (owned by self); raw is a valid out-parameter.
+        unsafe { sys::lc_device_take_error(self.handle.0.as_ptr(), &mut raw) };
+        match to_error(&raw, context) {
+            Some(error) => Err(error),
+            None => Ok(()),
+        }
+    }
+
+    /// Starts a new scene on this device.
+    pub fn try_new_scene(&self) -> Result<SceneBuilder, EmbreeError> {
+        // SAFETY: the device pointer is live for as long as self.
+        let ptr = unsafe { sys::lc_scene_new(self.handle.0.as_ptr()) };
+        self.check("creating a scene")?;
+        let ptr = NonNull::new(ptr).ok_or(EmbreeError {
+            code: 4,
+            kind: error_kind(4),
+            context: "creating a scene",
+            message: "rtcNewScene returned NULL".into(),
+        })?;
+        Ok(SceneBuilder { raw: SceneHandle { ptr, device: self.clone() }, meshes: Vec::new() })
+    }
+}
+
+/// Number of `f32`s to allocate for `vertex_count` float3 vertices shared with
+/// Embree: Embree reads each vertex with a 16-byte SSE load, so the buffer
+/// must extend at least 16 bytes past the start of the last vertex (one float
+/// more than 3 per vertex). Embree's `rtcSetSharedGeometryBuffer` docs.
+#[must_use]
+pub fn padded_vertex_floats(vertex_count: usize) -> usize {
+    if vertex_count == 0 {
+        // Embree still may touch the pointer: keep one 16-byte load readable.
+        4
+    } else {
+        (vertex_count - 1) * 3 + 4
+    }
+}
+
+/// A triangle mesh's buffers, shared with Embree (never moved once attached:
+/// the Vecs are not touched again, so their heap storage stays put).
+struct SharedMesh {
+    _vertices: Vec<f32>,
+    _indices: Vec<u32>,
+}
+
+struct SceneHandle {
+    ptr: NonNull<sys::LcScene>,
+    device: Device,
+}
+
+// SAFETY: a committed Embree scene may be traced from any number of threads
+// at once (Embree's docs: rtcIntersect1/rtcOccluded1 are thread-safe on a
+// committed scene); the builder is only mutated through &mut.
+unsafe impl Send for SceneHandle {}
+// SAFETY: as for Send; &Scene only exposes the thread-safe query functions.
+unsafe impl Sync for SceneHandle {}
+
+impl Drop for SceneHandle {
+    fn drop(&mut self) {
+        // SAFETY: created by lc_scene_new, released once; the device outlives it
+        // because self.device keeps it alive.
+        unsafe { sys::lc_scene_release(self.ptr.as_ptr()) }
+    }
+}
+
+/// A scene being assembled: attach meshes, then [`commit`](Self::commit).
+pub struct SceneBuilder {
+    raw: SceneHandle,
+    meshes: Vec<SharedMesh>,
+}
+
+/// Geometry id of an attached mesh (Embree's geomID).
+pub type GeometryId = u32;
+
+/// An error in the data handed to [`SceneBuilder::attach_triangles`].
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+pub enum MeshError {
+    /// An index refers past the vertex list (caller's data is malformed).
+    #[error("triangle {triangle} refers to vertex {index}, but the mesh has {vertex_count} vertices")]
+    IndexOutOfRange { triangle: usize, index: u32, vertex_count: usize },
+    /// A vertex coordinate is NaN or infinite.
+    #[error("vertex {vertex} is not finite")]
+    NonFiniteVertex { vertex: usize },
+    /// Embree rejected the buffers.
+    #[error(transparent)]
+    Embree(#[from] EmbreeError),
+}
+
+impl SceneBuilder {
+    /// Attaches a triangle mesh, copying its data into buffers padded as
+    /// Embree requires. Indices are checked against the vertex count.
+    pub fn attach_triangles(
+        &mut self,
+        vertices: &[Vec3],
+        triangles: &[[u32; 3]],
+    ) -> Result<GeometryId, MeshError> {
+        if let Some(vertex) = vertices.iter().position(|v| !v.is_finite()) {
+            return Err(MeshError::NonFiniteVertex { vertex });
+        }
+        for (triangle, tri) in triangles.iter().enumerate() {
+            for &index in tri {
+                if index as usize >= vertices.len() {
+                    return Err(MeshError::IndexOutOfRange {
+                        triangle,
+                        index,
+                        vertex_count: vertices.len(),
+                    });
+                }
+            }
+        }
+        let mut vertex_floats = vec![0.0f32; padded_vertex_floats(vertices.len())];
+        for (i, v) in vertices.iter().enumerate() {
+            vertex_floats[3 * i..3 * i + 3].copy_from_slice(&v.to_array());
+        }
+        // Index buffers are read element-wise, but keep them 16-byte readable too.
+        let mut index_u32 = Vec::with_capacity(triangles.len() * 3 + 1);
+        index_u32.extend(triangles.iter().flatten().copied());
+        index_u32.push(0);
+        // SAFETY: both buffers are live heap allocations owned by self.meshes
+        // until the scene is dropped (they are pushed below and never mutated or
+        // reallocated), their lengths cover the counts passed, the vertex buffer
+        // is padded for 16-byte loads, and all indices were checked in range.
+        let id = unsafe {
+            sys::lc_scene_attach_triangles(
+                self.raw.ptr.as_ptr(),
+                vertex_floats.as_ptr(),
+                vertices.len(),
+                index_u32.as_ptr(),
+                triangles.len(),
+            )
+        };
+        self.meshes.push(SharedMesh { _vertices: vertex_floats, _indices: index_u32 });
+        self.raw.device.check("attaching a triangle mesh")?;
+        if id == sys::LC_INVALID_ID {
+            return Err(MeshError::Embree(EmbreeError {
+                code: 1,
+                kind: error_kind(1),
+                context: "attaching a triangle mesh",
+                message: "rtcNewGeometry failed".into(),
+            }));
+        }
+        Ok(id)
+    }
+
+    /// Builds Embree's acceleration structure; the result is read-only and
+    /// may be traced from many threads.
+    pub fn commit(self) -> Result<Scene, EmbreeError> {
+        // SAFETY: the scene pointer is live; commit is called once, from one thread.
+        unsafe { sys::lc_scene_commit(self.raw.ptr.as_ptr()) };
+        self.raw.device.check("committing the scene")?;
+        Ok(Scene { raw: self.raw, _meshes: self.meshes })
+    }
+}
+
+/// A ray: origin, direction and the parametric interval `[t_near, t_far]`
+/// measured in lengths of `direction`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Ray {
+    pub origin: Vec3,
+    pub direction: Vec3,
+    pub t_near: f32,
+    pub t_far: f32,
+}
+
+impl Ray {
+    fn to_sys(self) -> sys::LcRay {
+        sys::LcRay {
+            org: self.origin.to_array(),
+            tnear: self.t_near,
+            dir: self.direction.to_array(),
+            tfar: self.t_far,
+        }
+    }
+}
+
+/// The closest hit of a ray.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Hit {
+    /// Ray parameter of the hit.
+    pub t: f32,
+    /// Barycentric coordinates: the hit is `(1-u-v) p0 + u p1 + v p2`.
+    pub u: f32,
+    pub v: f32,
+    /// Unnormalised geometric normal, `(p1 - p0) x (p2 - p0)` (Embree's convention).
+    pub ng: Vec3,
+    pub geometry: GeometryId,
+    pub primitive: u32,
+}
+
+/// A committed, read-only scene. `Sync`: trace from any number of threads.
+pub struct Scene {
+    raw: SceneHandle,
+    _meshes: Vec<SharedMesh>,
+}
+
+impl Scene {
+    /// The closest hit along `ray`, or `None`.
+    #[must_use]
+    pub fn intersect(&self, ray: &Ray) -> Option<Hit> {
+        let ray = ray.to_sys();
+        let mut hit = sys::LcHit::default();
+        // SAFETY: the scene is committed and live; ray and hit are valid for the call.
+        let found = unsafe { sys::lc_intersect1(self.raw.ptr.as_ptr(), &ray, &mut hit) };
+        (found != 0).then(|| from_sys_hit(&hit))
+    }
+
+    /// Closest hits of many rays in one call into Embree.
+    pub fn intersect_batch(&self, rays: &[Ray], hits: &mut Vec<Option<Hit>>) {
+        let raw_rays: Vec<sys::LcRay> = rays.iter().map(|r| r.to_sys()).collect();
+        let mut raw_hits = vec![sys::LcHit::default(); rays.len()];
+        // SAFETY: both arrays hold rays.len() elements; the scene is committed.
+        unsafe {
+            sys::lc_intersect_batch(
+                self.raw.ptr.as_ptr(),
+                raw_rays.as_ptr(),
+                raw_hits.as_mut_ptr(),
+                rays.len(),
+            )
+        };
+        hits.clear();
+        hits.extend(
+            raw_hits.iter().map(|h| (h.geom_id != sys::LC_INVALID_ID).then(|| from_sys_hit(h))),
+        );
+    }
+
+    /// Whether anything blocks `ray` inside `[t_near, t_far]`.
+    #[must_use]
+    pub fn occluded(&self, ray: &Ray) -> bool {
+        let ray = ray.to_sys();
+        // SAFETY: the scene is committed and live; ray is valid for the call.
+        unsafe { sys::lc_occluded1(self.raw.ptr.as_ptr(), &ray) != 0 }
+    }
+
+    /// Occlusion of many rays in one call into Embree (what the renderer
+    /// uses). `occluded` is resized to `rays.len()`.
+    pub fn occluded_batch(&self, rays: &[ShadowRay], occluded: &mut Vec<bool>) {
+        occluded.clear();
+        occluded.resize(rays.len(), false);
+        if rays.is_empty() {
+            return;
+        }
+        let mut flags = vec![0u8; rays.len()];
+        // SAFETY: ShadowRay is repr(transparent) over sys::LcRay, so the slice
+        // is a valid array of rays.len() LcRay; flags holds rays.len() bytes.
+        unsafe {
+            sys::lc_occluded_batch(
+                self.raw.ptr.as_ptr(),
+                rays.as_ptr().cast::<sys::LcRay>(),
+                flags.as_mut_ptr(),
+                rays.len(),
+            )
+        };
+        for (out, flag) in occluded.iter_mut().zip(flags) {
+            *out = flag != 0;
+        }
+    }
+}
+
+fn from_sys_hit(hit: &sys::LcHit) -> Hit {
+    Hit {
+        t: hit.t,
+        u: hit.u,
+        v: hit.v,
+        ng: Vec3::from_array(hit.ng),
+        geometry: hit.geom_id,
+        primitive: hit.prim_id,
+    }
+}
+
+/// A ray in the layout the batch occlusion call takes, so a batch is built
+/// once and handed to Embree without copying.
+#[derive(Clone, Copy)]
+#[repr(transparent)]
+pub struct ShadowRay(sys::LcRay);
+
+impl ShadowRay {
+    #[must_use]
+    pub fn new(ray: Ray) -> Self {
+        Self(ray.to_sys())
+    }
+}
+
+impl std::fmt::Debug for ShadowRay {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("ShadowRay")
+            .field("origin", &self.0.org)
+            .field("direction", &self.0.dir)
+            .field("t_near", &self.0.tnear)
+            .field("t_far", &self.0.tfar)
+            .finish()
+    }
+}
+
+#[cfg(test)]
+mod tests;

@@ -1,0 +1,213 @@
+/* lightcuts' Embree shim: the only C in the project. It hides the API
+ * differences between Embree 3 (intersect contexts, default geometry mask
+ * 0xFFFFFFFF) and Embree 4 (argument structs, default geometry mask 1) behind
+ * the types of shim.h. LC_EMBREE_MAJOR is set by build.rs. */
+#include "shim.h"
+
+#include <math.h>
+#include <pthread.h>
+#include <stdlib.h>
+#include <string.h>
+#include <xmmintrin.h>
+#include <pmmintrin.h>
+
+#if LC_EMBREE_MAJOR == 4
+#include <embree4/rtcore.h>
+#elif LC_EMBREE_MAJOR == 3
+#include <embree3/rtcore.h>
+#else
+#error "LC_EMBREE_MAJOR must be 3 or 4"
+#endif
+
+/* Every ray and every geometry uses all mask bits: Embree 4 changed the
+ * default geometry mask from 0xFFFFFFFF to 1, so both are set explicitly. */
+#define LC_MASK_ALL 0xFFFFFFFFu
+
+struct LcDevice {
+    RTCDevice device;
+    pthread_mutex_t lock; /* Embree may call the error callback from any thread */
+    LcError first_error;
+};
+
+struct LcScene {
+    LcDevice* owner;
+    RTCScene scene;
+};
+
+int32_t lc_embree_version(void) { return RTC_VERSION; }
+
+static void copy_message(LcError* error, enum RTCError code, const char* message) {
+    error->code = (int32_t)code;
+    if (message == NULL) message = "";
+    strncpy(error->message, message, sizeof error->message - 1);
+    error->message[sizeof error->message - 1] = '\0';
+}
+
+static void on_error(void* user, enum RTCError code, const char* message) {
+    LcDevice* device = (LcDevice*)user;
+    pthread_mutex_lock(&device->lock);
+    if (device->first_error.code == 0) copy_message(&device->first_error, code, message);
+    pthread_mutex_unlock(&device->lock);
+}
+
+LcDevice* lc_device_new(const char* config, LcError* error) {
+    memset(error, 0, sizeof *error);
+    RTCDevice rtc = rtcNewDevice(config);
+    if (rtc == NULL) {
+        copy_message(error, rtcGetDeviceError(NULL), "rtcNewDevice failed (unsupported CPU or bad config)");
+        return NULL;
+    }
+    LcDevice* device = (LcDevice*)calloc(1, sizeof *device);
+    if (device == NULL) {
+        rtcReleaseDevice(rtc);
+        copy_message(error, RTC_ERROR_OUT_OF_MEMORY, "out of memory allocating the device wrapper");
+        return NULL;
+    }
+    device->device = rtc;
+    pthread_mutex_init(&device->lock, NULL);
+    rtcSetDeviceErrorFunction(rtc, on_error, device);
+    return device;
+}
+
+void lc_device_release(LcDevice* device) {
+    if (device == NULL) return;
+    rtcReleaseDevice(device->device);
+    pthread_mutex_destroy(&device->lock);
+    free(device);
+}
+
+void lc_device_take_error(LcDevice* device, LcError* error) {
+    pthread_mutex_lock(&device->lock);
+    *error = device->first_error;
+    memset(&device->first_error, 0, sizeof device->first_error);
+    pthread_mutex_unlock(&device->lock);
+    if (error->code == 0) {
+        /* Errors raised before the callback was set, or on a path that skips it. */
+        enum RTCError code = rtcGetDeviceError(device->device);
+        if (code != RTC_ERROR_NONE) copy_message(error, code, "Embree device error");
+    }
+}
+
+LcScene* lc_scene_new(LcDevice* device) {
+    RTCScene rtc = rtcNewScene(device->device);
+    if (rtc == NULL) return NULL;
+    LcScene* scene = (LcScene*)calloc(1, sizeof *scene);
+    if (scene == NULL) {
+        rtcReleaseScene(rtc);
+        return NULL;
+    }
+    scene->owner = device;
+    scene->scene = rtc;
+    /* Robust traversal: watertight enough for shadow rays that graze edges. */
+    rtcSetSceneFlags(rtc, RTC_SCENE_FLAG_ROBUST);
+    rtcSetSceneBuildQuality(rtc, RTC_BUILD_QUALITY_HIGH);
+    return scene;
+}
+
+void lc_scene_release(LcScene* scene) {
+    if (scene == NULL) return;
+    rtcReleaseScene(scene->scene);
+    free(scene);
+}
+
+uint32_t lc_scene_attach_triangles(LcScene* scene, const float* vertices, size_t vertex_count,
+                                   const uint32_t* indices, size_t triangle_count) {
+    RTCGeometry geometry = rtcNewGeometry(scene->owner->device, RTC_GEOMETRY_TYPE_TRIANGLE);
+    if (geometry == NULL) return LC_INVALID_ID;
+    rtcSetSharedGeometryBuffer(geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, vertices, 0,
+                               3 * sizeof(float), vertex_count);
+    rtcSetSharedGeometryBuffer(geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, indices, 0,
+                               3 * sizeof(uint32_t), triangle_count);
+    rtcSetGeometryMask(geometry, LC_MASK_ALL);
+    rtcCommitGeometry(geometry);
+    unsigned int id = rtcAttachGeometry(scene->scene, geometry);
+    rtcReleaseGeometry(geometry); /* the scene holds its own reference */
+    return (uint32_t)id;
+}
+
+void lc_scene_commit(LcScene* scene) { rtcCommitScene(scene->scene); }
+
+static void to_rtc_ray(const LcRay* in, struct RTCRay* out) {
+    out->org_x = in->org[0];
+    out->org_y = in->org[1];
+    out->org_z = in->org[2];
+    out->tnear = in->tnear;
+    out->dir_x = in->dir[0];
+    out->dir_y = in->dir[1];
+    out->dir_z = in->dir[2];
+    out->time = 0.0f;
+    out->tfar = in->tfar;
+    out->mask = LC_MASK_ALL;
+    out->id = 0;
+    out->flags = 0;
+}
+
+static int32_t intersect_one(RTCScene scene, const LcRay* ray, LcHit* hit) {
+    struct RTCRayHit rayhit;
+    to_rtc_ray(ray, &rayhit.ray);
+    rayhit.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+    rayhit.hit.primID = RTC_INVALID_GEOMETRY_ID;
+    rayhit.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+#if LC_EMBREE_MAJOR == 4
+    rtcIntersect1(scene, &rayhit, NULL);
+#else
+    struct RTCIntersectContext context;
+    rtcInitIntersectContext(&context);
+    rtcIntersect1(scene, &context, &rayhit);
+#endif
+    if (rayhit.hit.geomID == RTC_INVALID_GEOMETRY_ID) {
+        memset(hit, 0, sizeof *hit);
+        hit->geom_id = LC_INVALID_ID;
+        hit->prim_id = LC_INVALID_ID;
+        return 0;
+    }
+    hit->t = rayhit.ray.tfar;
+    hit->u = rayhit.hit.u;
+    hit->v = rayhit.hit.v;
+    hit->ng[0] = rayhit.hit.Ng_x;
+    hit->ng[1] = rayhit.hit.Ng_y;
+    hit->ng[2] = rayhit.hit.Ng_z;
+    hit->geom_id = rayhit.hit.geomID;
+    hit->prim_id = rayhit.hit.primID;
+    return 1;
+}
+
+int32_t lc_intersect1(LcScene* scene, const LcRay* ray, LcHit* hit) {
+    return intersect_one(scene->scene, ray, hit);
+}
+
+void lc_intersect_batch(LcScene* scene, const LcRay* rays, LcHit* hits, size_t n) {
+    for (size_t i = 0; i < n; ++i) intersect_one(scene->scene, &rays[i], &hits[i]);
+}
+
+/* Embree 4 removed the ray-stream API (rtcOccluded1M); one call per ray inside
+ * this loop keeps the FFI crossing to one per batch on both majors. */
+static int32_t occluded_one(RTCScene scene, const LcRay* in) {
+    struct RTCRay ray;
+    to_rtc_ray(in, &ray);
+#if LC_EMBREE_MAJOR == 4
+    rtcOccluded1(scene, &ray, NULL);
+#else
+    struct RTCIntersectContext context;
+    rtcInitIntersectContext(&context);
+    rtcOccluded1(scene, &context, &ray);
+#endif
+    /* Embree sets tfar to -inf when the ray is occluded. */
+    return ray.tfar < 0.0f && isinf(ray.tfar);
+}
+
+int32_t lc_occluded1(LcScene* scene, const LcRay* ray) { return occluded_one(scene->scene, ray); }
+
+void lc_occluded_batch(LcScene* scene, const LcRay* rays, uint8_t* occluded, size_t n) {
+    for (size_t i = 0; i < n; ++i) occluded[i] = (uint8_t)occluded_one(scene->scene, &rays[i]);
+}
+
+void lc_set_flush_denormals(void) {
+    _MM_SET_FLUSH_ZERO_MODE(_MM_FLUSH_ZERO_ON);
+    _MM_SET_DENORMALS_ZERO_MODE(_MM_DENORMALS_ZERO_ON);
+}
+
+int32_t lc_flush_denormals_enabled(void) {
+    return _MM_GET_FLUSH_ZERO_MODE() == _MM_FLUSH_ZERO_ON &&
+           _MM_GET_DENORMALS_ZERO_MODE() == _MM_DENORMALS_ZERO_ON;
+}

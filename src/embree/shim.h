@@ -1,0 +1,89 @@
+/* lightcuts' own C interface to Intel Embree 3 or 4.
+ *
+ * Every Embree type stays inside shim.c: this header declares only our own
+ * plain-C types, so the Rust bindings that bindgen makes from it are the same
+ * for both Embree majors and cannot disagree with Embree's struct layouts
+ * (Embree 4.3's RTCRayHit is 96 bytes, 4.2's was 80).
+ */
+#ifndef LIGHTCUTS_EMBREE_SHIM_H
+#define LIGHTCUTS_EMBREE_SHIM_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* Opaque handles: a device (with its recorded error) and a scene. */
+typedef struct LcDevice LcDevice;
+typedef struct LcScene LcScene;
+
+/* A ray: origin, direction (need not be normalised), and the parametric
+ * interval [tnear, tfar] in units of the direction's length. */
+typedef struct LcRay {
+    float org[3];
+    float tnear;
+    float dir[3];
+    float tfar;
+} LcRay;
+
+/* The closest hit of a ray. geom_id is LC_INVALID_ID on a miss. */
+typedef struct LcHit {
+    float t;
+    float u;
+    float v;
+    float ng[3]; /* unnormalised geometric normal, Embree's convention */
+    uint32_t geom_id;
+    uint32_t prim_id;
+} LcHit;
+
+#define LC_INVALID_ID 0xFFFFFFFFu
+
+/* The first error Embree reported on a device since the last take. */
+typedef struct LcError {
+    int32_t code;       /* Embree's RTCError value; 0 means none */
+    char message[256];  /* NUL-terminated */
+} LcError;
+
+/* The major.minor.patch of the Embree library this shim was compiled against,
+ * as major * 10000 + minor * 100 + patch (Embree's RTC_VERSION). */
+int32_t lc_embree_version(void);
+
+/* Creates a device; NULL on failure, with the reason in *error. */
+LcDevice* lc_device_new(const char* config, LcError* error);
+void lc_device_release(LcDevice* device);
+/* Moves the first recorded error into *error (code 0 when none) and clears it. */
+void lc_device_take_error(LcDevice* device, LcError* error);
+
+LcScene* lc_scene_new(LcDevice* device);
+void lc_scene_release(LcScene* scene);
+/* Attaches a triangle mesh whose buffers stay owned by the caller and must
+ * outlive the scene. vertices: vertex_count float3 with stride 12 bytes and
+ * padding readable by a 16-byte load past the last vertex; indices:
+ * triangle_count uint32 triples. Returns the geometry id, or LC_INVALID_ID. */
+uint32_t lc_scene_attach_triangles(LcScene* scene,
+                                   const float* vertices, size_t vertex_count,
+                                   const uint32_t* indices, size_t triangle_count);
+void lc_scene_commit(LcScene* scene);
+
+/* Closest hit along one ray; returns 1 on a hit, 0 on a miss. */
+int32_t lc_intersect1(LcScene* scene, const LcRay* ray, LcHit* hit);
+/* Closest hits of n rays in one call. */
+void lc_intersect_batch(LcScene* scene, const LcRay* rays, LcHit* hits, size_t n);
+/* Returns 1 when anything blocks the ray inside [tnear, tfar]. */
+int32_t lc_occluded1(LcScene* scene, const LcRay* ray);
+/* occluded[i] = 1 when rays[i] is blocked, in one call for n rays. */
+void lc_occluded_batch(LcScene* scene, const LcRay* rays, uint8_t* occluded, size_t n);
+
+/* Sets flush-to-zero and denormals-are-zero on the calling thread, as Embree's
+ * documentation recommends for every thread that traces rays. */
+void lc_set_flush_denormals(void);
+/* 1 when both modes are on for the calling thread. */
+int32_t lc_flush_denormals_enabled(void);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif

@@ -1,0 +1,197 @@
+//! The Embree wrapper against a brute-force ray-triangle intersector.
+use super::*;
+use crate::sampling::Rng;
+
+/// Möller–Trumbore in f64: the reference answer.
+fn brute_force(vertices: &[Vec3], triangles: &[[u32; 3]], ray: &Ray) -> Option<(f64, usize)> {
+    let o = ray.origin.as_dvec3();
+    let d = ray.direction.as_dvec3();
+    let mut best: Option<(f64, usize)> = None;
+    for (i, tri) in triangles.iter().enumerate() {
+        let p0 = vertices[tri[0] as usize].as_dvec3();
+        let e1 = vertices[tri[1] as usize].as_dvec3() - p0;
+        let e2 = vertices[tri[2] as usize].as_dvec3() - p0;
+        let pv = d.cross(e2);
+        let det = e1.dot(pv);
+        if det.abs() < 1e-14 {
+            continue;
+        }
+        let tv = o - p0;
+        let u = tv.dot(pv) / det;
+        let qv = tv.cross(e1);
+        let v = d.dot(qv) / det;
+        let t = e2.dot(qv) / det;
+        if u < 0.0 || v < 0.0 || u + v > 1.0 {
+            continue;
+        }
+        if t >= f64::from(ray.t_near) && t <= f64::from(ray.t_far) && best.is_none_or(|b| t < b.0) {
+            best = Some((t, i));
+        }
+    }
+    best
+}
+
+fn random_mesh(rng: &mut Rng, triangles: usize) -> (Vec<Vec3>, Vec<[u32; 3]>) {
+    let mut vertices = Vec::new();
+    let mut tris = Vec::new();
+    for t in 0..triangles {
+        let c = Vec3::new(rng.range_f32(-1.0, 1.0), rng.range_f32(-1.0, 1.0), rng.range_f32(-1.0, 1.0));
+        for _ in 0..3 {
+            vertices.push(c + 0.3 * Vec3::new(rng.range_f32(-1.0, 1.0), rng.range_f32(-1.0, 1.0), rng.range_f32(-1.0, 1.0)));
+        }
+        let b = 3 * t as u32;
+        tris.push([b, b + 1, b + 2]);
+    }
+    (vertices, tris)
+}
+
+fn random_ray(rng: &mut Rng) -> Ray {
+    let origin = Vec3::new(rng.range_f32(-2.0, 2.0), rng.range_f32(-2.0, 2.0), rng.range_f32(-2.0, 2.0));
+    let target = Vec3::new(rng.range_f32(-1.0, 1.0), rng.range_f32(-1.0, 1.0), rng.range_f32(-1.0, 1.0));
+    Ray { origin, direction: target - origin, t_near: 0.0, t_far: rng.range_f32(0.2, 3.0) }
+}
+
+/// Whether a ray passes within `tolerance` (in t) of an edge-case decision
+/// where f32 Embree and f64 reference may legitimately disagree.
+fn near_ambiguous(vertices: &[Vec3], triangles: &[[u32; 3]], ray: &Ray) -> bool {
+    // Perturb the ray slightly: if the reference answer changes, the case is ambiguous.
+    let base = brute_force(vertices, triangles, ray).map(|h| h.1);
+    let eps = 1e-4;
+    [Vec3::X, Vec3::Y, Vec3::Z, -Vec3::X, -Vec3::Y, -Vec3::Z].iter().any(|&e| {
+        let mut r = *ray;
+        r.origin += e * eps;
+        let mut far = r;
+        far.t_far *= 1.0 + eps;
+        let mut near = r;
+        near.t_far *= 1.0 - eps;
+        brute_force(vertices, triangles, &r).map(|h| h.1) != base
+            || brute_force(vertices, triangles, &far).map(|h| h.1) != base
+            || brute_force(vertices, triangles, &near).map(|h| h.1) != base
+    })
+}
+
+#[test]
+fn padding_leaves_room_for_a_16_byte_load_past_the_last_vertex() {
+    for n in 1..50usize {
+        let floats = padded_vertex_floats(n);
+        let last_start_bytes = (n - 1) * 12;
+        assert!(floats * 4 >= last_start_bytes + 16, "n={n}");
+        assert!(floats >= 3 * n);
+        // and no more than one float of waste
+        assert!(floats <= 3 * n + 1);
+    }
+    assert!(padded_vertex_floats(0) * 4 >= 16);
+}
+
+#[test]
+fn closest_hit_and_occlusion_match_brute_force_on_random_meshes() {
+    let device = Device::try_new().expect("Embree device");
+    let mut rng = Rng::seeded(42);
+    let mut checked = 0;
+    let mut hits = 0;
+    for _mesh in 0..8 {
+        let (vertices, tris) = random_mesh(&mut rng, 40);
+        let mut builder = device.try_new_scene().unwrap();
+        let id = builder.attach_triangles(&vertices, &tris).unwrap();
+        let scene = builder.commit().unwrap();
+        let rays: Vec<Ray> = (0..500).map(|_| random_ray(&mut rng)).collect();
+        let mut batch = Vec::new();
+        scene.occluded_batch(&rays.iter().map(|r| ShadowRay::new(*r)).collect::<Vec<_>>(), &mut batch);
+        let mut batch_hits = Vec::new();
+        scene.intersect_batch(&rays, &mut batch_hits);
+        for (i, ray) in rays.iter().enumerate() {
+            let single_hit = scene.intersect(ray);
+            let single_occluded = scene.occluded(ray);
+            // batch = single, always, bit for bit
+            assert_eq!(batch[i], single_occluded);
+            assert_eq!(batch_hits[i], single_hit);
+            if near_ambiguous(&vertices, &tris, ray) {
+                continue;
+            }
+            checked += 1;
+            let reference = brute_force(&vertices, &tris, ray);
+            assert_eq!(single_occluded, reference.is_some(), "ray {ray:?}");
+            match (single_hit, reference) {
+                (None, None) => {}
+                (Some(h), Some((t, prim))) => {
+                    hits += 1;
+                    assert_eq!(h.geometry, id);
+                    assert_eq!(h.primitive as usize, prim, "ray {ray:?}");
+                    assert!((f64::from(h.t) - t).abs() <= 1e-4 * t.max(1.0), "t {} vs {t}", h.t);
+                    let tri = tris[prim];
+                    let p = ray.origin + ray.direction * h.t;
+                    let [p0, p1, p2] = tri.map(|k| vertices[k as usize]);
+                    let q = (1.0 - h.u - h.v) * p0 + h.u * p1 + h.v * p2;
+                    assert!((p - q).length() < 1e-3, "barycentrics disagree");
+                    let ng = (p1 - p0).cross(p2 - p0);
+                    assert!((h.ng - ng).length() <= 1e-4 * ng.length().max(1.0));
+                }
+                (a, b) => panic!("Embree {a:?} vs reference {b:?} for {ray:?}"),
+            }
+        }
+    }
+    assert!(checked > 3500, "too many ambiguous rays: {checked}");
+    assert!(hits > 500 && hits < checked, "test should see both hits and misses: {hits}/{checked}");
+}
+
+#[test]
+fn rays_respect_their_interval() {
+    let device = Device::try_new().unwrap();
+    let mut builder = device.try_new_scene().unwrap();
+    // One big triangle in the plane z = 1.
+    let v = [Vec3::new(-10.0, -10.0, 1.0), Vec3::new(10.0, -10.0, 1.0), Vec3::new(0.0, 10.0, 1.0)];
+    builder.attach_triangles(&v, &[[0, 1, 2]]).unwrap();
+    let scene = builder.commit().unwrap();
+    let ray = |t_near, t_far| Ray { origin: Vec3::ZERO, direction: Vec3::Z, t_near, t_far };
+    assert!(scene.occluded(&ray(0.0, 2.0)));
+    assert!(!scene.occluded(&ray(0.0, 0.99)));
+    assert!(!scene.occluded(&ray(1.01, 2.0)));
+    assert_eq!(scene.intersect(&ray(0.0, f32::INFINITY)).map(|h| h.t), Some(1.0));
+    assert!(scene.intersect(&ray(0.0, 0.5)).is_none());
+}
+
+#[test]
+fn several_meshes_report_their_own_ids_and_an_empty_scene_hits_nothing() {
+    let device = Device::try_new().unwrap();
+    let empty = device.try_new_scene().unwrap().commit().unwrap();
+    let ray = Ray { origin: Vec3::ZERO, direction: Vec3::Z, t_near: 0.0, t_far: f32::INFINITY };
+    assert!(empty.intersect(&ray).is_none());
+    assert!(!empty.occluded(&ray));
+    let mut builder = device.try_new_scene().unwrap();
+    let tri = |z: f32| [Vec3::new(-1.0, -1.0, z), Vec3::new(1.0, -1.0, z), Vec3::new(0.0, 1.0, z)];
+    let a = builder.attach_triangles(&tri(2.0), &[[0, 1, 2]]).unwrap();
+    let b = builder.attach_triangles(&tri(1.0), &[[0, 1, 2]]).unwrap();
+    assert_ne!(a, b);
+    let scene = builder.commit().unwrap();
+    assert_eq!(scene.intersect(&ray).unwrap().geometry, b);
+}
+
+#[test]
+fn bad_meshes_are_rejected_before_embree_sees_them() {
+    let device = Device::try_new().unwrap();
+    let mut builder = device.try_new_scene().unwrap();
+    let v = [Vec3::ZERO, Vec3::X, Vec3::Y];
+    assert!(matches!(
+        builder.attach_triangles(&v, &[[0, 1, 3]]),
+        Err(MeshError::IndexOutOfRange { triangle: 0, index: 3, vertex_count: 3 })
+    ));
+    let bad = [Vec3::ZERO, Vec3::new(f32::NAN, 0.0, 0.0), Vec3::Y];
+    assert!(matches!(builder.attach_triangles(&bad, &[[0, 1, 2]]), Err(MeshError::NonFiniteVertex { vertex: 1 })));
+}
+
+#[test]
+fn flush_denormals_is_per_thread() {
+    std::thread::spawn(|| {
+        assert!(!flush_denormals_enabled());
+        set_flush_denormals();
+        assert!(flush_denormals_enabled());
+    })
+    .join()
+    .unwrap();
+}
+
+#[test]
+fn version_is_the_major_build_rs_found() {
+    let (major, _, _) = version();
+    assert_eq!(major.to_string(), env!("LIGHTCUTS_EMBREE_MAJOR"));
+}

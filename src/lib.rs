@@ -1,0 +1,11 @@
+//! lightcuts: a many-light renderer implementing Lightcuts [LC05] on Intel Embree.
+//!
+//! Layout: `embree` (the only `unsafe`), `scene` (file format), `light`
+//! (light types), `light_tree` (agglomerative clustering), `lightcut` (per-point
+//! cuts), `render` (integrator, tiles), `output` (EXR, PNG, comparison), `cli`.
+#![deny(unsafe_code)]
+
+pub mod embree;
+pub mod light;
+pub mod sampling;
+pub mod scene;

@@ -1,0 +1,74 @@
+//! Materials: diffuse (constant or textured albedo) plus Phong specular, plus
+//! a perfect mirror layer. The BRDF is the one [LC05] and the 2010 report use,
+//! and whose bound is in ../shared/LIGHTCUTS.md section 4.
+
+use std::f32::consts::PI;
+
+use glam::{Vec2, Vec3};
+
+use super::texture::Texture;
+
+#[derive(Debug, Clone)]
+pub enum Albedo {
+    Constant(Vec3),
+    /// Index into `Scene::textures`, and uv repeats.
+    Texture { texture: usize, scale: Vec2 },
+}
+
+#[derive(Debug, Clone)]
+pub struct Material {
+    pub name: String,
+    pub albedo: Albedo,
+    /// Phong k_s.
+    pub specular: Vec3,
+    /// Phong exponent n.
+    pub exponent: f32,
+    /// Perfect mirror reflectance.
+    pub mirror: Vec3,
+}
+
+impl Material {
+    /// Diffuse albedo k_d at a surface point.
+    #[must_use]
+    pub fn albedo_at(&self, uv: Vec2, textures: &[Texture]) -> Vec3 {
+        match &self.albedo {
+            Albedo::Constant(c) => *c,
+            Albedo::Texture { texture, scale } => textures[*texture].lookup(uv * *scale),
+        }
+    }
+
+    #[must_use]
+    pub fn has_specular(&self) -> bool {
+        self.specular != Vec3::ZERO
+    }
+
+    #[must_use]
+    pub fn has_mirror(&self) -> bool {
+        self.mirror != Vec3::ZERO
+    }
+}
+
+/// The Phong lobe's normalisation, (n + 2) / (2 pi), so that k_s is the
+/// lobe's directional-hemispherical reflectance at normal incidence.
+#[must_use]
+pub fn phong_normalisation(exponent: f32) -> f32 {
+    (exponent + 2.0) / (2.0 * PI)
+}
+
+/// f_r(wi, wo) = k_d / pi + k_s (n+2)/(2 pi) cos^n(alpha), alpha between wi and
+/// the mirror direction `r` of wo. All directions unit length.
+#[must_use]
+pub fn brdf(kd: Vec3, material: &Material, r: Vec3, wi: Vec3) -> Vec3 {
+    let diffuse = kd * (1.0 / PI);
+    if !material.has_specular() {
+        return diffuse;
+    }
+    let cos_alpha = r.dot(wi).max(0.0);
+    diffuse + material.specular * (phong_normalisation(material.exponent) * cos_alpha.powf(material.exponent))
+}
+
+/// Mirror direction of `wo` about `n` (both unit, pointing away from the surface).
+#[must_use]
+pub fn reflect(wo: Vec3, n: Vec3) -> Vec3 {
+    2.0 * n.dot(wo) * n - wo
+}

@@ -1,0 +1,217 @@
+//! Triangle meshes: generated quads, boxes and spheres, and OBJ files (tobj).
+
+use std::path::Path;
+
+use glam::{Vec2, Vec3};
+
+use super::error::SceneError;
+
+/// A triangle mesh in world space with one material.
+#[derive(Debug, Clone, Default)]
+pub struct Mesh {
+    pub positions: Vec<Vec3>,
+    /// Per-vertex shading normals (unit length), when the shape has them.
+    pub normals: Option<Vec<Vec3>>,
+    /// Per-vertex texture coordinates, when the shape has them.
+    pub uvs: Option<Vec<Vec2>>,
+    pub triangles: Vec<[u32; 3]>,
+    /// Index into `Scene::materials`.
+    pub material: usize,
+}
+
+impl Mesh {
+    /// A parallelogram with corners c, c+u, c+u+v, c+v; uv spans [0,1]^2.
+    #[must_use]
+    pub fn quad(corner: Vec3, u: Vec3, v: Vec3, material: usize) -> Self {
+        Self {
+            positions: vec![corner, corner + u, corner + u + v, corner + v],
+            normals: None,
+            uvs: Some(vec![Vec2::new(0.0, 0.0), Vec2::new(1.0, 0.0), Vec2::new(1.0, 1.0), Vec2::new(0.0, 1.0)]),
+            triangles: vec![[0, 1, 2], [0, 2, 3]],
+            material,
+        }
+    }
+
+    /// An axis-aligned box, six faces with their own vertices (flat shading),
+    /// each face's uv spanning [0,1]^2.
+    #[must_use]
+    pub fn cuboid(min: Vec3, max: Vec3, material: usize) -> Self {
+        let d = max - min;
+        let faces = [
+            (min, Vec3::new(0.0, 0.0, d.z), Vec3::new(0.0, d.y, 0.0)), // -x
+            (Vec3::new(max.x, min.y, min.z), Vec3::new(0.0, d.y, 0.0), Vec3::new(0.0, 0.0, d.z)), // +x
+            (min, Vec3::new(d.x, 0.0, 0.0), Vec3::new(0.0, 0.0, d.z)), // -y
+            (Vec3::new(min.x, max.y, min.z), Vec3::new(0.0, 0.0, d.z), Vec3::new(d.x, 0.0, 0.0)), // +y
+            (min, Vec3::new(0.0, d.y, 0.0), Vec3::new(d.x, 0.0, 0.0)), // -z
+            (Vec3::new(min.x, min.y, max.z), Vec3::new(d.x, 0.0, 0.0), Vec3::new(0.0, d.y, 0.0)), // +z
+        ];
+        let mut mesh = Self { material, uvs: Some(Vec::new()), ..Self::default() };
+        for (corner, u, v) in faces {
+            mesh.append(&Self::quad(corner, u, v, material));
+        }
+        mesh
+    }
+
+    /// A UV sphere with `segments` longitudes and `segments / 2` latitudes,
+    /// smooth normals and (longitude, latitude) texture coordinates.
+    #[must_use]
+    pub fn sphere(center: Vec3, radius: f32, segments: u32, material: usize) -> Self {
+        let slices = segments.max(3);
+        let stacks = (segments / 2).max(2);
+        let mut positions = Vec::new();
+        let mut normals = Vec::new();
+        let mut uvs = Vec::new();
+        for j in 0..=stacks {
+            let theta = std::f32::consts::PI * j as f32 / stacks as f32;
+            for i in 0..=slices {
+                let phi = std::f32::consts::TAU * i as f32 / slices as f32;
+                let n = Vec3::new(theta.sin() * phi.cos(), theta.cos(), theta.sin() * phi.sin());
+                positions.push(center + radius * n);
+                normals.push(n);
+                uvs.push(Vec2::new(i as f32 / slices as f32, j as f32 / stacks as f32));
+            }
+        }
+        let row = slices + 1;
+        let mut triangles = Vec::new();
+        for j in 0..stacks {
+            for i in 0..slices {
+                let a = j * row + i;
+                let b = a + row;
+                // Skip the degenerate triangles at the poles.
+                if j != 0 {
+                    triangles.push([a, a + 1, b]);
+                }
+                if j + 1 != stacks {
+                    triangles.push([a + 1, b + 1, b]);
+                }
+            }
+        }
+        Self { positions, normals: Some(normals), uvs: Some(uvs), triangles, material }
+    }
+
+    /// Appends another mesh's triangles (same material), keeping attributes
+    /// only where both meshes have them.
+    fn append(&mut self, other: &Self) {
+        let base = self.positions.len() as u32;
+        self.positions.extend_from_slice(&other.positions);
+        self.triangles.extend(other.triangles.iter().map(|t| t.map(|i| i + base)));
+        match (&mut self.uvs, &other.uvs) {
+            (Some(a), Some(b)) => a.extend_from_slice(b),
+            _ => self.uvs = None,
+        }
+        match (&mut self.normals, &other.normals) {
+            (Some(a), Some(b)) => a.extend_from_slice(b),
+            _ => self.normals = None,
+        }
+    }
+
+    /// Loads every object of an OBJ file into one mesh, scaled then translated.
+    pub fn load_obj(path: &Path, scale: f32, translate: Vec3, material: usize) -> Result<Self, SceneError> {
+        let options = tobj::LoadOptions { triangulate: true, single_index: true, ..Default::default() };
+        let (models, _materials) = tobj::load_obj(path, &options)
+            .map_err(|e| SceneError::new(path, "OBJ", format!("cannot load mesh: {e}")))?;
+        let mut mesh = Self { material, ..Self::default() };
+        let mut all_normals = true;
+        let mut all_uvs = true;
+        let mut normals = Vec::new();
+        let mut uvs = Vec::new();
+        for model in &models {
+            let m = &model.mesh;
+            let base = mesh.positions.len();
+            let count = m.positions.len() / 3;
+            for (i, p) in m.positions.chunks_exact(3).enumerate() {
+                let v = Vec3::new(p[0], p[1], p[2]);
+                if !v.is_finite() {
+                    return Err(SceneError::new(path, format!("object '{}', vertex {}", model.name, i + 1), "coordinate is not a finite number"));
+                }
+                mesh.positions.push(v * scale + translate);
+            }
+            if m.normals.len() == m.positions.len() {
+                normals.extend(m.normals.chunks_exact(3).map(|n| Vec3::new(n[0], n[1], n[2]).normalize_or_zero()));
+            } else {
+                all_normals = false;
+            }
+            if m.texcoords.len() / 2 == count {
+                uvs.extend(m.texcoords.chunks_exact(2).map(|t| Vec2::new(t[0], t[1])));
+            } else {
+                all_uvs = false;
+            }
+            for (t, tri) in m.indices.chunks_exact(3).enumerate() {
+                for &index in tri {
+                    if index as usize >= count {
+                        return Err(SceneError::new(
+                            path,
+                            format!("object '{}', face {}", model.name, t + 1),
+                            format!("vertex index {} out of range (the object has {count} vertices)", index + 1),
+                        ));
+                    }
+                }
+                mesh.triangles.push([tri[0], tri[1], tri[2]].map(|i| i + base as u32));
+            }
+        }
+        if mesh.triangles.is_empty() {
+            return Err(SceneError::new(path, "OBJ", "the mesh has no faces"));
+        }
+        // Shading normals must be usable everywhere, or not at all.
+        if all_normals && normals.iter().all(|n| n.is_finite() && *n != Vec3::ZERO) {
+            mesh.normals = Some(normals);
+        }
+        if all_uvs && uvs.iter().all(|t| t.is_finite()) {
+            mesh.uvs = Some(uvs);
+        }
+        Ok(mesh)
+    }
+
+    /// Axis-aligned bounds of the positions: (min, max).
+    #[must_use]
+    pub fn bounds(&self) -> (Vec3, Vec3) {
+        self.positions
+            .iter()
+            .fold((Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)), |(lo, hi), &p| (lo.min(p), hi.max(p)))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn area(mesh: &Mesh) -> f32 {
+        mesh.triangles
+            .iter()
+            .map(|t| {
+                let [a, b, c] = t.map(|i| mesh.positions[i as usize]);
+                0.5 * (b - a).cross(c - a).length()
+            })
+            .sum()
+    }
+
+    #[test]
+    fn generated_shapes_have_the_right_area_and_valid_indices() {
+        let q = Mesh::quad(Vec3::ZERO, Vec3::X * 2.0, Vec3::Z * 3.0, 0);
+        assert!((area(&q) - 6.0).abs() < 1e-5);
+        let b = Mesh::cuboid(Vec3::ZERO, Vec3::new(1.0, 2.0, 3.0), 0);
+        assert!((area(&b) - 22.0).abs() < 1e-4);
+        assert_eq!(b.triangles.len(), 12);
+        let s = Mesh::sphere(Vec3::ONE, 2.0, 96, 0);
+        let exact = 4.0 * std::f32::consts::PI * 4.0;
+        assert!((area(&s) - exact).abs() / exact < 0.01);
+        for m in [&q, &b, &s] {
+            assert!(m.triangles.iter().flatten().all(|&i| (i as usize) < m.positions.len()));
+            assert_eq!(m.uvs.as_ref().unwrap().len(), m.positions.len());
+        }
+        for (p, n) in s.positions.iter().zip(s.normals.as_ref().unwrap()) {
+            assert!(((*p - Vec3::ONE) / 2.0 - *n).length() < 1e-5);
+        }
+    }
+
+    #[test]
+    fn box_faces_point_outwards() {
+        let b = Mesh::cuboid(Vec3::splat(-1.0), Vec3::splat(1.0), 0);
+        for t in &b.triangles {
+            let [p0, p1, p2] = t.map(|i| b.positions[i as usize]);
+            let n = (p1 - p0).cross(p2 - p0);
+            let centre = (p0 + p1 + p2) / 3.0;
+            assert!(n.dot(centre) > 0.0, "face at {centre} points inwards");
+        }
+    }
+}
