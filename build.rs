@@ -23,11 +23,18 @@ fn find_embree() -> Option<Embree> {
     for major in [4, 3] {
         for root in &roots {
             let include_dir = root.join("include");
-            if include_dir.join(format!("embree{major}/rtcore_config.h")).is_file() {
+            if include_dir
+                .join(format!("embree{major}/rtcore_config.h"))
+                .is_file()
+            {
                 let lib_dir = [root.join("lib"), root.join("lib64")]
                     .into_iter()
                     .find(|dir| has_library(dir, major));
-                return Some(Embree { major, include_dir, lib_dir });
+                return Some(Embree {
+                    major,
+                    include_dir,
+                    lib_dir,
+                });
             }
         }
     }

@@ -5,7 +5,11 @@
 //! cuts), `render` (integrator, tiles), `output` (EXR, PNG, comparison), `cli`.
 #![deny(unsafe_code)]
 
+pub mod cli;
 pub mod embree;
+pub mod interrupt;
 pub mod light;
+pub mod output;
+pub mod render;
 pub mod sampling;
 pub mod scene;

@@ -1,1 +1,5 @@
-fn main(){}
+//! The `lightcuts` binary: see `lightcuts --help`.
+
+fn main() {
+    std::process::exit(lightcuts::cli::main());
+}

@@ -111,13 +111,17 @@ impl Device {
         // SAFETY: config is a valid C string; raw is a valid out-parameter.
         let ptr = unsafe { sys::lc_device_new(config.as_ptr(), &mut raw) };
         match NonNull::new(ptr) {
-            Some(ptr) => Ok(Self { handle: Arc::new(DeviceHandle(ptr)) }),
-            None => Err(to_error(&raw, "creating the device").unwrap_or(EmbreeError {
-                code: 1,
-                kind: error_kind(1),
-                context: "creating the device",
-                message: "rtcNewDevice returned NULL".into(),
-            })),
+            Some(ptr) => Ok(Self {
+                handle: Arc::new(DeviceHandle(ptr)),
+            }),
+            None => Err(
+                to_error(&raw, "creating the device").unwrap_or(EmbreeError {
+                    code: 1,
+                    kind: error_kind(1),
+                    context: "creating the device",
+                    message: "rtcNewDevice returned NULL".into(),
+                }),
+            ),
         }
     }
 
@@ -143,7 +147,13 @@ impl Device {
             context: "creating a scene",
             message: "rtcNewScene returned NULL".into(),
         })?;
-        Ok(SceneBuilder { raw: SceneHandle { ptr, device: self.clone() }, meshes: Vec::new() })
+        Ok(SceneBuilder {
+            raw: SceneHandle {
+                ptr,
+                device: self.clone(),
+            },
+            meshes: Vec::new(),
+        })
     }
 }
 
@@ -201,8 +211,14 @@ pub type GeometryId = u32;
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
 pub enum MeshError {
     /// An index refers past the vertex list (caller's data is malformed).
-    #[error("triangle {triangle} refers to vertex {index}, but the mesh has {vertex_count} vertices")]
-    IndexOutOfRange { triangle: usize, index: u32, vertex_count: usize },
+    #[error(
+        "triangle {triangle} refers to vertex {index}, but the mesh has {vertex_count} vertices"
+    )]
+    IndexOutOfRange {
+        triangle: usize,
+        index: u32,
+        vertex_count: usize,
+    },
     /// A vertex coordinate is NaN or infinite.
     #[error("vertex {vertex} is not finite")]
     NonFiniteVertex { vertex: usize },
@@ -254,7 +270,10 @@ impl SceneBuilder {
                 triangles.len(),
             )
         };
-        self.meshes.push(SharedMesh { _vertices: vertex_floats, _indices: index_u32 });
+        self.meshes.push(SharedMesh {
+            _vertices: vertex_floats,
+            _indices: index_u32,
+        });
         self.raw.device.check("attaching a triangle mesh")?;
         if id == sys::LC_INVALID_ID {
             return Err(MeshError::Embree(EmbreeError {
@@ -273,7 +292,10 @@ impl SceneBuilder {
         // SAFETY: the scene pointer is live; commit is called once, from one thread.
         unsafe { sys::lc_scene_commit(self.raw.ptr.as_ptr()) };
         self.raw.device.check("committing the scene")?;
-        Ok(Scene { raw: self.raw, _meshes: self.meshes })
+        Ok(Scene {
+            raw: self.raw,
+            _meshes: self.meshes,
+        })
     }
 }
 
@@ -344,7 +366,9 @@ impl Scene {
         };
         hits.clear();
         hits.extend(
-            raw_hits.iter().map(|h| (h.geom_id != sys::LC_INVALID_ID).then(|| from_sys_hit(h))),
+            raw_hits
+                .iter()
+                .map(|h| (h.geom_id != sys::LC_INVALID_ID).then(|| from_sys_hit(h))),
         );
     }
 

@@ -1,0 +1,183 @@
+//! `lightcuts render`: load, build, render, write EXR (and PNG), print statistics.
+
+use std::path::PathBuf;
+use std::time::Instant;
+
+use clap::Args;
+
+use super::{parse_pixel_bounds, parse_resolution, CliError};
+use crate::embree::Device;
+use crate::output::exr::{write_exr, ExrChannels, ExrMetadata};
+use crate::output::preview::write_png;
+use crate::render::integrator::Integrator;
+use crate::render::progress::Progress;
+use crate::render::{self, DirectLighting, Geometry, PassSettings, PixelBounds};
+use crate::scene::{check_resolution, Scene};
+
+#[derive(Debug, Args)]
+pub struct RenderArgs {
+    /// Scene file (TOML, or JSON by its .json extension).
+    pub scene: PathBuf,
+    /// Output OpenEXR file.
+    #[arg(short, long, value_name = "OUT.exr")]
+    pub output: PathBuf,
+    /// Reference mode: every light, one shadow ray each.
+    #[arg(long)]
+    pub exact: bool,
+    /// Film size, overriding the scene's.
+    #[arg(long, value_name = "WxH", value_parser = parse_resolution)]
+    pub resolution: Option<(u32, u32)>,
+    /// Samples per pixel, overriding the scene's.
+    #[arg(long, value_name = "N")]
+    pub spp: Option<u32>,
+    /// Seed of every random choice (sample positions, representatives).
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// Worker threads (0: one per CPU). The image does not depend on it.
+    #[arg(long, default_value_t = 0)]
+    pub threads: usize,
+    /// Render only this half-open window of the full frame, in pixels.
+    #[arg(long, value_name = "x0,x1,y0,y1", value_parser = parse_pixel_bounds)]
+    pub pixel_bounds: Option<[u32; 4]>,
+    /// Write the beauty (R, G, B, A) as 16-bit half floats.
+    #[arg(long)]
+    pub half: bool,
+    /// Also write a tone-mapped sRGB PNG preview.
+    #[arg(long, value_name = "PREVIEW.png")]
+    pub png: Option<PathBuf>,
+    /// Preview exposure in stops (the EXR is never scaled).
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+    pub exposure: f32,
+    /// No progress output.
+    #[arg(long, short)]
+    pub quiet: bool,
+}
+
+/// Film size, samples and window after applying the command-line overrides.
+pub fn pass_settings(
+    scene: &Scene,
+    resolution: Option<(u32, u32)>,
+    spp: Option<u32>,
+    seed: u64,
+    pixel_bounds: Option<[u32; 4]>,
+) -> Result<PassSettings, CliError> {
+    let (width, height) = resolution.unwrap_or((scene.film.width, scene.film.height));
+    check_resolution(&scene.path, "--resolution", width, height)?;
+    let spp = spp.unwrap_or(scene.film.spp);
+    if spp == 0 {
+        return Err(CliError::Usage {
+            flag: "--spp",
+            message: "must be at least 1".into(),
+        });
+    }
+    let bounds = match pixel_bounds {
+        None => PixelBounds::full(width, height),
+        Some([x0, x1, y0, y1]) => {
+            if x0 >= x1 || y0 >= y1 || x1 > width || y1 > height {
+                return Err(CliError::Usage {
+                    flag: "--pixel-bounds",
+                    message: format!("{x0},{x1},{y0},{y1} is not a non-empty window inside the {width}x{height} frame"),
+                });
+            }
+            PixelBounds { x0, x1, y0, y1 }
+        }
+    };
+    Ok(PassSettings {
+        width,
+        height,
+        spp,
+        seed,
+        bounds,
+    })
+}
+
+pub fn run(args: &RenderArgs) -> Result<(), CliError> {
+    let scene = Scene::load(&args.scene)?;
+    let settings = pass_settings(
+        &scene,
+        args.resolution,
+        args.spp,
+        args.seed,
+        args.pixel_bounds,
+    )?;
+    if !args.exposure.is_finite() {
+        return Err(CliError::Usage {
+            flag: "--exposure",
+            message: format!("must be finite, got {}", args.exposure),
+        });
+    }
+    let pool = render::thread_pool(args.threads).map_err(|e| CliError::Threads {
+        threads: args.threads,
+        message: e.to_string(),
+    })?;
+    let device = Device::try_new()?;
+    let geometry = Geometry::try_new(&device, &scene).map_err(|source| CliError::Geometry {
+        file: scene.path.clone(),
+        source,
+    })?;
+    let camera = scene.camera(settings.width, settings.height);
+    let integrator = Integrator {
+        geometry: &geometry,
+        lights: &scene.lights,
+        direct: DirectLighting::Exact,
+        max_mirror_depth: scene.max_mirror_depth,
+    };
+    let progress = Progress::for_stderr("render", args.quiet);
+    let start = Instant::now();
+    let (film, stats) = pool.install(|| render::render(&integrator, &camera, &settings, &progress));
+    let seconds = start.elapsed().as_secs_f64();
+
+    let meta = ExrMetadata {
+        scene_file: scene.path.clone(),
+        render_mode: "exact".into(),
+        render_seconds: seconds,
+        lights: scene.lights.len() as u64,
+        spp: settings.spp,
+        seed: settings.seed,
+    };
+    write_exr(
+        &args.output,
+        &film,
+        ExrChannels {
+            half_beauty: args.half,
+            lightcut_aovs: false,
+        },
+        &meta,
+    )?;
+    if let Some(png) = &args.png {
+        write_png(png, &film, args.exposure)?;
+    }
+
+    let rays = stats.shading.shadow_rays;
+    let b = settings.bounds;
+    println!(
+        "lightcuts {} (Embree {}.{}.{})",
+        env!("CARGO_PKG_VERSION"),
+        crate::embree::version().0,
+        crate::embree::version().1,
+        crate::embree::version().2
+    );
+    println!("  scene            {}", scene.path.display());
+    println!("  lights           {}", scene.lights.len());
+    println!("  triangles        {}", scene.triangle_count());
+    println!(
+        "  image            {}x{}, window {}x{} at ({}, {}), {} spp",
+        settings.width,
+        settings.height,
+        b.width(),
+        b.height(),
+        b.x0,
+        b.y0,
+        settings.spp
+    );
+    println!("  mode             exact");
+    println!("  render time      {seconds:.3} s");
+    println!("  camera rays      {}", stats.camera_rays);
+    println!("  shadow rays      {rays}");
+    println!(
+        "  shadow rays/s    {:.2} M",
+        rays as f64 / seconds.max(1e-9) / 1e6
+    );
+    println!("  output           {}", args.output.display());
+    Ok(())
+}

@@ -1,0 +1,130 @@
+//! OpenEXR output: single part, scanlines, ZIP compression. Channels `R,G,B,A`,
+//! `albedo.R/G/B`, `N.X/Y/Z`, `Z`, plus lightcuts' `lightcuts.cut_size` and
+//! `lightcuts.shadow_rays` when the render mode produces them. The data window
+//! is the rendered window; the display window the full frame.
+
+use std::path::{Path, PathBuf};
+
+use exr::prelude::*;
+
+use super::{write_atomically, OutputError};
+use crate::render::Film;
+
+/// Header attributes describing how the image was made.
+#[derive(Debug, Clone)]
+pub struct ExrMetadata {
+    pub scene_file: PathBuf,
+    /// `exact` or `lightcuts error=0.02 max_cut=1000`.
+    pub render_mode: String,
+    pub render_seconds: f64,
+    pub lights: u64,
+    pub spp: u32,
+    pub seed: u64,
+}
+
+/// Which channels to write.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct ExrChannels {
+    /// 16-bit half floats for the beauty (R, G, B, A); AOVs stay 32-bit.
+    pub half_beauty: bool,
+    /// Whether to write the `lightcuts.*` AOVs.
+    pub lightcut_aovs: bool,
+}
+
+/// Largest finite half float: beauty values beyond it are clamped, never Inf.
+const HALF_MAX: f32 = 65504.0;
+
+pub fn write_exr(
+    path: &Path,
+    film: &Film,
+    channels: ExrChannels,
+    meta: &ExrMetadata,
+) -> std::result::Result<(), OutputError> {
+    let b = film.bounds;
+    let size = (b.width() as usize, b.height() as usize);
+    let column = |f: &dyn Fn(&crate::render::Pixel) -> f32| -> Vec<f32> {
+        film.pixels.iter().map(f).collect()
+    };
+    let beauty = |name: &str, values: Vec<f32>| {
+        if channels.half_beauty {
+            AnyChannel::new(
+                name,
+                FlatSamples::F16(
+                    values
+                        .into_iter()
+                        .map(|v| f16::from_f32(v.min(HALF_MAX)))
+                        .collect(),
+                ),
+            )
+        } else {
+            AnyChannel::new(name, FlatSamples::F32(values))
+        }
+    };
+    let full = |name: &str, values: Vec<f32>| AnyChannel::new(name, FlatSamples::F32(values));
+    let mut list: Vec<AnyChannel<FlatSamples>> = vec![
+        beauty("R", column(&|p| p.rgb[0])),
+        beauty("G", column(&|p| p.rgb[1])),
+        beauty("B", column(&|p| p.rgb[2])),
+        beauty("A", column(&|p| p.alpha)),
+        full("albedo.R", column(&|p| p.albedo[0])),
+        full("albedo.G", column(&|p| p.albedo[1])),
+        full("albedo.B", column(&|p| p.albedo[2])),
+        full("N.X", column(&|p| p.normal[0])),
+        full("N.Y", column(&|p| p.normal[1])),
+        full("N.Z", column(&|p| p.normal[2])),
+        full("Z", column(&|p| p.z)),
+    ];
+    if channels.lightcut_aovs {
+        list.push(full("lightcuts.cut_size", column(&|p| p.cut_size)));
+        list.push(full("lightcuts.shadow_rays", column(&|p| p.shadow_rays)));
+    }
+
+    let mut attributes = LayerAttributes::default();
+    attributes.layer_position = Vec2(b.x0 as i32, b.y0 as i32);
+    attributes.software_name = Some(Text::from(concat!("lightcuts ", env!("CARGO_PKG_VERSION"))));
+    let mut other = |key: &str, value: AttributeValue| {
+        attributes.other.insert(Text::from(key), value);
+    };
+    other(
+        "lightcuts:sceneFile",
+        AttributeValue::Text(Text::from(meta.scene_file.display().to_string().as_str())),
+    );
+    other(
+        "lightcuts:renderMode",
+        AttributeValue::Text(Text::from(meta.render_mode.as_str())),
+    );
+    other(
+        "lightcuts:renderTimeSeconds",
+        AttributeValue::F64(meta.render_seconds),
+    );
+    other(
+        "lightcuts:lights",
+        AttributeValue::Text(Text::from(meta.lights.to_string().as_str())),
+    );
+    other(
+        "lightcuts:samplesPerPixel",
+        AttributeValue::I32(meta.spp.min(i32::MAX as u32) as i32),
+    );
+    other(
+        "lightcuts:seed",
+        AttributeValue::Text(Text::from(meta.seed.to_string().as_str())),
+    );
+
+    let encoding = Encoding {
+        compression: Compression::ZIP16,
+        blocks: Blocks::ScanLines,
+        line_order: LineOrder::Increasing,
+    };
+    let layer = Layer::new(size, attributes, encoding, AnyChannels::sort(list.into()));
+    let display = IntegerBounds::new(
+        Vec2(0, 0),
+        Vec2(film.full_width as usize, film.full_height as usize),
+    );
+    let image = Image::new(ImageAttributes::new(display), layer);
+    write_atomically(path, |temporary| {
+        image
+            .write()
+            .to_file(temporary)
+            .map_err(|e| format!("cannot write EXR: {e}"))
+    })
+}

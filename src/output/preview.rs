@@ -1,0 +1,65 @@
+//! A tone-mapped 8-bit sRGB PNG preview of the beauty pass: exposure in stops,
+//! clamp to [0, 1], then the sRGB transfer curve (IEC 61966-2-1).
+
+use std::path::Path;
+
+use super::{write_atomically, OutputError};
+use crate::render::Film;
+
+#[must_use]
+pub fn linear_to_srgb(c: f32) -> f32 {
+    if c <= 0.003_130_8 {
+        12.92 * c
+    } else {
+        1.055 * c.powf(1.0 / 2.4) - 0.055
+    }
+}
+
+/// 8-bit sRGB value of a linear value after `exposure` stops.
+#[must_use]
+pub fn to_srgb8(linear: f32, scale: f32) -> u8 {
+    let v = (linear * scale).clamp(0.0, 1.0);
+    (linear_to_srgb(v) * 255.0 + 0.5) as u8
+}
+
+/// Writes the film's window as an RGB PNG.
+pub fn write_png(path: &Path, film: &Film, exposure_stops: f32) -> Result<(), OutputError> {
+    let scale = exposure_stops.exp2();
+    let data: Vec<u8> = film
+        .pixels
+        .iter()
+        .flat_map(|p| p.rgb.map(|c| to_srgb8(c, scale)))
+        .collect();
+    write_rgb_png(path, film.bounds.width(), film.bounds.height(), &data)
+}
+
+/// Writes 8-bit RGB data as a PNG, atomically.
+pub fn write_rgb_png(path: &Path, width: u32, height: u32, rgb: &[u8]) -> Result<(), OutputError> {
+    write_atomically(path, |temporary| {
+        let file = std::fs::File::create(temporary).map_err(|e| e.to_string())?;
+        let mut encoder = png::Encoder::new(std::io::BufWriter::new(file), width, height);
+        encoder.set_color(png::ColorType::Rgb);
+        encoder.set_depth(png::BitDepth::Eight);
+        encoder.set_source_srgb(png::SrgbRenderingIntent::Perceptual);
+        let mut writer = encoder.write_header().map_err(|e| e.to_string())?;
+        writer.write_image_data(rgb).map_err(|e| e.to_string())?;
+        writer.finish().map_err(|e| e.to_string())
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn srgb_encoding_round_trips_the_decoder() {
+        for i in 0..=20 {
+            let c = i as f32 / 20.0;
+            let back = crate::scene::texture::srgb_to_linear(linear_to_srgb(c));
+            assert!((back - c).abs() < 1e-5, "{c} -> {back}");
+        }
+        assert_eq!(to_srgb8(2.0, 1.0), 255);
+        assert_eq!(to_srgb8(-1.0, 1.0), 0);
+        assert_eq!(to_srgb8(f32::NAN, 1.0), 0);
+    }
+}

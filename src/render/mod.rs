@@ -1,0 +1,171 @@
+//! Rendering: camera samples over tiles on rayon, shaded by the integrator
+//! into a film of beauty and AOVs.
+//!
+//! Determinism: every sample's position is a pure function of (seed, pixel,
+//! sample index), each pixel is computed by one thread in a fixed order, and
+//! tiles are assembled in a fixed order, so the image is bit-identical for any
+//! thread count, tile order and pixel window.
+
+pub mod film;
+pub mod geometry;
+pub mod integrator;
+pub mod progress;
+
+use std::time::{Duration, Instant};
+
+use glam::DVec3;
+use rayon::prelude::*;
+
+use crate::sampling::Rng;
+use crate::scene::Camera;
+pub use film::{Film, Pixel, PixelBounds};
+pub use geometry::Geometry;
+pub use integrator::DirectLighting;
+use integrator::{film_value, Integrator, Scratch, ShadingStats};
+use progress::Progress;
+
+/// Tile edge in pixels: small enough to balance load across threads.
+pub const TILE: u32 = 16;
+
+/// Settings of one render pass.
+#[derive(Debug, Clone, Copy)]
+pub struct PassSettings {
+    pub width: u32,
+    pub height: u32,
+    pub spp: u32,
+    pub seed: u64,
+    pub bounds: PixelBounds,
+}
+
+/// Counters and times of a finished pass.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct PassStats {
+    pub camera_rays: u64,
+    pub shading: ShadingStats,
+    pub time: Duration,
+}
+
+/// The tiles covering a window, in scanline order of tiles.
+#[must_use]
+pub fn tiles(bounds: PixelBounds, tile: u32) -> Vec<PixelBounds> {
+    let mut out = Vec::new();
+    let mut y = bounds.y0;
+    while y < bounds.y1 {
+        let mut x = bounds.x0;
+        while x < bounds.x1 {
+            out.push(PixelBounds {
+                x0: x,
+                x1: (x + tile).min(bounds.x1),
+                y0: y,
+                y1: (y + tile).min(bounds.y1),
+            });
+            x += tile;
+        }
+        y += tile;
+    }
+    out
+}
+
+/// Renders the window `settings.bounds` on the current rayon pool.
+pub fn render(
+    integrator: &Integrator<'_>,
+    camera: &Camera,
+    settings: &PassSettings,
+    progress: &Progress,
+) -> (Film, PassStats) {
+    let start = Instant::now();
+    let tile_list = tiles(settings.bounds, TILE);
+    progress.start(tile_list.len() as u64);
+    let rendered: Vec<(Vec<Pixel>, PassStats)> = tile_list
+        .par_iter()
+        .map_init(Scratch::default, |scratch, tile| {
+            let result = render_tile(integrator, camera, settings, *tile, scratch);
+            progress.advance();
+            result
+        })
+        .collect();
+    progress.finish();
+
+    let b = settings.bounds;
+    let mut film = Film {
+        full_width: settings.width,
+        full_height: settings.height,
+        bounds: b,
+        pixels: vec![Pixel::default(); b.area()],
+    };
+    let mut stats = PassStats::default();
+    for (tile, (pixels, tile_stats)) in tile_list.iter().zip(rendered) {
+        stats.camera_rays += tile_stats.camera_rays;
+        stats.shading.add(&tile_stats.shading);
+        for (i, pixel) in pixels.into_iter().enumerate() {
+            let x = tile.x0 + i as u32 % tile.width();
+            let y = tile.y0 + i as u32 / tile.width();
+            film.pixels[(y - b.y0) as usize * b.width() as usize + (x - b.x0) as usize] = pixel;
+        }
+    }
+    stats.time = start.elapsed();
+    (film, stats)
+}
+
+fn render_tile(
+    integrator: &Integrator<'_>,
+    camera: &Camera,
+    settings: &PassSettings,
+    tile: PixelBounds,
+    scratch: &mut Scratch,
+) -> (Vec<Pixel>, PassStats) {
+    let mut pixels = Vec::with_capacity(tile.area());
+    let mut stats = PassStats::default();
+    let inv_spp = 1.0 / f64::from(settings.spp);
+    for y in tile.y0..tile.y1 {
+        for x in tile.x0..tile.x1 {
+            let mut radiance = DVec3::ZERO;
+            let mut albedo = DVec3::ZERO;
+            let mut normal = DVec3::ZERO;
+            let mut hits = 0u32;
+            let mut z = f32::INFINITY;
+            let mut pixel_stats = ShadingStats::default();
+            for s in 0..settings.spp {
+                let mut rng =
+                    Rng::from_key(&[settings.seed, u64::from(x), u64::from(y), u64::from(s)]);
+                let ray = camera.ray(x as f32 + rng.next_f32(), y as f32 + rng.next_f32());
+                let sample = integrator.trace(ray, scratch);
+                stats.camera_rays += 1;
+                radiance += sample.radiance;
+                pixel_stats.add(&sample.stats);
+                if let Some(hit) = sample.first_hit {
+                    hits += 1;
+                    albedo += hit.albedo.as_dvec3();
+                    normal += hit.normal.as_dvec3();
+                    z = z.min(hit.distance);
+                }
+            }
+            stats.shading.add(&pixel_stats);
+            let value = |v: DVec3, scale: f64| (v * scale).to_array().map(film_value);
+            let hit_scale = if hits > 0 { 1.0 / f64::from(hits) } else { 0.0 };
+            pixels.push(Pixel {
+                rgb: value(radiance, inv_spp),
+                alpha: (f64::from(hits) * inv_spp) as f32,
+                albedo: value(albedo, hit_scale),
+                normal: value(normal, hit_scale),
+                z: if z.is_finite() { z } else { 0.0 },
+                cut_size: if pixel_stats.shading_points > 0 {
+                    (pixel_stats.cut_nodes as f64 / pixel_stats.shading_points as f64) as f32
+                } else {
+                    0.0
+                },
+                shadow_rays: pixel_stats.shadow_rays as f32,
+            });
+        }
+    }
+    (pixels, stats)
+}
+
+/// A rayon pool of `threads` workers (0: one per CPU), each with Embree's
+/// recommended flush-to-zero and denormals-are-zero modes set.
+pub fn thread_pool(threads: usize) -> Result<rayon::ThreadPool, rayon::ThreadPoolBuildError> {
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .start_handler(|_| crate::embree::set_flush_denormals())
+        .build()
+}
