@@ -260,4 +260,8 @@ fn flush_denormals_is_per_thread() {
 fn version_is_the_major_build_rs_found() {
     let (major, _, _) = version();
     assert_eq!(major.to_string(), env!("LIGHTCUTS_EMBREE_MAJOR"));
+    // ci/embree4.sh sets this so a silent fall-back to Embree 3 fails.
+    if let Ok(expected) = std::env::var("LIGHTCUTS_EXPECT_EMBREE_MAJOR") {
+        assert_eq!(major.to_string(), expected);
+    }
 }

@@ -61,6 +61,11 @@ pub fn write_exr(
         }
     };
     let full = |name: &str, values: Vec<f32>| AnyChannel::new(name, FlatSamples::F32(values));
+    // pLinear is only a hint for lossy B44 compression: true for alpha alone.
+    let colour = |mut c: AnyChannel<FlatSamples>| {
+        c.quantize_linearly = c.name.eq("A");
+        c
+    };
     let mut list: Vec<AnyChannel<FlatSamples>> = vec![
         beauty("R", column(&|p| p.rgb[0])),
         beauty("G", column(&|p| p.rgb[1])),
@@ -79,9 +84,11 @@ pub fn write_exr(
         list.push(full("lightcuts.shadow_rays", column(&|p| p.shadow_rays)));
     }
 
-    let mut attributes = LayerAttributes::default();
-    attributes.layer_position = Vec2(b.x0 as i32, b.y0 as i32);
-    attributes.software_name = Some(Text::from(concat!("lightcuts ", env!("CARGO_PKG_VERSION"))));
+    let mut attributes = LayerAttributes {
+        layer_position: Vec2(b.x0 as i32, b.y0 as i32),
+        software_name: Some(Text::from(concat!("lightcuts ", env!("CARGO_PKG_VERSION")))),
+        ..LayerAttributes::default()
+    };
     let mut other = |key: &str, value: AttributeValue| {
         attributes.other.insert(Text::from(key), value);
     };
@@ -115,7 +122,12 @@ pub fn write_exr(
         blocks: Blocks::ScanLines,
         line_order: LineOrder::Increasing,
     };
-    let layer = Layer::new(size, attributes, encoding, AnyChannels::sort(list.into()));
+    let layer = Layer::new(
+        size,
+        attributes,
+        encoding,
+        AnyChannels::sort(list.into_iter().map(colour).collect()),
+    );
     let display = IntegerBounds::new(
         Vec2(0, 0),
         Vec2(film.full_width as usize, film.full_height as usize),

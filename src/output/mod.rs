@@ -5,6 +5,7 @@
 
 pub mod exr;
 pub mod preview;
+pub mod read;
 
 use std::path::{Path, PathBuf};
 

@@ -1,0 +1,32 @@
+#!/usr/bin/env bash
+# Installs the Debian packages lightcuts needs to build and test: Embree
+# (libembree-dev: Embree 3 on Debian 12, Embree 4 on Debian 13), libclang for
+# bindgen, and a C compiler for the shim. Idempotent: installs only what is
+# missing, and does nothing (not even apt-get update) when all is present.
+set -euo pipefail
+
+packages=(libembree-dev libclang-dev gcc libc6-dev)
+
+missing=()
+for p in "${packages[@]}"; do
+    if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed"; then
+        missing+=("$p")
+    fi
+done
+
+if [ ${#missing[@]} -eq 0 ]; then
+    exit 0
+fi
+
+if [ "$(id -u)" -eq 0 ]; then
+    sudo=()
+elif command -v sudo >/dev/null 2>&1; then
+    sudo=(sudo)
+else
+    echo "ci/setup.sh: need root (or sudo) to install: ${missing[*]}" >&2
+    exit 1
+fi
+
+echo "ci/setup.sh: installing ${missing[*]}" >&2
+"${sudo[@]}" env DEBIAN_FRONTEND=noninteractive apt-get update -qq
+"${sudo[@]}" env DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null

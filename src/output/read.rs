@@ -1,0 +1,81 @@
+//! Reading our EXRs back (for `compare` and tests): every channel as f32.
+
+use std::collections::BTreeMap;
+use std::path::Path;
+
+use exr::prelude::*;
+
+use super::OutputError;
+
+/// A single-layer EXR with all channels as f32, scanline order.
+#[derive(Debug, Clone)]
+pub struct ExrImage {
+    /// Data window origin and size, in pixels.
+    pub x0: i32,
+    pub y0: i32,
+    pub width: usize,
+    pub height: usize,
+    /// Display window size.
+    pub display_width: usize,
+    pub display_height: usize,
+    pub channels: BTreeMap<String, Vec<f32>>,
+    /// Custom header attributes rendered as text.
+    pub attributes: BTreeMap<String, String>,
+}
+
+impl ExrImage {
+    /// The named channel, or an error naming the file and the channel.
+    pub fn channel(&self, path: &Path, name: &str) -> std::result::Result<&[f32], OutputError> {
+        self.channels.get(name).map(Vec::as_slice).ok_or_else(|| {
+            OutputError::new(
+                path,
+                format!(
+                    "channel '{name}' missing (has {})",
+                    self.channels.keys().cloned().collect::<Vec<_>>().join(", ")
+                ),
+            )
+        })
+    }
+}
+
+pub fn read_exr(path: &Path) -> std::result::Result<ExrImage, OutputError> {
+    let image = read()
+        .no_deep_data()
+        .largest_resolution_level()
+        .all_channels()
+        .first_valid_layer()
+        .all_attributes()
+        .from_file(path)
+        .map_err(|e| OutputError::new(path, format!("cannot read EXR: {e}")))?;
+    let layer = &image.layer_data;
+    let mut channels = BTreeMap::new();
+    for channel in &layer.channel_data.list {
+        let values: Vec<f32> = channel.sample_data.values_as_f32().collect();
+        channels.insert(channel.name.to_string(), values);
+    }
+    let mut attributes = BTreeMap::new();
+    for (key, value) in &layer.attributes.other {
+        let text = match value {
+            AttributeValue::Text(t) => t.to_string(),
+            AttributeValue::F64(v) => v.to_string(),
+            AttributeValue::F32(v) => v.to_string(),
+            AttributeValue::I32(v) => v.to_string(),
+            other => format!("{other:?}"),
+        };
+        attributes.insert(key.to_string(), text);
+    }
+    if let Some(software) = &layer.attributes.software_name {
+        attributes.insert("software".into(), software.to_string());
+    }
+    let display = image.attributes.display_window;
+    Ok(ExrImage {
+        x0: layer.attributes.layer_position.x(),
+        y0: layer.attributes.layer_position.y(),
+        width: layer.size.width(),
+        height: layer.size.height(),
+        display_width: display.size.width(),
+        display_height: display.size.height(),
+        channels,
+        attributes,
+    })
+}

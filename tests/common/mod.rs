@@ -1,0 +1,145 @@
+//! Helpers for tests that run the real `lightcuts` binary.
+#![allow(dead_code, unused_imports)]
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+pub use lightcuts::output::read::{read_exr, ExrImage};
+
+/// A fresh temporary directory, removed on drop.
+pub struct TempDir(pub PathBuf);
+
+impl TempDir {
+    pub fn new(name: &str) -> Self {
+        let dir = std::env::temp_dir().join(format!("lightcuts-it-{}-{name}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        Self(dir)
+    }
+
+    pub fn path(&self, name: &str) -> PathBuf {
+        self.0.join(name)
+    }
+
+    pub fn write(&self, name: &str, text: &str) -> PathBuf {
+        let path = self.path(name);
+        std::fs::write(&path, text).unwrap();
+        path
+    }
+
+    /// Every file in the directory.
+    pub fn files(&self) -> Vec<String> {
+        let mut v: Vec<String> = std::fs::read_dir(&self.0)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        v.sort();
+        v
+    }
+}
+
+impl Drop for TempDir {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.0);
+    }
+}
+
+pub fn lightcuts(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_lightcuts"))
+        .args(args)
+        .output()
+        .expect("run lightcuts")
+}
+
+/// Runs lightcuts and asserts success, returning stdout.
+pub fn lightcuts_ok(args: &[&str]) -> String {
+    let out = lightcuts(args);
+    assert!(
+        out.status.success(),
+        "lightcuts {args:?} failed:\n{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    String::from_utf8_lossy(&out.stdout).into_owned()
+}
+
+/// Runs lightcuts, asserts a clean failure (non-zero, no panic), returns stderr.
+pub fn lightcuts_fails(args: &[&str]) -> String {
+    let out = lightcuts(args);
+    let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
+    assert!(!out.status.success(), "lightcuts {args:?} should fail");
+    assert_eq!(
+        out.status.code(),
+        Some(1),
+        "exit code for {args:?}: {stderr}"
+    );
+    assert!(!stderr.contains("panicked"), "panic for {args:?}: {stderr}");
+    assert!(
+        stderr.starts_with("error: "),
+        "one clear message expected: {stderr}"
+    );
+    stderr
+}
+
+pub fn s(path: &Path) -> &str {
+    path.to_str().unwrap()
+}
+
+/// The repository's scenes directory.
+pub fn scenes() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes")
+}
+
+/// A small scene: floor, two spheres, a grid of point lights.
+pub fn small_scene(lights_per_side: u32) -> String {
+    format!(
+        r#"
+[film]
+width = 96
+height = 72
+
+[camera]
+eye = [0, 3, 6]
+look_at = [0, 0.5, 0]
+fov_y = 45
+
+[materials.floor]
+albedo = [0.7, 0.7, 0.7]
+
+[materials.shiny]
+albedo = [0.6, 0.2, 0.1]
+specular = [0.3, 0.3, 0.3]
+exponent = 30
+
+[materials.mirror]
+albedo = [0.05, 0.05, 0.05]
+mirror = [0.8, 0.8, 0.8]
+
+[[shapes]]
+type = "quad"
+corner = [-5, 0, 5]
+u = [10, 0, 0]
+v = [0, 0, -10]
+material = "floor"
+
+[[shapes]]
+type = "sphere"
+center = [-0.8, 0.7, 0]
+radius = 0.7
+material = "shiny"
+
+[[shapes]]
+type = "sphere"
+center = [0.9, 0.5, 0.4]
+radius = 0.5
+material = "mirror"
+
+[[lights]]
+type = "grid"
+corner = [-2, 3, -2]
+u = [4, 0, 0]
+v = [0, 0, 4]
+count = [{lights_per_side}, {lights_per_side}]
+intensity = [1.0, 0.9, 0.8]
+"#
+    )
+}
