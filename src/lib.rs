@@ -9,6 +9,7 @@ pub mod cli;
 pub mod embree;
 pub mod interrupt;
 pub mod light;
+pub mod light_tree;
 pub mod output;
 pub mod render;
 pub mod sampling;

@@ -1,0 +1,323 @@
+//! The light tree ([LC05] sec. 4.1): a binary tree per light type whose leaves
+//! are lights and whose internal nodes are clusters with summed intensity,
+//! bounds, and a representative light chosen with probability proportional
+//! to intensity. Stored as flat arrays; a node stores only what its type needs.
+//!
+//! Built by locally-ordered agglomerative clustering ([FAC08], in the parallel
+//! form of [PLOC18]: `ploc`), or by the exact greedy algorithm (`greedy`, for
+//! tests and the quality benchmark). Both are deterministic: the same lights
+//! and seed give the same tree for every thread count.
+
+pub mod cluster;
+pub mod greedy;
+pub mod ploc;
+
+use glam::Vec3;
+
+pub use cluster::Cone;
+use cluster::{Cluster, Metric};
+
+use crate::light::luminance;
+use crate::sampling::Rng;
+
+/// The three light types of [LC05], each with its own tree.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum LightKind {
+    /// Point lights radiating equally in all directions.
+    Omni,
+    /// Cosine-weighted lights with a normal (area-light samples, virtual point lights).
+    Oriented,
+    /// Lights at infinity from one direction (environment map samples, sun).
+    Directional,
+}
+
+impl LightKind {
+    #[must_use]
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Omni => "omni",
+            Self::Oriented => "oriented",
+            Self::Directional => "directional",
+        }
+    }
+}
+
+/// A node: a leaf (one light, by index into the tree's lights) or an internal
+/// cluster (by index into the node arrays). The top bit tells which.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct NodeRef(u32);
+
+const LEAF_BIT: u32 = 1 << 31;
+
+impl NodeRef {
+    #[must_use]
+    pub fn leaf(light: u32) -> Self {
+        debug_assert!(light < LEAF_BIT);
+        Self(light | LEAF_BIT)
+    }
+
+    #[must_use]
+    pub fn internal(node: u32) -> Self {
+        debug_assert!(node < LEAF_BIT);
+        Self(node)
+    }
+
+    #[must_use]
+    pub fn is_leaf(self) -> bool {
+        self.0 & LEAF_BIT != 0
+    }
+
+    /// Light index (leaf) or node index (internal).
+    #[must_use]
+    pub fn index(self) -> usize {
+        (self.0 & !LEAF_BIT) as usize
+    }
+}
+
+/// One light as a tree leaf: `position` is the direction *towards* the light
+/// for directional lights; `normal` is used by oriented lights only.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TreeLight {
+    pub position: Vec3,
+    pub normal: Vec3,
+    pub intensity: Vec3,
+}
+
+/// A built light tree. Leaves are the lights in input order.
+#[derive(Debug, Clone)]
+pub struct LightTree {
+    pub kind: LightKind,
+    /// Leaf data (omni and oriented: position; directional: direction).
+    pub light_position: Vec<Vec3>,
+    /// Oriented only: each light's unit normal.
+    pub light_normal: Vec<Vec3>,
+    pub light_intensity: Vec<Vec3>,
+    /// Internal nodes (n - 1 of them for n lights).
+    pub intensity: Vec<Vec3>,
+    /// Box of positions (omni, oriented) or of directions (directional).
+    pub bounds_min: Vec<Vec3>,
+    pub bounds_max: Vec<Vec3>,
+    /// Oriented only: cone of normals.
+    pub cone: Vec<Cone>,
+    /// Index of the representative light.
+    pub representative: Vec<u32>,
+    pub children: Vec<[NodeRef; 2]>,
+    pub root: Option<NodeRef>,
+}
+
+impl LightTree {
+    #[must_use]
+    pub fn light_count(&self) -> usize {
+        self.light_intensity.len()
+    }
+
+    #[must_use]
+    pub fn node_intensity(&self, node: NodeRef) -> Vec3 {
+        if node.is_leaf() {
+            self.light_intensity[node.index()]
+        } else {
+            self.intensity[node.index()]
+        }
+    }
+
+    /// (min, max) of the node's box (a point for a leaf).
+    #[must_use]
+    pub fn node_bounds(&self, node: NodeRef) -> (Vec3, Vec3) {
+        if node.is_leaf() {
+            let p = self.light_position[node.index()];
+            (p, p)
+        } else {
+            (self.bounds_min[node.index()], self.bounds_max[node.index()])
+        }
+    }
+
+    /// Cone of normals (oriented trees only).
+    #[must_use]
+    pub fn node_cone(&self, node: NodeRef) -> Cone {
+        if node.is_leaf() {
+            Cone::of_direction(self.light_normal[node.index()])
+        } else {
+            self.cone[node.index()]
+        }
+    }
+
+    #[must_use]
+    pub fn node_representative(&self, node: NodeRef) -> u32 {
+        if node.is_leaf() {
+            node.index() as u32
+        } else {
+            self.representative[node.index()]
+        }
+    }
+
+    /// Children of an internal node.
+    #[must_use]
+    pub fn node_children(&self, node: NodeRef) -> [NodeRef; 2] {
+        debug_assert!(!node.is_leaf());
+        self.children[node.index()]
+    }
+
+    /// Heap bytes the finished tree holds (leaf and node arrays).
+    #[must_use]
+    pub fn memory_bytes(&self) -> usize {
+        fn bytes<T>(v: &Vec<T>) -> usize {
+            v.capacity() * std::mem::size_of::<T>()
+        }
+        bytes(&self.light_position)
+            + bytes(&self.light_normal)
+            + bytes(&self.light_intensity)
+            + bytes(&self.intensity)
+            + bytes(&self.bounds_min)
+            + bytes(&self.bounds_max)
+            + bytes(&self.cone)
+            + bytes(&self.representative)
+            + bytes(&self.children)
+    }
+
+    /// Sum of [LC05]'s cluster size over internal nodes: the quantity the
+    /// builders minimise greedily (smaller is a better tree).
+    #[must_use]
+    pub fn total_cluster_size(&self) -> f64 {
+        let metric = metric_for(self.kind, &self.light_position);
+        (0..self.intensity.len())
+            .map(|i| {
+                let c = Cluster {
+                    min: self.bounds_min[i],
+                    max: self.bounds_max[i],
+                    cone: if self.kind == LightKind::Oriented {
+                        self.cone[i]
+                    } else {
+                        Cone::of_direction(Vec3::Z)
+                    },
+                    intensity: self.intensity[i],
+                    weight: luminance(self.intensity[i]),
+                    node: NodeRef::internal(i as u32),
+                };
+                metric.size(&c)
+            })
+            .sum()
+    }
+}
+
+/// The metric's constants for a set of light positions.
+fn metric_for(kind: LightKind, positions: &[Vec3]) -> Metric {
+    let c_squared = if kind == LightKind::Oriented {
+        let (lo, hi) = positions
+            .iter()
+            .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), &p| {
+                (lo.min(p), hi.max(p))
+            });
+        (hi - lo).as_dvec3().length_squared()
+    } else {
+        0.0
+    };
+    Metric { kind, c_squared }
+}
+
+/// Shared by both builders: the leaf arrays and the node arrays being filled,
+/// and the one place where two clusters merge.
+pub(crate) struct TreeBuilder {
+    tree: LightTree,
+    metric: Metric,
+    seed: u64,
+}
+
+impl TreeBuilder {
+    fn new(kind: LightKind, lights: &[TreeLight], seed: u64) -> Self {
+        let n = lights.len();
+        let internal = n.saturating_sub(1);
+        let positions: Vec<Vec3> = lights.iter().map(|l| l.position).collect();
+        let metric = metric_for(kind, &positions);
+        let oriented = kind == LightKind::Oriented;
+        let tree = LightTree {
+            kind,
+            light_position: positions,
+            light_normal: if oriented {
+                lights
+                    .iter()
+                    .map(|l| l.normal.normalize_or_zero())
+                    .collect()
+            } else {
+                Vec::new()
+            },
+            light_intensity: lights.iter().map(|l| l.intensity).collect(),
+            intensity: Vec::with_capacity(internal),
+            bounds_min: Vec::with_capacity(internal),
+            bounds_max: Vec::with_capacity(internal),
+            cone: Vec::with_capacity(if oriented { internal } else { 0 }),
+            representative: Vec::with_capacity(internal),
+            children: Vec::with_capacity(internal),
+            root: (n > 0).then_some(NodeRef::leaf(0)),
+        };
+        Self { tree, metric, seed }
+    }
+
+    fn leaf_cluster(&self, light: usize) -> Cluster {
+        let p = self.tree.light_position[light];
+        let intensity = self.tree.light_intensity[light];
+        Cluster {
+            min: p,
+            max: p,
+            cone: if self.metric.kind == LightKind::Oriented {
+                Cone::of_direction(self.tree.light_normal[light])
+            } else {
+                Cone::of_direction(Vec3::Z)
+            },
+            intensity,
+            weight: luminance(intensity),
+            node: NodeRef::leaf(light as u32),
+        }
+    }
+
+    /// Creates the internal node for A u B. The representative is A's with
+    /// probability w_A / (w_A + w_B), drawn from a stream keyed by (seed,
+    /// node index): node indices are assigned in a fixed order, so the choice
+    /// does not depend on thread timing. By induction every light is its
+    /// node's representative with probability w_light / w_node ([LC05] sec. 4.1).
+    fn merge(&mut self, a: &Cluster, b: &Cluster) -> Cluster {
+        let index = self.tree.intensity.len() as u32;
+        let node = NodeRef::internal(index);
+        let total = f64::from(a.weight) + f64::from(b.weight);
+        let u = Rng::from_key(&[self.seed, u64::from(index)]).next_f64();
+        // Zero total weight (all lights black): pick evenly.
+        let pick_a = if total > 0.0 {
+            u * total < f64::from(a.weight)
+        } else {
+            u < 0.5
+        };
+        let representative = if pick_a {
+            self.tree.node_representative(a.node)
+        } else {
+            self.tree.node_representative(b.node)
+        };
+        let merged = Cluster {
+            min: a.min.min(b.min),
+            max: a.max.max(b.max),
+            cone: if self.metric.kind == LightKind::Oriented {
+                a.cone.union(b.cone)
+            } else {
+                a.cone
+            },
+            intensity: a.intensity + b.intensity,
+            weight: a.weight + b.weight,
+            node,
+        };
+        self.tree.intensity.push(merged.intensity);
+        self.tree.bounds_min.push(merged.min);
+        self.tree.bounds_max.push(merged.max);
+        if self.metric.kind == LightKind::Oriented {
+            self.tree.cone.push(merged.cone);
+        }
+        self.tree.representative.push(representative);
+        self.tree.children.push([a.node, b.node]);
+        merged
+    }
+
+    fn finish(mut self, root: Option<NodeRef>) -> LightTree {
+        self.tree.root = root;
+        self.tree
+    }
+}
+
+#[cfg(test)]
+mod tests;
