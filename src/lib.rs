@@ -14,3 +14,4 @@ pub mod output;
 pub mod render;
 pub mod sampling;
 pub mod scene;
+pub mod lightcut;

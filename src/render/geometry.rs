@@ -123,7 +123,7 @@ pub struct SurfacePoint<'s> {
     pub material: &'s Material,
     /// Distance from the ray origin, metres.
     pub distance: f32,
-    epsilon: f32,
+    pub(crate) epsilon: f32,
 }
 
 impl SurfacePoint<'_> {
@@ -162,6 +162,12 @@ impl SurfacePoint<'_> {
             t_near: 0.0,
             t_far: 1.0 - self.epsilon / length,
         }))
+    }
+
+    /// The shadow ray towards a light at infinity in unit direction `d`.
+    #[must_use]
+    pub fn shadow_ray_towards(&self, d: Vec3) -> ShadowRay {
+        ShadowRay::new(Ray { origin: self.offset_origin(), direction: d, t_near: 0.0, t_far: f32::INFINITY })
     }
 
     /// The mirror-reflected ray.
