@@ -1,6 +1,7 @@
 //! The command line. This is the only place an error becomes an exit code:
 //! everything below returns `Result`s.
 
+mod compare_cmd;
 mod render_cmd;
 
 use std::path::PathBuf;
@@ -27,6 +28,8 @@ pub struct Cli {
 pub enum Command {
     /// Render a scene to an OpenEXR image (beauty + AOVs).
     Render(render_cmd::RenderArgs),
+    /// Compare a render against a reference on luminance (relative error).
+    Compare(compare_cmd::CompareArgs),
 }
 
 /// Everything that can stop a command, each naming its cause.
@@ -62,6 +65,7 @@ pub fn main() -> i32 {
     ctrlc_cleanup();
     let result = match cli.command {
         Command::Render(args) => render_cmd::run(&args),
+        Command::Compare(args) => compare_cmd::run(&args),
     };
     match result {
         Ok(()) => 0,

@@ -7,6 +7,7 @@ use clap::Args;
 
 use super::{parse_pixel_bounds, parse_resolution, CliError};
 use crate::embree::Device;
+use crate::lightcut::cut::{CutSettings, LightTrees};
 use crate::output::exr::{write_exr, ExrChannels, ExrMetadata};
 use crate::output::preview::write_png;
 use crate::render::integrator::Integrator;
@@ -22,8 +23,15 @@ pub struct RenderArgs {
     #[arg(short, long, value_name = "OUT.exr")]
     pub output: PathBuf,
     /// Reference mode: every light, one shadow ray each.
-    #[arg(long)]
+    #[arg(long, conflicts_with_all = ["error", "max_cut"])]
     pub exact: bool,
+    /// Lightcuts' relative error threshold (0.02 = 2%); 0 refines every
+    /// cluster, reproducing --exact when max-cut allows.
+    #[arg(long, default_value_t = 0.02)]
+    pub error: f64,
+    /// Largest cut per shading point, in nodes.
+    #[arg(long, default_value_t = 1000)]
+    pub max_cut: usize,
     /// Film size, overriding the scene's.
     #[arg(long, value_name = "WxH", value_parser = parse_resolution)]
     pub resolution: Option<(u32, u32)>,
@@ -91,6 +99,23 @@ pub fn pass_settings(
     })
 }
 
+/// The cut settings of a lightcuts render, validated.
+pub fn cut_settings(error: f64, max_cut: usize) -> Result<CutSettings, CliError> {
+    if !(error.is_finite() && error >= 0.0) {
+        return Err(CliError::Usage {
+            flag: "--error",
+            message: format!("must be finite and >= 0, got {error}"),
+        });
+    }
+    if max_cut == 0 {
+        return Err(CliError::Usage {
+            flag: "--max-cut",
+            message: "must be at least 1".into(),
+        });
+    }
+    Ok(CutSettings { error, max_cut })
+}
+
 pub fn run(args: &RenderArgs) -> Result<(), CliError> {
     let scene = Scene::load(&args.scene)?;
     let settings = pass_settings(
@@ -100,6 +125,11 @@ pub fn run(args: &RenderArgs) -> Result<(), CliError> {
         args.seed,
         args.pixel_bounds,
     )?;
+    let cut = if args.exact {
+        None
+    } else {
+        Some(cut_settings(args.error, args.max_cut)?)
+    };
     if !args.exposure.is_finite() {
         return Err(CliError::Usage {
             flag: "--exposure",
@@ -116,20 +146,29 @@ pub fn run(args: &RenderArgs) -> Result<(), CliError> {
         source,
     })?;
     let camera = scene.camera(settings.width, settings.height);
+    let start = Instant::now();
+    let trees = cut.map(|_| pool.install(|| LightTrees::build(&scene.lights, settings.seed)));
+    let direct = match (&trees, cut) {
+        (Some(trees), Some(settings)) => DirectLighting::Lightcuts { trees, settings },
+        _ => DirectLighting::Exact,
+    };
+    let mode = match cut {
+        Some(c) => format!("lightcuts error={} max_cut={}", c.error, c.max_cut),
+        None => "exact".to_string(),
+    };
     let integrator = Integrator {
         geometry: &geometry,
         lights: &scene.lights,
-        direct: DirectLighting::Exact,
+        direct,
         max_mirror_depth: scene.max_mirror_depth,
     };
     let progress = Progress::for_stderr("render", args.quiet);
-    let start = Instant::now();
     let (film, stats) = pool.install(|| render::render(&integrator, &camera, &settings, &progress));
     let seconds = start.elapsed().as_secs_f64();
 
     let meta = ExrMetadata {
         scene_file: scene.path.clone(),
-        render_mode: "exact".into(),
+        render_mode: mode.clone(),
         render_seconds: seconds,
         lights: scene.lights.len() as u64,
         spp: settings.spp,
@@ -140,7 +179,7 @@ pub fn run(args: &RenderArgs) -> Result<(), CliError> {
         &film,
         ExrChannels {
             half_beauty: args.half,
-            lightcut_aovs: false,
+            lightcut_aovs: cut.is_some(),
         },
         &meta,
     )?;
@@ -150,15 +189,20 @@ pub fn run(args: &RenderArgs) -> Result<(), CliError> {
 
     let rays = stats.shading.shadow_rays;
     let b = settings.bounds;
+    let (major, minor, patch) = crate::embree::version();
+    let pixels = b.area().max(1) as f64;
     println!(
-        "lightcuts {} (Embree {}.{}.{})",
-        env!("CARGO_PKG_VERSION"),
-        crate::embree::version().0,
-        crate::embree::version().1,
-        crate::embree::version().2
+        "lightcuts {} (Embree {major}.{minor}.{patch})",
+        env!("CARGO_PKG_VERSION")
     );
     println!("  scene            {}", scene.path.display());
-    println!("  lights           {}", scene.lights.len());
+    println!(
+        "  lights           {} (omni {}, oriented {}, directional {})",
+        scene.lights.len(),
+        scene.lights.omni.len(),
+        scene.lights.oriented.len(),
+        scene.lights.directional.len()
+    );
     println!("  triangles        {}", scene.triangle_count());
     println!(
         "  image            {}x{}, window {}x{} at ({}, {}), {} spp",
@@ -170,14 +214,35 @@ pub fn run(args: &RenderArgs) -> Result<(), CliError> {
         b.y0,
         settings.spp
     );
-    println!("  mode             exact");
-    println!("  render time      {seconds:.3} s");
+    println!("  mode             {mode}");
+    if let Some(trees) = &trees {
+        for (tree, time) in trees.trees.iter().zip(&trees.build_times) {
+            println!(
+                "  tree build       {} {} lights in {:.3} s",
+                tree.kind.name(),
+                tree.light_count(),
+                time.as_secs_f64()
+            );
+        }
+    }
+    println!("  render time      {seconds:.3} s (including tree build)");
     println!("  camera rays      {}", stats.camera_rays);
-    println!("  shadow rays      {rays}");
+    println!(
+        "  shadow rays      {rays} ({:.1} per pixel)",
+        rays as f64 / pixels
+    );
     println!(
         "  shadow rays/s    {:.2} M",
-        rays as f64 / seconds.max(1e-9) / 1e6
+        rays as f64 / stats.time.as_secs_f64().max(1e-9) / 1e6
     );
+    if cut.is_some() {
+        let points = stats.shading.shading_points.max(1) as f64;
+        println!(
+            "  cut size         average {:.1}, maximum {}",
+            stats.shading.cut_nodes as f64 / points,
+            stats.shading.max_cut
+        );
+    }
     println!("  output           {}", args.output.display());
     Ok(())
 }

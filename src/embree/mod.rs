@@ -388,20 +388,18 @@ impl Scene {
         if rays.is_empty() {
             return;
         }
-        let mut flags = vec![0u8; rays.len()];
         // SAFETY: ShadowRay is repr(transparent) over sys::LcRay, so the slice
-        // is a valid array of rays.len() LcRay; flags holds rays.len() bytes.
+        // is a valid array of rays.len() LcRay. `occluded` holds rays.len()
+        // bools; bool is one byte and the shim writes only 0 or 1 into each,
+        // both valid bool values, so writing through a u8 pointer is sound.
         unsafe {
             sys::lc_occluded_batch(
                 self.raw.ptr.as_ptr(),
                 rays.as_ptr().cast::<sys::LcRay>(),
-                flags.as_mut_ptr(),
+                occluded.as_mut_ptr().cast::<u8>(),
                 rays.len(),
             )
         };
-        for (out, flag) in occluded.iter_mut().zip(flags) {
-            *out = flag != 0;
-        }
     }
 }
 

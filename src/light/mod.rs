@@ -68,9 +68,33 @@ impl Lights {
     #[must_use]
     pub fn tree_lights(&self, kind: LightKind) -> Vec<TreeLight> {
         match kind {
-            LightKind::Omni => self.omni.iter().map(|l| TreeLight { position: l.position, normal: Vec3::ZERO, intensity: l.intensity }).collect(),
-            LightKind::Oriented => self.oriented.iter().map(|l| TreeLight { position: l.position, normal: l.normal, intensity: l.intensity }).collect(),
-            LightKind::Directional => self.directional.iter().map(|l| TreeLight { position: l.direction, normal: Vec3::ZERO, intensity: l.irradiance }).collect(),
+            LightKind::Omni => self
+                .omni
+                .iter()
+                .map(|l| TreeLight {
+                    position: l.position,
+                    normal: Vec3::ZERO,
+                    intensity: l.intensity,
+                })
+                .collect(),
+            LightKind::Oriented => self
+                .oriented
+                .iter()
+                .map(|l| TreeLight {
+                    position: l.position,
+                    normal: l.normal,
+                    intensity: l.intensity,
+                })
+                .collect(),
+            LightKind::Directional => self
+                .directional
+                .iter()
+                .map(|l| TreeLight {
+                    position: l.direction,
+                    normal: Vec3::ZERO,
+                    intensity: l.irradiance,
+                })
+                .collect(),
         }
     }
 }

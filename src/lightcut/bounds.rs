@@ -16,23 +16,55 @@ use crate::scene::material::phong_normalisation;
 /// them with a wide margin and changes cut sizes by nothing measurable.
 const COS_SLACK: f32 = 1e-5;
 
+/// An orthonormal frame whose third axis is a given unit axis, for
+/// [`cos_bound_in`]; build it once per shading point and axis.
+#[derive(Debug, Clone, Copy)]
+pub struct Frame {
+    tangent: Vec3,
+    bitangent: Vec3,
+    axis: Vec3,
+}
+
+impl Frame {
+    #[must_use]
+    pub fn new(axis: Vec3) -> Self {
+        let (tangent, bitangent) = axis.any_orthonormal_pair();
+        Self {
+            tangent,
+            bitangent,
+            axis,
+        }
+    }
+}
+
 /// Upper bound of cos(angle between unit `axis` and v) over all v in the box
-/// [lo, hi] (LIGHTCUTS.md section 3): the box of the rotated box, by interval
-/// arithmetic, then w / sqrt(u^2 + v^2 + w^2) at the largest w and smallest |u|, |v|.
+/// [lo, hi] (LIGHTCUTS.md section 3).
 #[must_use]
 pub fn cos_bound(axis: Vec3, lo: Vec3, hi: Vec3) -> f32 {
-    let (tangent, bitangent) = axis.any_orthonormal_pair();
+    cos_bound_in(&Frame::new(axis), lo, hi)
+}
+
+/// [`cos_bound`] in a prepared frame: the box of the rotated box, by interval
+/// arithmetic, then w / sqrt(u^2 + v^2 + w^2) at the largest w and smallest |u|, |v|.
+#[must_use]
+pub fn cos_bound_in(frame: &Frame, lo: Vec3, hi: Vec3) -> f32 {
     let range = |e: Vec3| {
         let (a, b) = (e * lo, e * hi);
         (a.min(b).element_sum(), a.max(b).element_sum())
     };
-    let (x0, x1) = range(tangent);
-    let (y0, y1) = range(bitangent);
-    let (_, z1) = range(axis);
+    let z1 = (frame.axis * lo).max(frame.axis * hi).element_sum();
     if z1 <= 0.0 {
         return 0.0;
     }
-    let nearest = |a: f32, b: f32| if a <= 0.0 && 0.0 <= b { 0.0 } else { a.abs().min(b.abs()) };
+    let (x0, x1) = range(frame.tangent);
+    let (y0, y1) = range(frame.bitangent);
+    let nearest = |a: f32, b: f32| {
+        if a <= 0.0 && 0.0 <= b {
+            0.0
+        } else {
+            a.abs().min(b.abs())
+        }
+    };
     let (mx, my) = (nearest(x0, x1), nearest(y0, y1));
     let bound = z1 / (mx * mx + my * my + z1 * z1).sqrt();
     (bound * (1.0 + COS_SLACK) + COS_SLACK).min(1.0)
@@ -45,45 +77,92 @@ pub fn distance_squared_to_box(p: Vec3, lo: Vec3, hi: Vec3) -> f64 {
     d.as_dvec3().length_squared()
 }
 
-/// Upper bound of the material term M = f_r cos(theta) over directions in
-/// the box `dirs` (vectors from the shading point; any length), per channel.
-#[must_use]
-pub fn material_bound(sp: &SurfacePoint<'_>, lo: Vec3, hi: Vec3) -> DVec3 {
-    let cos_theta = cos_bound(sp.n, lo, hi);
-    if cos_theta == 0.0 {
-        return DVec3::ZERO;
-    }
-    let mut f = sp.kd * (1.0 / PI);
-    if sp.material.has_specular() {
-        let cos_alpha = cos_bound(sp.r, lo, hi);
-        f += sp.material.specular * (phong_normalisation(sp.material.exponent) * cos_alpha.powf(sp.material.exponent));
-    }
-    (f * cos_theta).as_dvec3()
+/// What the bounds need of one shading point, prepared once per point.
+pub struct PointBounds<'a, 'p> {
+    pub sp: &'a SurfacePoint<'p>,
+    normal_frame: Frame,
+    /// The Phong lobe: (frame around the mirror direction, k_s (n+2)/(2 pi), n).
+    phong: Option<(Frame, Vec3, f32)>,
+    diffuse: Vec3,
+    min_distance_squared: f64,
 }
 
-/// Upper bound of M * G over a cluster, per channel (V's bound is 1).
-/// `lo, hi`: the cluster's box of positions (omni, oriented) or directions
-/// (directional); `cone`: its cone of normals (oriented only).
-#[must_use]
-pub fn cluster_bound(kind: LightKind, sp: &SurfacePoint<'_>, lo: Vec3, hi: Vec3, cone: Cone) -> DVec3 {
-    match kind {
-        LightKind::Directional => material_bound(sp, lo, hi),
-        LightKind::Omni | LightKind::Oriented => {
-            // The same clamp as the exact evaluation: G_i <= 1 / max(d_i^2, eps^2),
-            // so 1 / max(d_min^2, eps^2) bounds it and stays finite inside the box.
-            let g = 1.0 / distance_squared_to_box(sp.p, lo, hi).max(sp.min_distance_squared());
-            let m = material_bound(sp, lo - sp.p, hi - sp.p);
-            if kind == LightKind::Omni {
-                return m * g;
-            }
-            // cos(phi) <= cos(max(theta_min - beta, 0)), theta_min the smallest
-            // angle between the cone axis and x - y over the box.
-            let cos_theta_min = cos_bound(cone.axis, sp.p - hi, sp.p - lo);
-            let theta_min = cos_theta_min.clamp(-1.0, 1.0).acos();
-            let cos_phi = (theta_min - cone.half_angle).max(0.0).cos();
-            m * g * f64::from((cos_phi * (1.0 + COS_SLACK) + COS_SLACK).min(1.0))
+impl<'a, 'p> PointBounds<'a, 'p> {
+    #[must_use]
+    pub fn new(sp: &'a SurfacePoint<'p>) -> Self {
+        let m = sp.material;
+        let phong = m.has_specular().then(|| {
+            (
+                Frame::new(sp.r),
+                m.specular * phong_normalisation(m.exponent),
+                m.exponent,
+            )
+        });
+        Self {
+            sp,
+            normal_frame: Frame::new(sp.n),
+            phong,
+            diffuse: sp.kd * (1.0 / PI),
+            min_distance_squared: sp.min_distance_squared(),
         }
     }
+
+    /// Upper bound of the material term M = f_r cos(theta) over directions in
+    /// the box [lo, hi] (vectors from the shading point; any length), per
+    /// channel (LIGHTCUTS.md section 4).
+    #[must_use]
+    pub fn material(&self, lo: Vec3, hi: Vec3) -> DVec3 {
+        let cos_theta = cos_bound_in(&self.normal_frame, lo, hi);
+        if cos_theta == 0.0 {
+            return DVec3::ZERO;
+        }
+        let mut f = self.diffuse;
+        if let Some((frame, lobe, exponent)) = &self.phong {
+            f += *lobe * cos_bound_in(frame, lo, hi).powf(*exponent);
+        }
+        (f * cos_theta).as_dvec3()
+    }
+
+    /// Upper bound of M * G over a cluster, per channel (V's bound is 1).
+    /// `lo, hi`: the cluster's box of positions (omni, oriented) or
+    /// directions (directional); `cone`: its cone of normals (oriented only).
+    #[must_use]
+    pub fn cluster(&self, kind: LightKind, lo: Vec3, hi: Vec3, cone: Cone) -> DVec3 {
+        let p = self.sp.p;
+        match kind {
+            LightKind::Directional => self.material(lo, hi),
+            LightKind::Omni | LightKind::Oriented => {
+                let m = self.material(lo - p, hi - p);
+                if m == DVec3::ZERO {
+                    return m;
+                }
+                // The same clamp as the exact evaluation: G_i <= 1 / max(d_i^2, eps^2),
+                // so 1 / max(d_min^2, eps^2) bounds it and stays finite inside the box.
+                let g = 1.0 / distance_squared_to_box(p, lo, hi).max(self.min_distance_squared);
+                if kind == LightKind::Omni {
+                    return m * g;
+                }
+                // cos(phi) <= cos(max(theta_min - beta, 0)), theta_min the smallest
+                // angle between the cone axis and x - y over the box.
+                let cos_theta_min = cos_bound(cone.axis, p - hi, p - lo);
+                let theta_min = cos_theta_min.clamp(-1.0, 1.0).acos();
+                let cos_phi = (theta_min - cone.half_angle).max(0.0).cos();
+                m * g * f64::from((cos_phi * (1.0 + COS_SLACK) + COS_SLACK).min(1.0))
+            }
+        }
+    }
+}
+
+/// Upper bound of M * G over a cluster (one-off form of [`PointBounds::cluster`]).
+#[must_use]
+pub fn cluster_bound(
+    kind: LightKind,
+    sp: &SurfacePoint<'_>,
+    lo: Vec3,
+    hi: Vec3,
+    cone: Cone,
+) -> DVec3 {
+    PointBounds::new(sp).cluster(kind, lo, hi, cone)
 }
 
 /// The scalar error bound of a cluster of total intensity `intensity`:

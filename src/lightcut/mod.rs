@@ -3,3 +3,4 @@
 //! estimate, or `max_cut` nodes.
 
 pub mod bounds;
+pub mod cut;

@@ -140,3 +140,33 @@ pub fn write_exr(
             .map_err(|e| format!("cannot write EXR: {e}"))
     })
 }
+
+/// Writes a comparison as an EXR: per-channel absolute difference (R, G, B)
+/// and the relative error on luminance (`relative_error`).
+pub fn write_diff_exr(
+    path: &Path,
+    result: &super::compare::ComparisonResult,
+) -> std::result::Result<(), OutputError> {
+    let channel = |name: &str, v: Vec<f32>| AnyChannel::new(name, FlatSamples::F32(v));
+    let d = &result.difference;
+    let finite = |x: f64| x.min(f64::from(f32::MAX)) as f32;
+    let channels = vec![
+        channel("R", d.iter().map(|c| finite(c.x)).collect()),
+        channel("G", d.iter().map(|c| finite(c.y)).collect()),
+        channel("B", d.iter().map(|c| finite(c.z)).collect()),
+        channel(
+            "relative_error",
+            result.relative.iter().map(|&e| finite(e)).collect(),
+        ),
+    ];
+    let image = Image::from_channels(
+        (result.width, result.height),
+        AnyChannels::sort(channels.into()),
+    );
+    write_atomically(path, |t| {
+        image
+            .write()
+            .to_file(t)
+            .map_err(|e| format!("cannot write EXR: {e}"))
+    })
+}

@@ -3,6 +3,7 @@
 //! in the destination directory and renamed into place, so a reader never sees
 //! a half-written image under the output name.
 
+pub mod compare;
 pub mod exr;
 pub mod preview;
 pub mod read;

@@ -167,7 +167,12 @@ impl SurfacePoint<'_> {
     /// The shadow ray towards a light at infinity in unit direction `d`.
     #[must_use]
     pub fn shadow_ray_towards(&self, d: Vec3) -> ShadowRay {
-        ShadowRay::new(Ray { origin: self.offset_origin(), direction: d, t_near: 0.0, t_far: f32::INFINITY })
+        ShadowRay::new(Ray {
+            origin: self.offset_origin(),
+            direction: d,
+            t_near: 0.0,
+            t_far: f32::INFINITY,
+        })
     }
 
     /// The mirror-reflected ray.

@@ -10,6 +10,9 @@ use glam::{DVec3, Vec3};
 use super::geometry::{Geometry, SurfacePoint};
 use crate::embree::ShadowRay;
 use crate::light::Lights;
+use crate::light_tree::LightKind;
+use crate::lightcut::bounds::light_term;
+use crate::lightcut::cut::{self, CutScratch, CutSettings, LightTrees};
 
 /// Shadow rays handed to Embree per call: large enough to amortise the FFI
 /// crossing, small enough to stay in L1/L2 (256 rays x 32 bytes = 8 KiB).
@@ -17,9 +20,14 @@ pub const SHADOW_BATCH: usize = 256;
 
 /// How direct light is computed at each shading point.
 #[derive(Clone, Copy)]
-pub enum DirectLighting {
+pub enum DirectLighting<'a> {
     /// Every light, one shadow ray each: the reference.
     Exact,
+    /// A lightcut through the scene's light trees.
+    Lightcuts {
+        trees: &'a LightTrees,
+        settings: CutSettings,
+    },
 }
 
 /// Reusable per-thread buffers (no allocation per shading point).
@@ -28,6 +36,7 @@ pub struct Scratch {
     rays: Vec<ShadowRay>,
     values: Vec<DVec3>,
     occluded: Vec<bool>,
+    cut: CutScratch,
 }
 
 /// Counters for one shading point or summed over many.
@@ -66,7 +75,7 @@ pub struct SampleResult {
 pub struct Integrator<'a> {
     pub geometry: &'a Geometry<'a>,
     pub lights: &'a Lights,
-    pub direct: DirectLighting,
+    pub direct: DirectLighting<'a>,
     pub max_mirror_depth: u32,
 }
 
@@ -117,31 +126,20 @@ impl Integrator<'_> {
                 stats.max_cut = stats.max_cut.max(n);
                 exact_direct(self.geometry, self.lights, sp, scratch, stats)
             }
+            DirectLighting::Lightcuts { trees, settings } => cut::evaluate(
+                &trees.trees,
+                sp,
+                &self.geometry.embree,
+                &settings,
+                &mut scratch.cut,
+                stats,
+            ),
         }
     }
 }
 
-/// The unoccluded contribution M * G * I of a point light at `y` with
-/// intensity `intensity` ([LC05] eq. 1 without V), in f64.
-#[must_use]
-pub fn omni_contribution(sp: &SurfacePoint<'_>, y: Vec3, intensity: Vec3) -> DVec3 {
-    let d = y - sp.p;
-    let d2 = d.length_squared();
-    if d2 == 0.0 {
-        // The shading point is at the light: its direction is undefined and the
-        // light contributes nothing here (documented in docs/scene-format.md).
-        return DVec3::ZERO;
-    }
-    let wi = d / d2.sqrt();
-    let m = sp.material_term(wi);
-    if m == Vec3::ZERO {
-        return DVec3::ZERO;
-    }
-    let g = 1.0 / f64::from(d2).max(sp.min_distance_squared());
-    m.as_dvec3() * g * intensity.as_dvec3()
-}
-
-/// Every light, one shadow ray each, in batches.
+/// Every light, one shadow ray each, in batches of `SHADOW_BATCH`; summed
+/// in light order (omni, oriented, directional), so deterministic.
 fn exact_direct(
     geometry: &Geometry<'_>,
     lights: &Lights,
@@ -149,34 +147,75 @@ fn exact_direct(
     scratch: &mut Scratch,
     stats: &mut ShadingStats,
 ) -> DVec3 {
-    let mut sum = DVec3::ZERO;
-    for chunk in lights.omni.chunks(SHADOW_BATCH) {
-        scratch.rays.clear();
-        scratch.values.clear();
-        for light in chunk {
-            let value = omni_contribution(sp, light.position, light.intensity);
-            if value == DVec3::ZERO {
-                continue;
-            }
-            match sp.shadow_ray_to(light.position) {
-                Some(ray) => {
-                    scratch.rays.push(ray);
-                    scratch.values.push(value);
-                }
-                None => sum += value,
-            }
+    let mut batch = ExactBatch {
+        geometry,
+        sp,
+        scratch,
+        stats,
+        sum: DVec3::ZERO,
+    };
+    for l in &lights.omni {
+        batch.add(LightKind::Omni, l.position, Vec3::ZERO, l.intensity);
+    }
+    for l in &lights.oriented {
+        batch.add(LightKind::Oriented, l.position, l.normal, l.intensity);
+    }
+    for l in &lights.directional {
+        batch.add(
+            LightKind::Directional,
+            l.direction,
+            Vec3::ZERO,
+            l.irradiance,
+        );
+    }
+    batch.flush();
+    batch.sum
+}
+
+/// Collects unoccluded contributions and their shadow rays until a batch is full.
+struct ExactBatch<'a, 'p> {
+    geometry: &'a Geometry<'a>,
+    sp: &'a SurfacePoint<'p>,
+    scratch: &'a mut Scratch,
+    stats: &'a mut ShadingStats,
+    sum: DVec3,
+}
+
+impl ExactBatch<'_, '_> {
+    fn add(&mut self, kind: LightKind, position: Vec3, normal: Vec3, intensity: Vec3) {
+        let value = light_term(kind, self.sp, position, normal) * intensity.as_dvec3();
+        if value == DVec3::ZERO {
+            return;
         }
-        geometry
-            .embree
-            .occluded_batch(&scratch.rays, &mut scratch.occluded);
-        stats.shadow_rays += scratch.rays.len() as u64;
-        for (value, &occluded) in scratch.values.iter().zip(&scratch.occluded) {
-            if !occluded {
-                sum += *value;
+        let ray = match kind {
+            LightKind::Directional => Some(self.sp.shadow_ray_towards(position)),
+            _ => self.sp.shadow_ray_to(position),
+        };
+        match ray {
+            Some(ray) => {
+                self.scratch.rays.push(ray);
+                self.scratch.values.push(value);
+                if self.scratch.rays.len() == SHADOW_BATCH {
+                    self.flush();
+                }
             }
+            None => self.sum += value,
         }
     }
-    sum
+
+    fn flush(&mut self) {
+        self.geometry
+            .embree
+            .occluded_batch(&self.scratch.rays, &mut self.scratch.occluded);
+        self.stats.shadow_rays += self.scratch.rays.len() as u64;
+        for (value, &occluded) in self.scratch.values.iter().zip(&self.scratch.occluded) {
+            if !occluded {
+                self.sum += *value;
+            }
+        }
+        self.scratch.rays.clear();
+        self.scratch.values.clear();
+    }
 }
 
 /// A finite f32 for the film: NaN becomes 0 and magnitudes beyond f32's

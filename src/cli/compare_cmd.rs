@@ -1,0 +1,89 @@
+//! `lightcuts compare`: relative error of a render against a reference.
+
+use std::path::PathBuf;
+
+use clap::Args;
+
+use super::CliError;
+use crate::output::compare::{compare_files, heat, Comparison};
+use crate::output::exr::write_diff_exr;
+use crate::output::preview::write_rgb_png;
+use crate::output::OutputError;
+
+#[derive(Debug, Args)]
+pub struct CompareArgs {
+    /// The image under test.
+    pub test: PathBuf,
+    /// The reference (usually an --exact render of the same scene and settings).
+    pub reference: PathBuf,
+    /// Print the figures as JSON.
+    #[arg(long)]
+    pub json: bool,
+    /// Write a heat map of the relative error as a PNG.
+    #[arg(long, value_name = "DIFF.png")]
+    pub diff: Option<PathBuf>,
+    /// Write the absolute difference (R, G, B) and relative error as an EXR.
+    #[arg(long, value_name = "DIFF.exr")]
+    pub diff_exr: Option<PathBuf>,
+}
+
+pub fn run(args: &CompareArgs) -> Result<(), CliError> {
+    let result = compare_files(&args.test, &args.reference)?;
+    if let Some(path) = &args.diff {
+        let rgb: Vec<u8> = result.relative.iter().flat_map(|&e| heat(e)).collect();
+        write_rgb_png(path, result.width as u32, result.height as u32, &rgb)?;
+    }
+    if let Some(path) = &args.diff_exr {
+        write_diff_exr(path, &result)?;
+    }
+    print_comparison(&result.summary, args.json)
+        .map_err(|e| OutputError::new(std::path::Path::new("<stdout>"), e))?;
+    Ok(())
+}
+
+fn print_comparison(c: &Comparison, json: bool) -> Result<(), String> {
+    if json {
+        println!(
+            "{}",
+            serde_json::to_string_pretty(c).map_err(|e| e.to_string())?
+        );
+        return Ok(());
+    }
+    println!("pixels                 {}", c.pixels);
+    println!("relative error (luminance, floor {:.3e})", c.floor);
+    println!(
+        "  mean                 {:.4}%",
+        100.0 * c.mean_relative_error
+    );
+    println!(
+        "  median               {:.4}%",
+        100.0 * c.median_relative_error
+    );
+    println!(
+        "  95th percentile      {:.4}%",
+        100.0 * c.p95_relative_error
+    );
+    println!(
+        "  99th percentile      {:.4}%",
+        100.0 * c.p99_relative_error
+    );
+    println!(
+        "  maximum              {:.4}%",
+        100.0 * c.max_relative_error
+    );
+    println!(
+        "pixels above 1%        {:.4}%",
+        100.0 * c.fraction_above_1_percent
+    );
+    println!(
+        "pixels above 2%        {:.4}%",
+        100.0 * c.fraction_above_2_percent
+    );
+    println!(
+        "pixels above 5%        {:.4}%",
+        100.0 * c.fraction_above_5_percent
+    );
+    println!("RMSE                   {:.6e}", c.rmse);
+    println!("relative MSE           {:.6e}", c.relative_mse);
+    Ok(())
+}

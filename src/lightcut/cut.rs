@@ -1,0 +1,311 @@
+//! The cut per shading point ([LC05] sec. 4; ../shared/LIGHTCUTS.md section 5).
+//!
+//! Start from the roots of the trees present; keep the cut in a max-heap on
+//! error bound; replace the node with the largest bound by its children while
+//! that bound exceeds `error` times the total estimate and the cut is smaller
+//! than `max_cut`. The child that shares its parent's representative reuses
+//! the parent's M * G * V (no new shadow ray); the other costs one shadow ray.
+//!
+//! Shadow rays go to Embree in batches: each step pops up to
+//! `REFINE_BATCH` nodes that are above the threshold, refines them all, and
+//! traces their new rays in one call. Refining a node the one-at-a-time
+//! algorithm would have kept only tightens the result.
+//!
+//! Bounds and estimates are compared on luminance. The final radiance is the
+//! sum of the cut's estimates in creation order, so it is deterministic and
+//! free of the cancellation a running total accumulates.
+
+use std::cmp::Ordering;
+use std::collections::BinaryHeap;
+use std::time::{Duration, Instant};
+
+use glam::DVec3;
+
+use super::bounds::{error_bound, light_term, PointBounds};
+use crate::embree::{Scene as EmbreeScene, ShadowRay};
+use crate::light::{luminance64, Lights};
+use crate::light_tree::{ploc, LightKind, LightTree, NodeRef};
+use crate::render::geometry::SurfacePoint;
+use crate::render::integrator::ShadingStats;
+
+/// A tree with at most this many lights is evaluated light by light: for so
+/// few lights the bounds cannot save a shadow ray worth their cost, and the
+/// renderer must never be slower than `--exact` (measured: few4 in the README).
+pub const EXHAUSTIVE_LIGHTS: usize = 8;
+
+/// Nodes refined per batch of shadow rays.
+pub const REFINE_BATCH: usize = 8;
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CutSettings {
+    /// Relative error threshold epsilon (0.02 = 2%, Weber's law).
+    pub error: f64,
+    /// Largest cut, in nodes.
+    pub max_cut: usize,
+}
+
+impl Default for CutSettings {
+    fn default() -> Self {
+        Self {
+            error: 0.02,
+            max_cut: 1000,
+        }
+    }
+}
+
+/// The light trees of a scene: one per light kind the scene has, no more.
+pub struct LightTrees {
+    pub trees: Vec<LightTree>,
+    /// Build time of each tree, in the order of `trees`.
+    pub build_times: Vec<Duration>,
+}
+
+impl LightTrees {
+    /// Builds a tree for each kind of light present (on the current rayon pool).
+    #[must_use]
+    pub fn build(lights: &Lights, seed: u64) -> Self {
+        let mut trees = Vec::new();
+        let mut build_times = Vec::new();
+        for kind in [LightKind::Omni, LightKind::Oriented, LightKind::Directional] {
+            if lights.count(kind) == 0 {
+                continue;
+            }
+            let start = Instant::now();
+            let leaves = lights.tree_lights(kind);
+            trees.push(ploc::build(kind, &leaves, seed));
+            build_times.push(start.elapsed());
+        }
+        Self { trees, build_times }
+    }
+
+    #[must_use]
+    pub fn memory_bytes(&self) -> usize {
+        self.trees.iter().map(LightTree::memory_bytes).sum()
+    }
+}
+
+/// One node of the cut (or one that was in it and has been refined).
+#[derive(Debug, Clone, Copy)]
+struct Entry {
+    tree: u8,
+    node: NodeRef,
+    /// M * G * V of the node's representative, per unit intensity.
+    unit: DVec3,
+    estimate: DVec3,
+    in_cut: bool,
+}
+
+/// A node whose representative still needs its shadow ray.
+#[derive(Debug, Clone, Copy)]
+struct Pending {
+    tree: u8,
+    node: NodeRef,
+    unoccluded: DVec3,
+    /// Index into the ray batch, or None when no ray is needed.
+    ray: Option<u32>,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct HeapItem {
+    bound: f64,
+    entry: u32,
+}
+
+impl Eq for HeapItem {}
+
+impl Ord for HeapItem {
+    fn cmp(&self, other: &Self) -> Ordering {
+        // Largest bound first; ties go to the earlier entry (deterministic).
+        self.bound
+            .total_cmp(&other.bound)
+            .then_with(|| other.entry.cmp(&self.entry))
+    }
+}
+
+impl PartialOrd for HeapItem {
+    fn partial_cmp(&self, other: &Self) -> Option<Ordering> {
+        Some(self.cmp(other))
+    }
+}
+
+/// Per-thread buffers reused across shading points.
+#[derive(Default)]
+pub struct CutScratch {
+    entries: Vec<Entry>,
+    heap: BinaryHeap<HeapItem>,
+    pending: Vec<Pending>,
+    rays: Vec<ShadowRay>,
+    occluded: Vec<bool>,
+}
+
+struct Cut<'a, 'p> {
+    trees: &'a [LightTree],
+    sp: &'a SurfacePoint<'p>,
+    bounds: PointBounds<'a, 'p>,
+    embree: &'a EmbreeScene,
+    scratch: &'a mut CutScratch,
+    total: DVec3,
+    cut_nodes: usize,
+    shadow_rays: u64,
+}
+
+impl Cut<'_, '_> {
+    /// Queues a node whose representative is new to the cut.
+    fn add_new(&mut self, tree: u8, node: NodeRef) {
+        let t = &self.trees[tree as usize];
+        let rep = t.node_representative(node) as usize;
+        let normal = if t.kind == LightKind::Oriented {
+            t.light_normal[rep]
+        } else {
+            glam::Vec3::ZERO
+        };
+        let position = t.light_position[rep];
+        let unoccluded = light_term(t.kind, self.sp, position, normal);
+        let ray = if unoccluded == DVec3::ZERO {
+            None
+        } else {
+            let ray = match t.kind {
+                LightKind::Directional => Some(self.sp.shadow_ray_towards(position)),
+                _ => self.sp.shadow_ray_to(position),
+            };
+            ray.map(|r| {
+                self.scratch.rays.push(r);
+                (self.scratch.rays.len() - 1) as u32
+            })
+        };
+        self.scratch.pending.push(Pending {
+            tree,
+            node,
+            unoccluded,
+            ray,
+        });
+    }
+
+    /// Adds a node whose M * G * V is known (it shares its parent's representative).
+    fn add_known(&mut self, tree: u8, node: NodeRef, unit: DVec3) {
+        let t = &self.trees[tree as usize];
+        let intensity = t.node_intensity(node);
+        let estimate = unit * intensity.as_dvec3();
+        let index = self.scratch.entries.len() as u32;
+        self.scratch.entries.push(Entry {
+            tree,
+            node,
+            unit,
+            estimate,
+            in_cut: true,
+        });
+        self.total += estimate;
+        self.cut_nodes += 1;
+        if !node.is_leaf() {
+            let (lo, hi) = t.node_bounds(node);
+            let cone = if t.kind == LightKind::Oriented {
+                t.node_cone(node)
+            } else {
+                crate::light_tree::Cone::of_direction(glam::Vec3::Z)
+            };
+            let bound = error_bound(self.bounds.cluster(t.kind, lo, hi, cone), intensity);
+            if bound > 0.0 {
+                self.scratch.heap.push(HeapItem {
+                    bound,
+                    entry: index,
+                });
+            }
+        }
+    }
+
+    /// Traces the queued shadow rays in one batch and adds their nodes.
+    fn flush(&mut self) {
+        if self.scratch.pending.is_empty() {
+            return;
+        }
+        self.embree
+            .occluded_batch(&self.scratch.rays, &mut self.scratch.occluded);
+        self.shadow_rays += self.scratch.rays.len() as u64;
+        let pending = std::mem::take(&mut self.scratch.pending);
+        for p in &pending {
+            let visible = p.ray.is_none_or(|r| !self.scratch.occluded[r as usize]);
+            let unit = if visible { p.unoccluded } else { DVec3::ZERO };
+            self.add_known(p.tree, p.node, unit);
+        }
+        self.scratch.pending = pending;
+        self.scratch.pending.clear();
+        self.scratch.rays.clear();
+    }
+}
+
+/// Direct light at `sp` from every tree, by a lightcut.
+pub fn evaluate(
+    trees: &[LightTree],
+    sp: &SurfacePoint<'_>,
+    embree: &EmbreeScene,
+    settings: &CutSettings,
+    scratch: &mut CutScratch,
+    stats: &mut ShadingStats,
+) -> DVec3 {
+    scratch.entries.clear();
+    scratch.heap.clear();
+    scratch.pending.clear();
+    scratch.rays.clear();
+    let mut cut = Cut {
+        trees,
+        sp,
+        bounds: PointBounds::new(sp),
+        embree,
+        scratch,
+        total: DVec3::ZERO,
+        cut_nodes: 0,
+        shadow_rays: 0,
+    };
+    for (i, tree) in trees.iter().enumerate() {
+        let Some(root) = tree.root else { continue };
+        if tree.light_count() <= EXHAUSTIVE_LIGHTS {
+            for light in 0..tree.light_count() {
+                cut.add_new(i as u8, NodeRef::leaf(light as u32));
+            }
+        } else {
+            cut.add_new(i as u8, root);
+        }
+    }
+    cut.flush();
+    loop {
+        let threshold = settings.error * luminance64(cut.total).max(0.0);
+        let mut refined = 0;
+        while refined < REFINE_BATCH && cut.cut_nodes + refined < settings.max_cut {
+            let Some(top) = cut.scratch.heap.peek().copied() else {
+                break;
+            };
+            if top.bound <= threshold {
+                break;
+            }
+            cut.scratch.heap.pop();
+            let entry = cut.scratch.entries[top.entry as usize];
+            cut.scratch.entries[top.entry as usize].in_cut = false;
+            cut.total -= entry.estimate;
+            cut.cut_nodes -= 1;
+            let tree = &trees[entry.tree as usize];
+            let representative = tree.node_representative(entry.node);
+            for child in tree.node_children(entry.node) {
+                if tree.node_representative(child) == representative {
+                    cut.add_known(entry.tree, child, entry.unit);
+                } else {
+                    cut.add_new(entry.tree, child);
+                }
+            }
+            refined += 1;
+        }
+        if refined == 0 {
+            break;
+        }
+        cut.flush();
+    }
+    let radiance = cut
+        .scratch
+        .entries
+        .iter()
+        .filter(|e| e.in_cut)
+        .fold(DVec3::ZERO, |sum, e| sum + e.estimate);
+    stats.shadow_rays += cut.shadow_rays;
+    stats.cut_nodes += cut.cut_nodes as u64;
+    stats.max_cut = stats.max_cut.max(cut.cut_nodes as u64);
+    radiance
+}
