@@ -23,18 +23,9 @@ fn find_embree() -> Option<Embree> {
     for major in [4, 3] {
         for root in &roots {
             let include_dir = root.join("include");
-            if include_dir
-                .join(format!("embree{major}/rtcore_config.h"))
-                .is_file()
-            {
-                let lib_dir = [root.join("lib"), root.join("lib64")]
-                    .into_iter()
-                    .find(|dir| has_library(dir, major));
-                return Some(Embree {
-                    major,
-                    include_dir,
-                    lib_dir,
-                });
+            if include_dir.join(format!("embree{major}/rtcore_config.h")).is_file() {
+                let lib_dir = [root.join("lib"), root.join("lib64")].into_iter().find(|dir| has_library(dir, major));
+                return Some(Embree { major, include_dir, lib_dir });
             }
         }
     }
@@ -103,7 +94,5 @@ fn main() {
             std::process::exit(1);
         });
     let out = PathBuf::from(env::var("OUT_DIR").expect("cargo sets OUT_DIR"));
-    bindings
-        .write_to_file(out.join("shim_bindings.rs"))
-        .expect("OUT_DIR is writable");
+    bindings.write_to_file(out.join("shim_bindings.rs")).expect("OUT_DIR is writable");
 }

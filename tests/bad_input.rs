@@ -7,20 +7,13 @@ fn assert_rejected(dir: &TempDir, scene_name: &str, text: &str, expect: &[&str])
     let scene = dir.write(scene_name, text);
     let out = dir.path("out.exr");
     let stderr = lightcuts_fails(&["render", s(&scene), "-o", s(&out), "--exact", "--quiet"]);
-    assert!(
-        stderr.contains(scene_name),
-        "message does not name {scene_name}: {stderr}"
-    );
+    assert!(stderr.contains(scene_name), "message does not name {scene_name}: {stderr}");
     for e in expect {
         assert!(stderr.contains(e), "message lacks '{e}': {stderr}");
     }
     assert_eq!(stderr.lines().count(), 1, "one line: {stderr}");
     assert!(!out.exists(), "an output file was written");
-    assert!(
-        dir.files().iter().all(|f| !f.contains("out.exr")),
-        "a temporary file was left: {:?}",
-        dir.files()
-    );
+    assert!(dir.files().iter().all(|f| !f.contains("out.exr")), "a temporary file was left: {:?}", dir.files());
 }
 
 #[test]
@@ -50,26 +43,11 @@ fn misspelt_field_is_named() {
 #[test]
 fn missing_scene_file_and_output_directory_are_clear_errors() {
     let dir = TempDir::new("paths");
-    let stderr = lightcuts_fails(&[
-        "render",
-        s(&dir.path("none.toml")),
-        "-o",
-        s(&dir.path("o.exr")),
-        "--exact",
-    ]);
+    let stderr = lightcuts_fails(&["render", s(&dir.path("none.toml")), "-o", s(&dir.path("o.exr")), "--exact"]);
     assert!(stderr.contains("none.toml"), "{stderr}");
     let scene = dir.write("ok.toml", &small_scene(1));
     let out = dir.path("missing/dir/o.exr");
-    let stderr = lightcuts_fails(&[
-        "render",
-        s(&scene),
-        "-o",
-        s(&out),
-        "--exact",
-        "--quiet",
-        "--resolution",
-        "8x6",
-    ]);
+    let stderr = lightcuts_fails(&["render", s(&scene), "-o", s(&out), "--exact", "--quiet", "--resolution", "8x6"]);
     assert!(stderr.contains("missing/dir"), "{stderr}");
 }
 
@@ -78,28 +56,9 @@ fn bad_command_line_values_are_named() {
     let dir = TempDir::new("flags");
     let scene = dir.write("ok.toml", &small_scene(1));
     let out = dir.path("o.exr");
-    let stderr = lightcuts_fails(&[
-        "render",
-        s(&scene),
-        "-o",
-        s(&out),
-        "--exact",
-        "--pixel-bounds",
-        "0,200,0,10",
-    ]);
+    let stderr = lightcuts_fails(&["render", s(&scene), "-o", s(&out), "--exact", "--pixel-bounds", "0,200,0,10"]);
     assert!(stderr.contains("--pixel-bounds"), "{stderr}");
-    let stderr = lightcuts_fails(&[
-        "render",
-        s(&scene),
-        "-o",
-        s(&out),
-        "--exact",
-        "--resolution",
-        "100000x100000",
-    ]);
-    assert!(
-        stderr.contains("--resolution") && stderr.contains("memory"),
-        "{stderr}"
-    );
+    let stderr = lightcuts_fails(&["render", s(&scene), "-o", s(&out), "--exact", "--resolution", "100000x100000"]);
+    assert!(stderr.contains("--resolution") && stderr.contains("memory"), "{stderr}");
     assert!(!out.exists());
 }

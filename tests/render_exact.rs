@@ -44,10 +44,7 @@ intensity = {intensity:?}
         let expected = kd[c] / std::f32::consts::PI * intensity[c] / (radius * radius);
         for &v in image.channel(&out, name).unwrap() {
             // The tessellation (512 segments) moves points by at most 2e-5 R.
-            assert!(
-                (v - expected).abs() <= 1e-3 * expected,
-                "{name}: {v} vs {expected}"
-            );
+            assert!((v - expected).abs() <= 1e-3 * expected, "{name}: {v} vs {expected}");
         }
     }
     assert!(image.channel(&out, "A").unwrap().iter().all(|&a| a == 1.0));
@@ -58,29 +55,12 @@ fn exr_has_every_channel_and_attribute_and_a_png_preview() {
     let dir = TempDir::new("channels");
     let scene = dir.write("small.toml", &small_scene(3));
     let (out, png) = (dir.path("small.exr"), dir.path("small.png"));
-    let stdout = lightcuts_ok(&[
-        "render",
-        s(&scene),
-        "-o",
-        s(&out),
-        "--exact",
-        "--png",
-        s(&png),
-        "--seed",
-        "7",
-        "--spp",
-        "2",
-    ]);
-    assert!(
-        stdout.contains("shadow rays/s"),
-        "statistics block: {stdout}"
-    );
+    let stdout =
+        lightcuts_ok(&["render", s(&scene), "-o", s(&out), "--exact", "--png", s(&png), "--seed", "7", "--spp", "2"]);
+    assert!(stdout.contains("shadow rays/s"), "statistics block: {stdout}");
     let image = read_exr(&out).unwrap();
     let names: Vec<&str> = image.channels.keys().map(String::as_str).collect();
-    assert_eq!(
-        names,
-        ["A", "B", "G", "N.X", "N.Y", "N.Z", "R", "Z", "albedo.B", "albedo.G", "albedo.R"]
-    );
+    assert_eq!(names, ["A", "B", "G", "N.X", "N.Y", "N.Z", "R", "Z", "albedo.B", "albedo.G", "albedo.R"]);
     assert_eq!((image.width, image.height), (96, 72));
     assert_eq!(image.attributes["lightcuts:renderMode"], "exact");
     assert_eq!(image.attributes["lightcuts:lights"], "9");
@@ -88,25 +68,14 @@ fn exr_has_every_channel_and_attribute_and_a_png_preview() {
     assert_eq!(image.attributes["lightcuts:samplesPerPixel"], "2");
     assert!(image.attributes["software"].starts_with("lightcuts "));
     assert!(image.attributes["lightcuts:sceneFile"].ends_with("small.toml"));
-    assert!(
-        image.attributes["lightcuts:renderTimeSeconds"]
-            .parse::<f64>()
-            .unwrap()
-            > 0.0
-    );
+    assert!(image.attributes["lightcuts:renderTimeSeconds"].parse::<f64>().unwrap() > 0.0);
     for (name, values) in &image.channels {
-        assert!(
-            values.iter().all(|v| v.is_finite()),
-            "{name} has a non-finite value"
-        );
+        assert!(values.iter().all(|v| v.is_finite()), "{name} has a non-finite value");
     }
     // The image is not black, and the floor's normal points up.
     assert!(image.channel(&out, "R").unwrap().iter().any(|&v| v > 0.01));
     let ny = image.channel(&out, "N.Y").unwrap();
-    assert!(
-        (ny[ny.len() - 1] - 1.0).abs() < 1e-5,
-        "bottom-right pixel sees the floor"
-    );
+    assert!((ny[ny.len() - 1] - 1.0).abs() < 1e-5, "bottom-right pixel sees the floor");
     let decoder = png::Decoder::new(std::fs::File::open(&png).unwrap());
     let info = decoder.read_info().unwrap();
     assert_eq!((info.info().width, info.info().height), (96, 72));
@@ -119,17 +88,7 @@ fn half_floats_for_the_beauty_only() {
     let dir = TempDir::new("half");
     let scene = dir.write("small.toml", &small_scene(2));
     let out = dir.path("half.exr");
-    lightcuts_ok(&[
-        "render",
-        s(&scene),
-        "-o",
-        s(&out),
-        "--exact",
-        "--half",
-        "--quiet",
-        "--resolution",
-        "16x12",
-    ]);
+    lightcuts_ok(&["render", s(&scene), "-o", s(&out), "--exact", "--half", "--quiet", "--resolution", "16x12"]);
     let header = exr::meta::MetaData::read_from_file(&out, false).unwrap();
     for channel in &header.headers[0].channels.list {
         let expected = if ["R", "G", "B", "A"].contains(&channel.name.to_string().as_str()) {
@@ -152,31 +111,12 @@ fn any_thread_count_gives_the_same_bits() {
     let mut images = Vec::new();
     for threads in ["1", "2", "3"] {
         let out = dir.path(&format!("t{threads}.exr"));
-        lightcuts_ok(&[
-            "render",
-            s(&scene),
-            "-o",
-            s(&out),
-            "--exact",
-            "--quiet",
-            "--threads",
-            threads,
-            "--spp",
-            "2",
-        ]);
+        lightcuts_ok(&["render", s(&scene), "-o", s(&out), "--exact", "--quiet", "--threads", threads, "--spp", "2"]);
         images.push(read_exr(&out).unwrap());
     }
     for name in images[0].channels.keys() {
-        assert_eq!(
-            pixels(&images[0], name),
-            pixels(&images[1], name),
-            "{name}: 1 vs 2 threads"
-        );
-        assert_eq!(
-            pixels(&images[0], name),
-            pixels(&images[2], name),
-            "{name}: 1 vs 3 threads"
-        );
+        assert_eq!(pixels(&images[0], name), pixels(&images[1], name), "{name}: 1 vs 2 threads");
+        assert_eq!(pixels(&images[0], name), pixels(&images[2], name), "{name}: 1 vs 3 threads");
     }
 }
 
@@ -187,16 +127,7 @@ fn a_pixel_window_matches_the_same_pixels_of_the_full_frame() {
     let (full, part) = (dir.path("full.exr"), dir.path("part.exr"));
     lightcuts_ok(&["render", s(&scene), "-o", s(&full), "--exact", "--quiet"]);
     // A window that does not align with the 16-pixel tiles.
-    lightcuts_ok(&[
-        "render",
-        s(&scene),
-        "-o",
-        s(&part),
-        "--exact",
-        "--quiet",
-        "--pixel-bounds",
-        "13,61,7,50",
-    ]);
+    lightcuts_ok(&["render", s(&scene), "-o", s(&part), "--exact", "--quiet", "--pixel-bounds", "13,61,7,50"]);
     let (full, part) = (read_exr(&full).unwrap(), read_exr(&part).unwrap());
     assert_eq!((part.x0, part.y0, part.width, part.height), (13, 7, 48, 43));
     assert_eq!((part.display_width, part.display_height), (96, 72));
@@ -207,13 +138,7 @@ fn a_pixel_window_matches_the_same_pixels_of_the_full_frame() {
             for x in 0..48 {
                 let a = f[(y + 7) * 96 + x + 13];
                 let b = p[y * 48 + x];
-                assert_eq!(
-                    a.to_bits(),
-                    b.to_bits(),
-                    "{name} at ({}, {})",
-                    x + 13,
-                    y + 7
-                );
+                assert_eq!(a.to_bits(), b.to_bits(), "{name} at ({}, {})", x + 13, y + 7);
             }
         }
     }
@@ -224,35 +149,9 @@ fn command_line_overrides_apply() {
     let dir = TempDir::new("overrides");
     let scene = dir.write("small.toml", &small_scene(2));
     let (a, b) = (dir.path("a.exr"), dir.path("b.exr"));
-    lightcuts_ok(&[
-        "render",
-        s(&scene),
-        "-o",
-        s(&a),
-        "--exact",
-        "--quiet",
-        "--resolution",
-        "40x30",
-        "--seed",
-        "1",
-    ]);
-    lightcuts_ok(&[
-        "render",
-        s(&scene),
-        "-o",
-        s(&b),
-        "--exact",
-        "--quiet",
-        "--resolution",
-        "40x30",
-        "--seed",
-        "2",
-    ]);
+    lightcuts_ok(&["render", s(&scene), "-o", s(&a), "--exact", "--quiet", "--resolution", "40x30", "--seed", "1"]);
+    lightcuts_ok(&["render", s(&scene), "-o", s(&b), "--exact", "--quiet", "--resolution", "40x30", "--seed", "2"]);
     let (a, b) = (read_exr(&a).unwrap(), read_exr(&b).unwrap());
     assert_eq!((a.width, a.height), (40, 30));
-    assert_ne!(
-        pixels(&a, "R"),
-        pixels(&b, "R"),
-        "the seed moves the samples"
-    );
+    assert_ne!(pixels(&a, "R"), pixels(&b, "R"), "the seed moves the samples");
 }

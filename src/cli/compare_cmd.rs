@@ -36,53 +36,25 @@ pub fn run(args: &CompareArgs) -> Result<(), CliError> {
     if let Some(path) = &args.diff_exr {
         write_diff_exr(path, &result)?;
     }
-    print_comparison(&result.summary, args.json)
-        .map_err(|e| OutputError::new(std::path::Path::new("<stdout>"), e))?;
+    print_comparison(&result.summary, args.json).map_err(|e| OutputError::new(std::path::Path::new("<stdout>"), e))?;
     Ok(())
 }
 
 fn print_comparison(c: &Comparison, json: bool) -> Result<(), String> {
     if json {
-        println!(
-            "{}",
-            serde_json::to_string_pretty(c).map_err(|e| e.to_string())?
-        );
+        println!("{}", serde_json::to_string_pretty(c).map_err(|e| e.to_string())?);
         return Ok(());
     }
     println!("pixels                 {}", c.pixels);
     println!("relative error (luminance, floor {:.3e})", c.floor);
-    println!(
-        "  mean                 {:.4}%",
-        100.0 * c.mean_relative_error
-    );
-    println!(
-        "  median               {:.4}%",
-        100.0 * c.median_relative_error
-    );
-    println!(
-        "  95th percentile      {:.4}%",
-        100.0 * c.p95_relative_error
-    );
-    println!(
-        "  99th percentile      {:.4}%",
-        100.0 * c.p99_relative_error
-    );
-    println!(
-        "  maximum              {:.4}%",
-        100.0 * c.max_relative_error
-    );
-    println!(
-        "pixels above 1%        {:.4}%",
-        100.0 * c.fraction_above_1_percent
-    );
-    println!(
-        "pixels above 2%        {:.4}%",
-        100.0 * c.fraction_above_2_percent
-    );
-    println!(
-        "pixels above 5%        {:.4}%",
-        100.0 * c.fraction_above_5_percent
-    );
+    println!("  mean                 {:.4}%", 100.0 * c.mean_relative_error);
+    println!("  median               {:.4}%", 100.0 * c.median_relative_error);
+    println!("  95th percentile      {:.4}%", 100.0 * c.p95_relative_error);
+    println!("  99th percentile      {:.4}%", 100.0 * c.p99_relative_error);
+    println!("  maximum              {:.4}%", 100.0 * c.max_relative_error);
+    println!("pixels above 1%        {:.4}%", 100.0 * c.fraction_above_1_percent);
+    println!("pixels above 2%        {:.4}%", 100.0 * c.fraction_above_2_percent);
+    println!("pixels above 5%        {:.4}%", 100.0 * c.fraction_above_5_percent);
     println!("RMSE                   {:.6e}", c.rmse);
     println!("relative MSE           {:.6e}", c.relative_mse);
     Ok(())

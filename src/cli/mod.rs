@@ -14,11 +14,7 @@ use crate::render::geometry::GeometryError;
 use crate::scene::SceneError;
 
 #[derive(Debug, Parser)]
-#[command(
-    name = "lightcuts",
-    version,
-    about = "A many-light renderer: Lightcuts (Walter et al. 2005) on Intel Embree"
-)]
+#[command(name = "lightcuts", version, about = "A many-light renderer: Lightcuts (Walter et al. 2005) on Intel Embree")]
 pub struct Cli {
     #[command(subcommand)]
     pub command: Command,
@@ -46,10 +42,7 @@ pub enum CliError {
     Embree(#[from] EmbreeError),
     /// A shape could not be handed to Embree.
     #[error("{file}: {source}")]
-    Geometry {
-        file: PathBuf,
-        source: GeometryError,
-    },
+    Geometry { file: PathBuf, source: GeometryError },
     /// A command-line value is invalid: the user's input.
     #[error("{flag}: {message}")]
     Usage { flag: &'static str, message: String },
@@ -88,17 +81,9 @@ fn ctrlc_cleanup() {
 
 /// Parses `WxH`.
 pub fn parse_resolution(s: &str) -> Result<(u32, u32), String> {
-    let (w, h) = s
-        .split_once(['x', 'X'])
-        .ok_or_else(|| format!("expected WIDTHxHEIGHT, got '{s}'"))?;
-    let w: u32 = w
-        .trim()
-        .parse()
-        .map_err(|_| format!("width '{w}' is not a positive integer"))?;
-    let h: u32 = h
-        .trim()
-        .parse()
-        .map_err(|_| format!("height '{h}' is not a positive integer"))?;
+    let (w, h) = s.split_once(['x', 'X']).ok_or_else(|| format!("expected WIDTHxHEIGHT, got '{s}'"))?;
+    let w: u32 = w.trim().parse().map_err(|_| format!("width '{w}' is not a positive integer"))?;
+    let h: u32 = h.trim().parse().map_err(|_| format!("height '{h}' is not a positive integer"))?;
     if w == 0 || h == 0 {
         return Err(format!("width and height must be at least 1, got {w}x{h}"));
     }
@@ -113,10 +98,7 @@ pub fn parse_pixel_bounds(s: &str) -> Result<[u32; 4], String> {
     }
     let mut out = [0u32; 4];
     for (o, p) in out.iter_mut().zip(&parts) {
-        *o = p
-            .trim()
-            .parse()
-            .map_err(|_| format!("'{p}' is not a non-negative integer"))?;
+        *o = p.trim().parse().map_err(|_| format!("'{p}' is not a non-negative integer"))?;
     }
     Ok(out)
 }

@@ -73,10 +73,7 @@ pub fn pass_settings(
     check_resolution(&scene.path, "--resolution", width, height)?;
     let spp = spp.unwrap_or(scene.film.spp);
     if spp == 0 {
-        return Err(CliError::Usage {
-            flag: "--spp",
-            message: "must be at least 1".into(),
-        });
+        return Err(CliError::Usage { flag: "--spp", message: "must be at least 1".into() });
     }
     let bounds = match pixel_bounds {
         None => PixelBounds::full(width, height),
@@ -90,61 +87,32 @@ pub fn pass_settings(
             PixelBounds { x0, x1, y0, y1 }
         }
     };
-    Ok(PassSettings {
-        width,
-        height,
-        spp,
-        seed,
-        bounds,
-    })
+    Ok(PassSettings { width, height, spp, seed, bounds })
 }
 
 /// The cut settings of a lightcuts render, validated.
 pub fn cut_settings(error: f64, max_cut: usize) -> Result<CutSettings, CliError> {
     if !(error.is_finite() && error >= 0.0) {
-        return Err(CliError::Usage {
-            flag: "--error",
-            message: format!("must be finite and >= 0, got {error}"),
-        });
+        return Err(CliError::Usage { flag: "--error", message: format!("must be finite and >= 0, got {error}") });
     }
     if max_cut == 0 {
-        return Err(CliError::Usage {
-            flag: "--max-cut",
-            message: "must be at least 1".into(),
-        });
+        return Err(CliError::Usage { flag: "--max-cut", message: "must be at least 1".into() });
     }
     Ok(CutSettings { error, max_cut })
 }
 
 pub fn run(args: &RenderArgs) -> Result<(), CliError> {
     let scene = Scene::load(&args.scene)?;
-    let settings = pass_settings(
-        &scene,
-        args.resolution,
-        args.spp,
-        args.seed,
-        args.pixel_bounds,
-    )?;
-    let cut = if args.exact {
-        None
-    } else {
-        Some(cut_settings(args.error, args.max_cut)?)
-    };
+    let settings = pass_settings(&scene, args.resolution, args.spp, args.seed, args.pixel_bounds)?;
+    let cut = if args.exact { None } else { Some(cut_settings(args.error, args.max_cut)?) };
     if !args.exposure.is_finite() {
-        return Err(CliError::Usage {
-            flag: "--exposure",
-            message: format!("must be finite, got {}", args.exposure),
-        });
+        return Err(CliError::Usage { flag: "--exposure", message: format!("must be finite, got {}", args.exposure) });
     }
-    let pool = render::thread_pool(args.threads).map_err(|e| CliError::Threads {
-        threads: args.threads,
-        message: e.to_string(),
-    })?;
+    let pool = render::thread_pool(args.threads)
+        .map_err(|e| CliError::Threads { threads: args.threads, message: e.to_string() })?;
     let device = Device::try_new()?;
-    let geometry = Geometry::try_new(&device, &scene).map_err(|source| CliError::Geometry {
-        file: scene.path.clone(),
-        source,
-    })?;
+    let geometry =
+        Geometry::try_new(&device, &scene).map_err(|source| CliError::Geometry { file: scene.path.clone(), source })?;
     let camera = scene.camera(settings.width, settings.height);
     let start = Instant::now();
     let trees = cut.map(|_| pool.install(|| LightTrees::build(&scene.lights, settings.seed)));
@@ -156,12 +124,8 @@ pub fn run(args: &RenderArgs) -> Result<(), CliError> {
         Some(c) => format!("lightcuts error={} max_cut={}", c.error, c.max_cut),
         None => "exact".to_string(),
     };
-    let integrator = Integrator {
-        geometry: &geometry,
-        lights: &scene.lights,
-        direct,
-        max_mirror_depth: scene.max_mirror_depth,
-    };
+    let integrator =
+        Integrator { geometry: &geometry, lights: &scene.lights, direct, max_mirror_depth: scene.max_mirror_depth };
     let progress = Progress::for_stderr("render", args.quiet);
     let (film, stats) = pool.install(|| render::render(&integrator, &camera, &settings, &progress));
     let seconds = start.elapsed().as_secs_f64();
@@ -174,15 +138,7 @@ pub fn run(args: &RenderArgs) -> Result<(), CliError> {
         spp: settings.spp,
         seed: settings.seed,
     };
-    write_exr(
-        &args.output,
-        &film,
-        ExrChannels {
-            half_beauty: args.half,
-            lightcut_aovs: cut.is_some(),
-        },
-        &meta,
-    )?;
+    write_exr(&args.output, &film, ExrChannels { half_beauty: args.half, lightcut_aovs: cut.is_some() }, &meta)?;
     if let Some(png) = &args.png {
         write_png(png, &film, args.exposure)?;
     }
@@ -191,10 +147,7 @@ pub fn run(args: &RenderArgs) -> Result<(), CliError> {
     let b = settings.bounds;
     let (major, minor, patch) = crate::embree::version();
     let pixels = b.area().max(1) as f64;
-    println!(
-        "lightcuts {} (Embree {major}.{minor}.{patch})",
-        env!("CARGO_PKG_VERSION")
-    );
+    println!("lightcuts {} (Embree {major}.{minor}.{patch})", env!("CARGO_PKG_VERSION"));
     println!("  scene            {}", scene.path.display());
     println!(
         "  lights           {} (omni {}, oriented {}, directional {})",
@@ -227,14 +180,8 @@ pub fn run(args: &RenderArgs) -> Result<(), CliError> {
     }
     println!("  render time      {seconds:.3} s (including tree build)");
     println!("  camera rays      {}", stats.camera_rays);
-    println!(
-        "  shadow rays      {rays} ({:.1} per pixel)",
-        rays as f64 / pixels
-    );
-    println!(
-        "  shadow rays/s    {:.2} M",
-        rays as f64 / stats.time.as_secs_f64().max(1e-9) / 1e6
-    );
+    println!("  shadow rays      {rays} ({:.1} per pixel)", rays as f64 / pixels);
+    println!("  shadow rays/s    {:.2} M", rays as f64 / stats.time.as_secs_f64().max(1e-9) / 1e6);
     if cut.is_some() {
         let points = stats.shading.shading_points.max(1) as f64;
         println!(

@@ -111,17 +111,13 @@ impl Device {
         // SAFETY: config is a valid C string; raw is a valid out-parameter.
         let ptr = unsafe { sys::lc_device_new(config.as_ptr(), &mut raw) };
         match NonNull::new(ptr) {
-            Some(ptr) => Ok(Self {
-                handle: Arc::new(DeviceHandle(ptr)),
-            }),
-            None => Err(
-                to_error(&raw, "creating the device").unwrap_or(EmbreeError {
-                    code: 1,
-                    kind: error_kind(1),
-                    context: "creating the device",
-                    message: "rtcNewDevice returned NULL".into(),
-                }),
-            ),
+            Some(ptr) => Ok(Self { handle: Arc::new(DeviceHandle(ptr)) }),
+            None => Err(to_error(&raw, "creating the device").unwrap_or(EmbreeError {
+                code: 1,
+                kind: error_kind(1),
+                context: "creating the device",
+                message: "rtcNewDevice returned NULL".into(),
+            })),
         }
     }
 
@@ -147,13 +143,7 @@ impl Device {
             context: "creating a scene",
             message: "rtcNewScene returned NULL".into(),
         })?;
-        Ok(SceneBuilder {
-            raw: SceneHandle {
-                ptr,
-                device: self.clone(),
-            },
-            meshes: Vec::new(),
-        })
+        Ok(SceneBuilder { raw: SceneHandle { ptr, device: self.clone() }, meshes: Vec::new() })
     }
 }
 
@@ -211,14 +201,8 @@ pub type GeometryId = u32;
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
 pub enum MeshError {
     /// An index refers past the vertex list (caller's data is malformed).
-    #[error(
-        "triangle {triangle} refers to vertex {index}, but the mesh has {vertex_count} vertices"
-    )]
-    IndexOutOfRange {
-        triangle: usize,
-        index: u32,
-        vertex_count: usize,
-    },
+    #[error("triangle {triangle} refers to vertex {index}, but the mesh has {vertex_count} vertices")]
+    IndexOutOfRange { triangle: usize, index: u32, vertex_count: usize },
     /// A vertex coordinate is NaN or infinite.
     #[error("vertex {vertex} is not finite")]
     NonFiniteVertex { vertex: usize },
@@ -230,22 +214,14 @@ pub enum MeshError {
 impl SceneBuilder {
     /// Attaches a triangle mesh, copying its data into buffers padded as
     /// Embree requires. Indices are checked against the vertex count.
-    pub fn attach_triangles(
-        &mut self,
-        vertices: &[Vec3],
-        triangles: &[[u32; 3]],
-    ) -> Result<GeometryId, MeshError> {
+    pub fn attach_triangles(&mut self, vertices: &[Vec3], triangles: &[[u32; 3]]) -> Result<GeometryId, MeshError> {
         if let Some(vertex) = vertices.iter().position(|v| !v.is_finite()) {
             return Err(MeshError::NonFiniteVertex { vertex });
         }
         for (triangle, tri) in triangles.iter().enumerate() {
             for &index in tri {
                 if index as usize >= vertices.len() {
-                    return Err(MeshError::IndexOutOfRange {
-                        triangle,
-                        index,
-                        vertex_count: vertices.len(),
-                    });
+                    return Err(MeshError::IndexOutOfRange { triangle, index, vertex_count: vertices.len() });
                 }
             }
         }
@@ -270,10 +246,7 @@ impl SceneBuilder {
                 triangles.len(),
             )
         };
-        self.meshes.push(SharedMesh {
-            _vertices: vertex_floats,
-            _indices: index_u32,
-        });
+        self.meshes.push(SharedMesh { _vertices: vertex_floats, _indices: index_u32 });
         self.raw.device.check("attaching a triangle mesh")?;
         if id == sys::LC_INVALID_ID {
             return Err(MeshError::Embree(EmbreeError {
@@ -292,10 +265,7 @@ impl SceneBuilder {
         // SAFETY: the scene pointer is live; commit is called once, from one thread.
         unsafe { sys::lc_scene_commit(self.raw.ptr.as_ptr()) };
         self.raw.device.check("committing the scene")?;
-        Ok(Scene {
-            raw: self.raw,
-            _meshes: self.meshes,
-        })
+        Ok(Scene { raw: self.raw, _meshes: self.meshes })
     }
 }
 
@@ -311,12 +281,7 @@ pub struct Ray {
 
 impl Ray {
     fn to_sys(self) -> sys::LcRay {
-        sys::LcRay {
-            org: self.origin.to_array(),
-            tnear: self.t_near,
-            dir: self.direction.to_array(),
-            tfar: self.t_far,
-        }
+        sys::LcRay { org: self.origin.to_array(), tnear: self.t_near, dir: self.direction.to_array(), tfar: self.t_far }
     }
 }
 
@@ -356,20 +321,9 @@ impl Scene {
         let raw_rays: Vec<sys::LcRay> = rays.iter().map(|r| r.to_sys()).collect();
         let mut raw_hits = vec![sys::LcHit::default(); rays.len()];
         // SAFETY: both arrays hold rays.len() elements; the scene is committed.
-        unsafe {
-            sys::lc_intersect_batch(
-                self.raw.ptr.as_ptr(),
-                raw_rays.as_ptr(),
-                raw_hits.as_mut_ptr(),
-                rays.len(),
-            )
-        };
+        unsafe { sys::lc_intersect_batch(self.raw.ptr.as_ptr(), raw_rays.as_ptr(), raw_hits.as_mut_ptr(), rays.len()) };
         hits.clear();
-        hits.extend(
-            raw_hits
-                .iter()
-                .map(|h| (h.geom_id != sys::LC_INVALID_ID).then(|| from_sys_hit(h))),
-        );
+        hits.extend(raw_hits.iter().map(|h| (h.geom_id != sys::LC_INVALID_ID).then(|| from_sys_hit(h))));
     }
 
     /// Whether anything blocks `ray` inside `[t_near, t_far]`.
@@ -404,14 +358,7 @@ impl Scene {
 }
 
 fn from_sys_hit(hit: &sys::LcHit) -> Hit {
-    Hit {
-        t: hit.t,
-        u: hit.u,
-        v: hit.v,
-        ng: Vec3::from_array(hit.ng),
-        geometry: hit.geom_id,
-        primitive: hit.prim_id,
-    }
+    Hit { t: hit.t, u: hit.u, v: hit.v, ng: Vec3::from_array(hit.ng), geometry: hit.geom_id, primitive: hit.prim_id }
 }
 
 /// A ray in the layout the batch occlusion call takes, so a batch is built

@@ -35,19 +35,10 @@ fn random_mesh(rng: &mut Rng, triangles: usize) -> (Vec<Vec3>, Vec<[u32; 3]>) {
     let mut vertices = Vec::new();
     let mut tris = Vec::new();
     for t in 0..triangles {
-        let c = Vec3::new(
-            rng.range_f32(-1.0, 1.0),
-            rng.range_f32(-1.0, 1.0),
-            rng.range_f32(-1.0, 1.0),
-        );
+        let c = Vec3::new(rng.range_f32(-1.0, 1.0), rng.range_f32(-1.0, 1.0), rng.range_f32(-1.0, 1.0));
         for _ in 0..3 {
             vertices.push(
-                c + 0.3
-                    * Vec3::new(
-                        rng.range_f32(-1.0, 1.0),
-                        rng.range_f32(-1.0, 1.0),
-                        rng.range_f32(-1.0, 1.0),
-                    ),
+                c + 0.3 * Vec3::new(rng.range_f32(-1.0, 1.0), rng.range_f32(-1.0, 1.0), rng.range_f32(-1.0, 1.0)),
             );
         }
         let b = 3 * t as u32;
@@ -57,22 +48,9 @@ fn random_mesh(rng: &mut Rng, triangles: usize) -> (Vec<Vec3>, Vec<[u32; 3]>) {
 }
 
 fn random_ray(rng: &mut Rng) -> Ray {
-    let origin = Vec3::new(
-        rng.range_f32(-2.0, 2.0),
-        rng.range_f32(-2.0, 2.0),
-        rng.range_f32(-2.0, 2.0),
-    );
-    let target = Vec3::new(
-        rng.range_f32(-1.0, 1.0),
-        rng.range_f32(-1.0, 1.0),
-        rng.range_f32(-1.0, 1.0),
-    );
-    Ray {
-        origin,
-        direction: target - origin,
-        t_near: 0.0,
-        t_far: rng.range_f32(0.2, 3.0),
-    }
+    let origin = Vec3::new(rng.range_f32(-2.0, 2.0), rng.range_f32(-2.0, 2.0), rng.range_f32(-2.0, 2.0));
+    let target = Vec3::new(rng.range_f32(-1.0, 1.0), rng.range_f32(-1.0, 1.0), rng.range_f32(-1.0, 1.0));
+    Ray { origin, direction: target - origin, t_near: 0.0, t_far: rng.range_f32(0.2, 3.0) }
 }
 
 /// Whether a ray passes within `tolerance` (in t) of an edge-case decision
@@ -81,19 +59,17 @@ fn near_ambiguous(vertices: &[Vec3], triangles: &[[u32; 3]], ray: &Ray) -> bool 
     // Perturb the ray slightly: if the reference answer changes, the case is ambiguous.
     let base = brute_force(vertices, triangles, ray).map(|h| h.1);
     let eps = 1e-4;
-    [Vec3::X, Vec3::Y, Vec3::Z, -Vec3::X, -Vec3::Y, -Vec3::Z]
-        .iter()
-        .any(|&e| {
-            let mut r = *ray;
-            r.origin += e * eps;
-            let mut far = r;
-            far.t_far *= 1.0 + eps;
-            let mut near = r;
-            near.t_far *= 1.0 - eps;
-            brute_force(vertices, triangles, &r).map(|h| h.1) != base
-                || brute_force(vertices, triangles, &far).map(|h| h.1) != base
-                || brute_force(vertices, triangles, &near).map(|h| h.1) != base
-        })
+    [Vec3::X, Vec3::Y, Vec3::Z, -Vec3::X, -Vec3::Y, -Vec3::Z].iter().any(|&e| {
+        let mut r = *ray;
+        r.origin += e * eps;
+        let mut far = r;
+        far.t_far *= 1.0 + eps;
+        let mut near = r;
+        near.t_far *= 1.0 - eps;
+        brute_force(vertices, triangles, &r).map(|h| h.1) != base
+            || brute_force(vertices, triangles, &far).map(|h| h.1) != base
+            || brute_force(vertices, triangles, &near).map(|h| h.1) != base
+    })
 }
 
 #[test]
@@ -122,10 +98,7 @@ fn closest_hit_and_occlusion_match_brute_force_on_random_meshes() {
         let scene = builder.commit().unwrap();
         let rays: Vec<Ray> = (0..500).map(|_| random_ray(&mut rng)).collect();
         let mut batch = Vec::new();
-        scene.occluded_batch(
-            &rays.iter().map(|r| ShadowRay::new(*r)).collect::<Vec<_>>(),
-            &mut batch,
-        );
+        scene.occluded_batch(&rays.iter().map(|r| ShadowRay::new(*r)).collect::<Vec<_>>(), &mut batch);
         let mut batch_hits = Vec::new();
         scene.intersect_batch(&rays, &mut batch_hits);
         for (i, ray) in rays.iter().enumerate() {
@@ -146,11 +119,7 @@ fn closest_hit_and_occlusion_match_brute_force_on_random_meshes() {
                     hits += 1;
                     assert_eq!(h.geometry, id);
                     assert_eq!(h.primitive as usize, prim, "ray {ray:?}");
-                    assert!(
-                        (f64::from(h.t) - t).abs() <= 1e-4 * t.max(1.0),
-                        "t {} vs {t}",
-                        h.t
-                    );
+                    assert!((f64::from(h.t) - t).abs() <= 1e-4 * t.max(1.0), "t {} vs {t}", h.t);
                     let tri = tris[prim];
                     let p = ray.origin + ray.direction * h.t;
                     let [p0, p1, p2] = tri.map(|k| vertices[k as usize]);
@@ -164,10 +133,7 @@ fn closest_hit_and_occlusion_match_brute_force_on_random_meshes() {
         }
     }
     assert!(checked > 3500, "too many ambiguous rays: {checked}");
-    assert!(
-        hits > 500 && hits < checked,
-        "test should see both hits and misses: {hits}/{checked}"
-    );
+    assert!(hits > 500 && hits < checked, "test should see both hits and misses: {hits}/{checked}");
 }
 
 #[test]
@@ -175,26 +141,14 @@ fn rays_respect_their_interval() {
     let device = Device::try_new().unwrap();
     let mut builder = device.try_new_scene().unwrap();
     // One big triangle in the plane z = 1.
-    let v = [
-        Vec3::new(-10.0, -10.0, 1.0),
-        Vec3::new(10.0, -10.0, 1.0),
-        Vec3::new(0.0, 10.0, 1.0),
-    ];
+    let v = [Vec3::new(-10.0, -10.0, 1.0), Vec3::new(10.0, -10.0, 1.0), Vec3::new(0.0, 10.0, 1.0)];
     builder.attach_triangles(&v, &[[0, 1, 2]]).unwrap();
     let scene = builder.commit().unwrap();
-    let ray = |t_near, t_far| Ray {
-        origin: Vec3::ZERO,
-        direction: Vec3::Z,
-        t_near,
-        t_far,
-    };
+    let ray = |t_near, t_far| Ray { origin: Vec3::ZERO, direction: Vec3::Z, t_near, t_far };
     assert!(scene.occluded(&ray(0.0, 2.0)));
     assert!(!scene.occluded(&ray(0.0, 0.99)));
     assert!(!scene.occluded(&ray(1.01, 2.0)));
-    assert_eq!(
-        scene.intersect(&ray(0.0, f32::INFINITY)).map(|h| h.t),
-        Some(1.0)
-    );
+    assert_eq!(scene.intersect(&ray(0.0, f32::INFINITY)).map(|h| h.t), Some(1.0));
     assert!(scene.intersect(&ray(0.0, 0.5)).is_none());
 }
 
@@ -202,22 +156,11 @@ fn rays_respect_their_interval() {
 fn several_meshes_report_their_own_ids_and_an_empty_scene_hits_nothing() {
     let device = Device::try_new().unwrap();
     let empty = device.try_new_scene().unwrap().commit().unwrap();
-    let ray = Ray {
-        origin: Vec3::ZERO,
-        direction: Vec3::Z,
-        t_near: 0.0,
-        t_far: f32::INFINITY,
-    };
+    let ray = Ray { origin: Vec3::ZERO, direction: Vec3::Z, t_near: 0.0, t_far: f32::INFINITY };
     assert!(empty.intersect(&ray).is_none());
     assert!(!empty.occluded(&ray));
     let mut builder = device.try_new_scene().unwrap();
-    let tri = |z: f32| {
-        [
-            Vec3::new(-1.0, -1.0, z),
-            Vec3::new(1.0, -1.0, z),
-            Vec3::new(0.0, 1.0, z),
-        ]
-    };
+    let tri = |z: f32| [Vec3::new(-1.0, -1.0, z), Vec3::new(1.0, -1.0, z), Vec3::new(0.0, 1.0, z)];
     let a = builder.attach_triangles(&tri(2.0), &[[0, 1, 2]]).unwrap();
     let b = builder.attach_triangles(&tri(1.0), &[[0, 1, 2]]).unwrap();
     assert_ne!(a, b);
@@ -232,17 +175,10 @@ fn bad_meshes_are_rejected_before_embree_sees_them() {
     let v = [Vec3::ZERO, Vec3::X, Vec3::Y];
     assert!(matches!(
         builder.attach_triangles(&v, &[[0, 1, 3]]),
-        Err(MeshError::IndexOutOfRange {
-            triangle: 0,
-            index: 3,
-            vertex_count: 3
-        })
+        Err(MeshError::IndexOutOfRange { triangle: 0, index: 3, vertex_count: 3 })
     ));
     let bad = [Vec3::ZERO, Vec3::new(f32::NAN, 0.0, 0.0), Vec3::Y];
-    assert!(matches!(
-        builder.attach_triangles(&bad, &[[0, 1, 2]]),
-        Err(MeshError::NonFiniteVertex { vertex: 1 })
-    ));
+    assert!(matches!(builder.attach_triangles(&bad, &[[0, 1, 2]]), Err(MeshError::NonFiniteVertex { vertex: 1 })));
 }
 
 #[test]

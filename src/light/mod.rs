@@ -71,29 +71,17 @@ impl Lights {
             LightKind::Omni => self
                 .omni
                 .iter()
-                .map(|l| TreeLight {
-                    position: l.position,
-                    normal: Vec3::ZERO,
-                    intensity: l.intensity,
-                })
+                .map(|l| TreeLight { position: l.position, normal: Vec3::ZERO, intensity: l.intensity })
                 .collect(),
             LightKind::Oriented => self
                 .oriented
                 .iter()
-                .map(|l| TreeLight {
-                    position: l.position,
-                    normal: l.normal,
-                    intensity: l.intensity,
-                })
+                .map(|l| TreeLight { position: l.position, normal: l.normal, intensity: l.intensity })
                 .collect(),
             LightKind::Directional => self
                 .directional
                 .iter()
-                .map(|l| TreeLight {
-                    position: l.direction,
-                    normal: Vec3::ZERO,
-                    intensity: l.irradiance,
-                })
+                .map(|l| TreeLight { position: l.direction, normal: Vec3::ZERO, intensity: l.irradiance })
                 .collect(),
         }
     }

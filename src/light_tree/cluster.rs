@@ -16,10 +16,7 @@ pub struct Cone {
 impl Cone {
     #[must_use]
     pub fn of_direction(axis: Vec3) -> Self {
-        Self {
-            axis,
-            half_angle: 0.0,
-        }
+        Self { axis, half_angle: 0.0 }
     }
 
     /// The smallest cone (by this construction) containing both cones: the
@@ -27,35 +24,22 @@ impl Cone {
     /// rounding never leaves a child direction outside.
     #[must_use]
     pub fn union(self, other: Self) -> Self {
-        let (a, b) = if self.half_angle >= other.half_angle {
-            (self, other)
-        } else {
-            (other, self)
-        };
+        let (a, b) = if self.half_angle >= other.half_angle { (self, other) } else { (other, self) };
         let between = a.axis.dot(b.axis).clamp(-1.0, 1.0).acos();
         if between + b.half_angle <= a.half_angle {
             return a;
         }
         let half_angle = 0.5 * (a.half_angle + between + b.half_angle);
         if half_angle >= std::f32::consts::PI {
-            return Self {
-                axis: a.axis,
-                half_angle: std::f32::consts::PI,
-            };
+            return Self { axis: a.axis, half_angle: std::f32::consts::PI };
         }
         // Rotate a's axis towards b's by (half_angle - a.half_angle).
         let rotate = half_angle - a.half_angle;
         let ortho = (b.axis - a.axis * a.axis.dot(b.axis)).normalize_or_zero();
-        let axis = if ortho == Vec3::ZERO {
-            a.axis
-        } else {
-            (a.axis * rotate.cos() + ortho * rotate.sin()).normalize()
-        };
+        let axis =
+            if ortho == Vec3::ZERO { a.axis } else { (a.axis * rotate.cos() + ortho * rotate.sin()).normalize() };
         // 1e-5 rad covers the f32 rounding of acos, cos, sin and normalize above.
-        Self {
-            axis,
-            half_angle: (half_angle + 1e-5).min(std::f32::consts::PI),
-        }
+        Self { axis, half_angle: (half_angle + 1e-5).min(std::f32::consts::PI) }
     }
 
     /// Whether direction `d` (unit) lies inside the cone.
@@ -121,11 +105,7 @@ mod tests {
 
     fn random_unit(rng: &mut Rng) -> Vec3 {
         loop {
-            let v = Vec3::new(
-                rng.range_f32(-1.0, 1.0),
-                rng.range_f32(-1.0, 1.0),
-                rng.range_f32(-1.0, 1.0),
-            );
+            let v = Vec3::new(rng.range_f32(-1.0, 1.0), rng.range_f32(-1.0, 1.0), rng.range_f32(-1.0, 1.0));
             if v.length_squared() > 1e-4 && v.length_squared() <= 1.0 {
                 return v.normalize();
             }
@@ -137,17 +117,10 @@ mod tests {
         let mut rng = Rng::seeded(3);
         for _ in 0..2000 {
             // Build cones from random direction sets and check each member.
-            let dirs_a: Vec<Vec3> = (0..rng.below(4) + 1)
-                .map(|_| random_unit(&mut rng))
-                .collect();
-            let dirs_b: Vec<Vec3> = (0..rng.below(4) + 1)
-                .map(|_| random_unit(&mut rng))
-                .collect();
-            let cone_of = |d: &[Vec3]| {
-                d.iter().skip(1).fold(Cone::of_direction(d[0]), |c, &x| {
-                    c.union(Cone::of_direction(x))
-                })
-            };
+            let dirs_a: Vec<Vec3> = (0..rng.below(4) + 1).map(|_| random_unit(&mut rng)).collect();
+            let dirs_b: Vec<Vec3> = (0..rng.below(4) + 1).map(|_| random_unit(&mut rng)).collect();
+            let cone_of =
+                |d: &[Vec3]| d.iter().skip(1).fold(Cone::of_direction(d[0]), |c, &x| c.union(Cone::of_direction(x)));
             let (a, b) = (cone_of(&dirs_a), cone_of(&dirs_b));
             let u = a.union(b);
             for d in dirs_a.iter().chain(&dirs_b) {

@@ -10,9 +10,7 @@ use super::{LightKind, LightTree, TreeBuilder, TreeLight};
 #[must_use]
 pub fn build(kind: LightKind, lights: &[TreeLight], seed: u64) -> LightTree {
     let mut builder = TreeBuilder::new(kind, lights, seed);
-    let mut clusters: Vec<Option<Cluster>> = (0..lights.len())
-        .map(|i| Some(builder.leaf_cluster(i)))
-        .collect();
+    let mut clusters: Vec<Option<Cluster>> = (0..lights.len()).map(|i| Some(builder.leaf_cluster(i))).collect();
     let n = clusters.len();
     if n <= 1 {
         let root = clusters.first().and_then(|c| c.map(|c| c.node));
@@ -45,10 +43,7 @@ pub fn build(kind: LightKind, lights: &[TreeLight], seed: u64) -> LightTree {
             }
         }
         let j = nearest[i].1;
-        let (a, b) = (
-            clusters[i].take().expect("live"),
-            clusters[j].take().expect("live"),
-        );
+        let (a, b) = (clusters[i].take().expect("live"), clusters[j].take().expect("live"));
         let merged = builder.merge(&a, &b);
         let slot = i.min(j);
         clusters[slot] = Some(merged);

@@ -184,11 +184,7 @@ impl LightTree {
                 let c = Cluster {
                     min: self.bounds_min[i],
                     max: self.bounds_max[i],
-                    cone: if self.kind == LightKind::Oriented {
-                        self.cone[i]
-                    } else {
-                        Cone::of_direction(Vec3::Z)
-                    },
+                    cone: if self.kind == LightKind::Oriented { self.cone[i] } else { Cone::of_direction(Vec3::Z) },
                     intensity: self.intensity[i],
                     weight: luminance(self.intensity[i]),
                     node: NodeRef::internal(i as u32),
@@ -202,11 +198,8 @@ impl LightTree {
 /// The metric's constants for a set of light positions.
 fn metric_for(kind: LightKind, positions: &[Vec3]) -> Metric {
     let c_squared = if kind == LightKind::Oriented {
-        let (lo, hi) = positions
-            .iter()
-            .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), &p| {
-                (lo.min(p), hi.max(p))
-            });
+        let (lo, hi) =
+            positions.iter().fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), &p| (lo.min(p), hi.max(p)));
         (hi - lo).as_dvec3().length_squared()
     } else {
         0.0
@@ -233,10 +226,7 @@ impl TreeBuilder {
             kind,
             light_position: positions,
             light_normal: if oriented {
-                lights
-                    .iter()
-                    .map(|l| l.normal.normalize_or_zero())
-                    .collect()
+                lights.iter().map(|l| l.normal.normalize_or_zero()).collect()
             } else {
                 Vec::new()
             },
@@ -280,24 +270,13 @@ impl TreeBuilder {
         let total = f64::from(a.weight) + f64::from(b.weight);
         let u = Rng::from_key(&[self.seed, u64::from(index)]).next_f64();
         // Zero total weight (all lights black): pick evenly.
-        let pick_a = if total > 0.0 {
-            u * total < f64::from(a.weight)
-        } else {
-            u < 0.5
-        };
-        let representative = if pick_a {
-            self.tree.node_representative(a.node)
-        } else {
-            self.tree.node_representative(b.node)
-        };
+        let pick_a = if total > 0.0 { u * total < f64::from(a.weight) } else { u < 0.5 };
+        let representative =
+            if pick_a { self.tree.node_representative(a.node) } else { self.tree.node_representative(b.node) };
         let merged = Cluster {
             min: a.min.min(b.min),
             max: a.max.max(b.max),
-            cone: if self.metric.kind == LightKind::Oriented {
-                a.cone.union(b.cone)
-            } else {
-                a.cone
-            },
+            cone: if self.metric.kind == LightKind::Oriented { a.cone.union(b.cone) } else { a.cone },
             intensity: a.intensity + b.intensity,
             weight: a.weight + b.weight,
             node,

@@ -35,12 +35,7 @@ pub fn build(kind: LightKind, lights: &[TreeLight], seed: u64) -> LightTree {
 
 /// As [`build`], with a chosen search radius (>= 1).
 #[must_use]
-pub fn build_with_radius(
-    kind: LightKind,
-    lights: &[TreeLight],
-    seed: u64,
-    radius: usize,
-) -> LightTree {
+pub fn build_with_radius(kind: LightKind, lights: &[TreeLight], seed: u64, radius: usize) -> LightTree {
     let radius = radius.max(1);
     let mut builder = TreeBuilder::new(kind, lights, seed);
     if lights.len() <= 1 {
@@ -48,10 +43,7 @@ pub fn build_with_radius(
         return builder.finish(root);
     }
     let order = morton_order(&builder.tree.light_position);
-    let mut clusters: Vec<Cluster> = order
-        .iter()
-        .map(|&i| builder.leaf_cluster(i as usize))
-        .collect();
+    let mut clusters: Vec<Cluster> = order.iter().map(|&i| builder.leaf_cluster(i as usize)).collect();
     let metric = builder.metric;
     let mut sizes: Vec<f64> = Vec::new();
     let mut nearest: Vec<u32> = Vec::new();
@@ -71,10 +63,7 @@ pub fn build_with_radius(
                 next.push(builder.merge(&clusters[i], &clusters[j]));
             }
         }
-        debug_assert!(
-            next.len() < n,
-            "every pass merges at least the globally closest pair"
-        );
+        debug_assert!(next.len() < n, "every pass merges at least the globally closest pair");
         std::mem::swap(&mut clusters, &mut next);
     }
     let root = Some(clusters[0].node);
@@ -86,23 +75,16 @@ pub fn build_with_radius(
 fn pair_sizes(metric: &Metric, clusters: &[Cluster], radius: usize, sizes: &mut Vec<f64>) {
     let n = clusters.len();
     sizes.resize(n * radius, f64::INFINITY);
-    sizes
-        .par_chunks_mut(CHUNK * radius)
-        .enumerate()
-        .for_each(|(chunk, out)| {
-            let first = chunk * CHUNK;
-            for (local, row) in out.chunks_mut(radius).enumerate() {
-                let i = first + local;
-                for (k, slot) in row.iter_mut().enumerate() {
-                    let j = i + k + 1;
-                    *slot = if j < n {
-                        metric.merged_size(&clusters[i], &clusters[j])
-                    } else {
-                        f64::INFINITY
-                    };
-                }
+    sizes.par_chunks_mut(CHUNK * radius).enumerate().for_each(|(chunk, out)| {
+        let first = chunk * CHUNK;
+        for (local, row) in out.chunks_mut(radius).enumerate() {
+            let i = first + local;
+            for (k, slot) in row.iter_mut().enumerate() {
+                let j = i + k + 1;
+                *slot = if j < n { metric.merged_size(&clusters[i], &clusters[j]) } else { f64::INFINITY };
             }
-        });
+        }
+    });
 }
 
 /// nearest[i] = the j within `radius` of i minimising (size(i u j), min(i,j),
@@ -110,38 +92,31 @@ fn pair_sizes(metric: &Metric, clusters: &[Cluster], radius: usize, sizes: &mut 
 /// always mutual and every pass makes progress.
 fn nearest_neighbours(sizes: &[f64], n: usize, radius: usize, nearest: &mut Vec<u32>) {
     nearest.resize(n, 0);
-    nearest
-        .par_chunks_mut(CHUNK)
-        .enumerate()
-        .for_each(|(chunk, out)| {
-            for (local, slot) in out.iter_mut().enumerate() {
-                let i = chunk * CHUNK + local;
-                let mut best = (f64::INFINITY, usize::MAX, usize::MAX);
-                // Backward neighbours j < i: the pair is stored at row j.
-                for k in 1..=radius.min(i) {
-                    let j = i - k;
-                    let key = (sizes[j * radius + k - 1], j, i);
-                    if less(key, best) {
-                        best = key;
-                    }
+    nearest.par_chunks_mut(CHUNK).enumerate().for_each(|(chunk, out)| {
+        for (local, slot) in out.iter_mut().enumerate() {
+            let i = chunk * CHUNK + local;
+            let mut best = (f64::INFINITY, usize::MAX, usize::MAX);
+            // Backward neighbours j < i: the pair is stored at row j.
+            for k in 1..=radius.min(i) {
+                let j = i - k;
+                let key = (sizes[j * radius + k - 1], j, i);
+                if less(key, best) {
+                    best = key;
                 }
-                for k in 1..=radius {
-                    let j = i + k;
-                    if j >= n {
-                        break;
-                    }
-                    let key = (sizes[i * radius + k - 1], i, j);
-                    if less(key, best) {
-                        best = key;
-                    }
-                }
-                *slot = if best.1 == i {
-                    best.2 as u32
-                } else {
-                    best.1 as u32
-                };
             }
-        });
+            for k in 1..=radius {
+                let j = i + k;
+                if j >= n {
+                    break;
+                }
+                let key = (sizes[i * radius + k - 1], i, j);
+                if less(key, best) {
+                    best = key;
+                }
+            }
+            *slot = if best.1 == i { best.2 as u32 } else { best.1 as u32 };
+        }
+    });
 }
 
 /// Lexicographic order on (size, lower index, upper index); NaN sizes (which
@@ -158,11 +133,7 @@ fn less(a: (f64, usize, usize), b: (f64, usize, usize)) -> bool {
 /// Light indices sorted by the 63-bit Morton code of their position in the
 /// lights' bounding box (ties by index, so the order is total).
 fn morton_order(positions: &[Vec3]) -> Vec<u32> {
-    let (lo, hi) = positions
-        .iter()
-        .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), &p| {
-            (lo.min(p), hi.max(p))
-        });
+    let (lo, hi) = positions.iter().fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), &p| (lo.min(p), hi.max(p)));
     let extent = (hi - lo).max(Vec3::splat(f32::MIN_POSITIVE));
     let scale = 2_097_151.0 / extent; // 2^21 - 1 cells per axis
     let mut keyed: Vec<(u64, u32)> = positions
@@ -170,10 +141,7 @@ fn morton_order(positions: &[Vec3]) -> Vec<u32> {
         .enumerate()
         .map(|(i, &p)| {
             let q = ((p - lo) * scale).clamp(Vec3::ZERO, Vec3::splat(2_097_151.0));
-            (
-                morton3(q.x as u64) | (morton3(q.y as u64) << 1) | (morton3(q.z as u64) << 2),
-                i as u32,
-            )
+            (morton3(q.x as u64) | (morton3(q.y as u64) << 1) | (morton3(q.z as u64) << 2), i as u32)
         })
         .collect();
     keyed.par_sort_unstable();

@@ -5,49 +5,23 @@ use super::*;
 fn random_lights(seed: u64, n: usize, kind: LightKind, clustered: bool) -> Vec<TreeLight> {
     let mut rng = Rng::seeded(seed);
     let centres: Vec<Vec3> = (0..8)
-        .map(|_| {
-            Vec3::new(
-                rng.range_f32(-10.0, 10.0),
-                rng.range_f32(0.0, 5.0),
-                rng.range_f32(-10.0, 10.0),
-            )
-        })
+        .map(|_| Vec3::new(rng.range_f32(-10.0, 10.0), rng.range_f32(0.0, 5.0), rng.range_f32(-10.0, 10.0)))
         .collect();
     (0..n)
         .map(|_| {
             let mut position = if clustered {
                 centres[rng.below(8) as usize]
-                    + Vec3::new(
-                        rng.range_f32(-0.5, 0.5),
-                        rng.range_f32(-0.5, 0.5),
-                        rng.range_f32(-0.5, 0.5),
-                    )
+                    + Vec3::new(rng.range_f32(-0.5, 0.5), rng.range_f32(-0.5, 0.5), rng.range_f32(-0.5, 0.5))
             } else {
-                Vec3::new(
-                    rng.range_f32(-10.0, 10.0),
-                    rng.range_f32(0.0, 5.0),
-                    rng.range_f32(-10.0, 10.0),
-                )
+                Vec3::new(rng.range_f32(-10.0, 10.0), rng.range_f32(0.0, 5.0), rng.range_f32(-10.0, 10.0))
             };
-            let normal = Vec3::new(
-                rng.range_f32(-1.0, 1.0),
-                rng.range_f32(-1.0, 1.0),
-                rng.range_f32(-1.0, 1.0),
-            )
-            .normalize_or(Vec3::Y);
+            let normal = Vec3::new(rng.range_f32(-1.0, 1.0), rng.range_f32(-1.0, 1.0), rng.range_f32(-1.0, 1.0))
+                .normalize_or(Vec3::Y);
             if kind == LightKind::Directional {
                 position = normal;
             }
-            let intensity = Vec3::new(
-                rng.range_f32(0.0, 2.0),
-                rng.range_f32(0.0, 2.0),
-                rng.range_f32(0.0, 2.0),
-            );
-            TreeLight {
-                position,
-                normal,
-                intensity,
-            }
+            let intensity = Vec3::new(rng.range_f32(0.0, 2.0), rng.range_f32(0.0, 2.0), rng.range_f32(0.0, 2.0));
+            TreeLight { position, normal, intensity }
         })
         .collect()
 }
@@ -62,18 +36,11 @@ fn check_tree(tree: &LightTree, lights: &[TreeLight]) {
         assert!(tree.root.is_none());
         return;
     }
-    assert_eq!(
-        tree.intensity.len(),
-        n - 1,
-        "a binary tree over n leaves has n - 1 internal nodes"
-    );
+    assert_eq!(tree.intensity.len(), n - 1, "a binary tree over n leaves has n - 1 internal nodes");
     let mut seen = vec![0u32; n];
     let root = tree.root.expect("non-empty tree has a root");
     check_node(tree, root, &mut seen);
-    assert!(
-        seen.iter().all(|&c| c == 1),
-        "every light is in exactly one leaf"
-    );
+    assert!(seen.iter().all(|&c| c == 1), "every light is in exactly one leaf");
 }
 
 fn check_node(tree: &LightTree, node: NodeRef, seen: &mut [u32]) -> Vec<u32> {
@@ -86,33 +53,22 @@ fn check_node(tree: &LightTree, node: NodeRef, seen: &mut [u32]) -> Vec<u32> {
     below.extend(check_node(tree, b, seen));
     // Intensity is the sum of the children's (to f32 rounding).
     let sum = tree.node_intensity(a) + tree.node_intensity(b);
-    assert!(
-        (tree.node_intensity(node) - sum).abs().max_element() <= 1e-5 * sum.max_element().max(1.0)
-    );
+    assert!((tree.node_intensity(node) - sum).abs().max_element() <= 1e-5 * sum.max_element().max(1.0));
     // The box contains the children's boxes.
     let (lo, hi) = tree.node_bounds(node);
     for child in [a, b] {
         let (clo, chi) = tree.node_bounds(child);
-        assert!(
-            lo.cmple(clo).all() && hi.cmpge(chi).all(),
-            "box does not contain a child's box"
-        );
+        assert!(lo.cmple(clo).all() && hi.cmpge(chi).all(), "box does not contain a child's box");
     }
     // The cone contains every normal below.
     if tree.kind == LightKind::Oriented {
         let cone = tree.node_cone(node);
         for &l in &below {
-            assert!(
-                cone.contains(tree.light_normal[l as usize]),
-                "cone misses light {l}'s normal"
-            );
+            assert!(cone.contains(tree.light_normal[l as usize]), "cone misses light {l}'s normal");
         }
     }
     // The representative is a light of the node.
-    assert!(
-        below.contains(&tree.node_representative(node)),
-        "representative outside its node"
-    );
+    assert!(below.contains(&tree.node_representative(node)), "representative outside its node");
     below
 }
 
@@ -127,13 +83,7 @@ fn same_tree(a: &LightTree, b: &LightTree) -> bool {
 #[test]
 fn ploc_trees_satisfy_the_structural_properties() {
     for kind in KINDS {
-        for (seed, n, clustered) in [
-            (1, 1000, false),
-            (2, 777, true),
-            (3, 33, false),
-            (4, 2, false),
-            (5, 1, true),
-        ] {
+        for (seed, n, clustered) in [(1, 1000, false), (2, 777, true), (3, 33, false), (4, 2, false), (5, 1, true)] {
             let lights = random_lights(seed, n, kind, clustered);
             check_tree(&ploc::build(kind, &lights, seed), &lights);
         }
@@ -155,26 +105,12 @@ fn degenerate_light_sets_build_valid_trees() {
     for kind in KINDS {
         // Coincident lights, zero-intensity lights, and both together.
         let coincident: Vec<TreeLight> = (0..500)
-            .map(|i| TreeLight {
-                position: Vec3::ONE,
-                normal: Vec3::Y,
-                intensity: Vec3::splat(i as f32 % 3.0),
-            })
+            .map(|i| TreeLight { position: Vec3::ONE, normal: Vec3::Y, intensity: Vec3::splat(i as f32 % 3.0) })
             .collect();
-        let dark: Vec<TreeLight> = random_lights(21, 400, kind, false)
-            .into_iter()
-            .map(|l| TreeLight {
-                intensity: Vec3::ZERO,
-                ..l
-            })
-            .collect();
-        let both: Vec<TreeLight> = (0..300)
-            .map(|_| TreeLight {
-                position: Vec3::ZERO,
-                normal: Vec3::Y,
-                intensity: Vec3::ZERO,
-            })
-            .collect();
+        let dark: Vec<TreeLight> =
+            random_lights(21, 400, kind, false).into_iter().map(|l| TreeLight { intensity: Vec3::ZERO, ..l }).collect();
+        let both: Vec<TreeLight> =
+            (0..300).map(|_| TreeLight { position: Vec3::ZERO, normal: Vec3::Y, intensity: Vec3::ZERO }).collect();
         for lights in [&coincident, &dark, &both] {
             check_tree(&ploc::build(kind, lights, 5), lights);
             check_tree(&greedy::build(kind, &lights[..100], 5), &lights[..100]);
@@ -188,22 +124,14 @@ fn degenerate_light_sets_build_valid_trees() {
 fn the_tree_is_identical_for_one_and_two_threads_and_every_run() {
     for kind in KINDS {
         let lights = random_lights(31, 20_000, kind, true);
-        let pool = |t| {
-            rayon::ThreadPoolBuilder::new()
-                .num_threads(t)
-                .build()
-                .unwrap()
-        };
+        let pool = |t| rayon::ThreadPoolBuilder::new().num_threads(t).build().unwrap();
         let one = pool(1).install(|| ploc::build(kind, &lights, 9));
         let two = pool(2).install(|| ploc::build(kind, &lights, 9));
         let again = pool(2).install(|| ploc::build(kind, &lights, 9));
         assert!(same_tree(&one, &two), "{kind:?}: 1 vs 2 threads");
         assert!(same_tree(&two, &again), "{kind:?}: run to run");
         let other_seed = ploc::build(kind, &lights, 10);
-        assert_eq!(
-            one.children, other_seed.children,
-            "the seed changes representatives, not structure"
-        );
+        assert_eq!(one.children, other_seed.children, "the seed changes representatives, not structure");
         assert_ne!(one.representative, other_seed.representative);
     }
 }
@@ -228,10 +156,7 @@ fn representatives_are_chosen_in_proportion_to_intensity() {
         let expected = (i as f64 + 1.0) / 10.0;
         let freq = f64::from(c) / runs as f64;
         // 5 standard deviations of a binomial frequency at p <= 0.4: 0.0122.
-        assert!(
-            (freq - expected).abs() < 0.0122,
-            "light {i}: {freq} vs {expected}"
-        );
+        assert!((freq - expected).abs() < 0.0122, "light {i}: {freq} vs {expected}");
     }
 }
 
@@ -241,10 +166,7 @@ fn ploc_is_close_to_greedy_in_total_cluster_size() {
         let lights = random_lights(41, 2000, kind, true);
         let ploc = ploc::build(kind, &lights, 1).total_cluster_size();
         let greedy = greedy::build(kind, &lights, 1).total_cluster_size();
-        assert!(
-            ploc <= greedy * 1.25,
-            "{kind:?}: PLOC {ploc} vs greedy {greedy}"
-        );
+        assert!(ploc <= greedy * 1.25, "{kind:?}: PLOC {ploc} vs greedy {greedy}");
     }
 }
 
@@ -252,9 +174,5 @@ fn ploc_is_close_to_greedy_in_total_cluster_size() {
 fn memory_stays_under_100_bytes_per_omni_light() {
     let lights = random_lights(51, 10_000, LightKind::Omni, false);
     let tree = ploc::build(LightKind::Omni, &lights, 1);
-    assert!(
-        tree.memory_bytes() <= 100 * lights.len(),
-        "{} bytes",
-        tree.memory_bytes()
-    );
+    assert!(tree.memory_bytes() <= 100 * lights.len(), "{} bytes", tree.memory_bytes());
 }

@@ -29,11 +29,7 @@ impl Frame {
     #[must_use]
     pub fn new(axis: Vec3) -> Self {
         let (tangent, bitangent) = axis.any_orthonormal_pair();
-        Self {
-            tangent,
-            bitangent,
-            axis,
-        }
+        Self { tangent, bitangent, axis }
     }
 }
 
@@ -91,13 +87,8 @@ impl<'a, 'p> PointBounds<'a, 'p> {
     #[must_use]
     pub fn new(sp: &'a SurfacePoint<'p>) -> Self {
         let m = sp.material;
-        let phong = m.has_specular().then(|| {
-            (
-                Frame::new(sp.r),
-                m.specular * phong_normalisation(m.exponent),
-                m.exponent,
-            )
-        });
+        let phong =
+            m.has_specular().then(|| (Frame::new(sp.r), m.specular * phong_normalisation(m.exponent), m.exponent));
         Self {
             sp,
             normal_frame: Frame::new(sp.n),
@@ -155,13 +146,7 @@ impl<'a, 'p> PointBounds<'a, 'p> {
 
 /// Upper bound of M * G over a cluster (one-off form of [`PointBounds::cluster`]).
 #[must_use]
-pub fn cluster_bound(
-    kind: LightKind,
-    sp: &SurfacePoint<'_>,
-    lo: Vec3,
-    hi: Vec3,
-    cone: Cone,
-) -> DVec3 {
+pub fn cluster_bound(kind: LightKind, sp: &SurfacePoint<'_>, lo: Vec3, hi: Vec3, cone: Cone) -> DVec3 {
     PointBounds::new(sp).cluster(kind, lo, hi, cone)
 }
 

@@ -24,14 +24,15 @@ use glam::DVec3;
 use super::bounds::{error_bound, light_term, PointBounds};
 use crate::embree::{Scene as EmbreeScene, ShadowRay};
 use crate::light::{luminance64, Lights};
-use crate::light_tree::{ploc, LightKind, LightTree, NodeRef};
+use crate::light_tree::{ploc, Cone, LightKind, LightTree, NodeRef};
+use crate::render::direct::{BatchBuffers, LightBatch};
 use crate::render::geometry::SurfacePoint;
 use crate::render::integrator::ShadingStats;
 
 /// A tree with at most this many lights is evaluated light by light: for so
 /// few lights the bounds cannot save a shadow ray worth their cost, and the
 /// renderer must never be slower than `--exact` (measured: few4 in the README).
-pub const EXHAUSTIVE_LIGHTS: usize = 8;
+pub const EXHAUSTIVE_LIGHTS: usize = 200;
 
 /// Nodes refined per batch of shadow rays.
 pub const REFINE_BATCH: usize = 8;
@@ -46,10 +47,7 @@ pub struct CutSettings {
 
 impl Default for CutSettings {
     fn default() -> Self {
-        Self {
-            error: 0.02,
-            max_cut: 1000,
-        }
+        Self { error: 0.02, max_cut: 1000 }
     }
 }
 
@@ -92,6 +90,8 @@ struct Entry {
     /// M * G * V of the node's representative, per unit intensity.
     unit: DVec3,
     estimate: DVec3,
+    /// The node's error bound (0 for a leaf, which is exact).
+    bound: f64,
     in_cut: bool,
 }
 
@@ -116,9 +116,7 @@ impl Eq for HeapItem {}
 impl Ord for HeapItem {
     fn cmp(&self, other: &Self) -> Ordering {
         // Largest bound first; ties go to the earlier entry (deterministic).
-        self.bound
-            .total_cmp(&other.bound)
-            .then_with(|| other.entry.cmp(&self.entry))
+        self.bound.total_cmp(&other.bound).then_with(|| other.entry.cmp(&self.entry))
     }
 }
 
@@ -131,6 +129,9 @@ impl PartialOrd for HeapItem {
 /// Per-thread buffers reused across shading points.
 #[derive(Default)]
 pub struct CutScratch {
+    /// Sum of the error bounds of the last cut's nodes: the design's guarantee
+    /// on that point's error in luminance (|L_cut - L_exact| <= this).
+    pub last_error_bound: f64,
     entries: Vec<Entry>,
     heap: BinaryHeap<HeapItem>,
     pending: Vec<Pending>,
@@ -154,11 +155,7 @@ impl Cut<'_, '_> {
     fn add_new(&mut self, tree: u8, node: NodeRef) {
         let t = &self.trees[tree as usize];
         let rep = t.node_representative(node) as usize;
-        let normal = if t.kind == LightKind::Oriented {
-            t.light_normal[rep]
-        } else {
-            glam::Vec3::ZERO
-        };
+        let normal = if t.kind == LightKind::Oriented { t.light_normal[rep] } else { glam::Vec3::ZERO };
         let position = t.light_position[rep];
         let unoccluded = light_term(t.kind, self.sp, position, normal);
         let ray = if unoccluded == DVec3::ZERO {
@@ -173,12 +170,7 @@ impl Cut<'_, '_> {
                 (self.scratch.rays.len() - 1) as u32
             })
         };
-        self.scratch.pending.push(Pending {
-            tree,
-            node,
-            unoccluded,
-            ray,
-        });
+        self.scratch.pending.push(Pending { tree, node, unoccluded, ray });
     }
 
     /// Adds a node whose M * G * V is known (it shares its parent's representative).
@@ -186,30 +178,27 @@ impl Cut<'_, '_> {
         let t = &self.trees[tree as usize];
         let intensity = t.node_intensity(node);
         let estimate = unit * intensity.as_dvec3();
+        let bound = if node.is_leaf() {
+            0.0
+        } else {
+            let (lo, hi) = t.node_bounds(node);
+            let cone =
+                if t.kind == LightKind::Oriented { t.node_cone(node) } else { Cone::of_direction(glam::Vec3::Z) };
+            // Lights at one position (omni), or one direction (directional),
+            // or one position and one normal (oriented) have identical M, G
+            // and V: the representative's estimate is exact, the error 0.
+            if lo == hi && cone.half_angle == 0.0 {
+                0.0
+            } else {
+                error_bound(self.bounds.cluster(t.kind, lo, hi, cone), intensity)
+            }
+        };
         let index = self.scratch.entries.len() as u32;
-        self.scratch.entries.push(Entry {
-            tree,
-            node,
-            unit,
-            estimate,
-            in_cut: true,
-        });
+        self.scratch.entries.push(Entry { tree, node, unit, estimate, bound, in_cut: true });
         self.total += estimate;
         self.cut_nodes += 1;
-        if !node.is_leaf() {
-            let (lo, hi) = t.node_bounds(node);
-            let cone = if t.kind == LightKind::Oriented {
-                t.node_cone(node)
-            } else {
-                crate::light_tree::Cone::of_direction(glam::Vec3::Z)
-            };
-            let bound = error_bound(self.bounds.cluster(t.kind, lo, hi, cone), intensity);
-            if bound > 0.0 {
-                self.scratch.heap.push(HeapItem {
-                    bound,
-                    entry: index,
-                });
-            }
+        if bound > 0.0 {
+            self.scratch.heap.push(HeapItem { bound, entry: index });
         }
     }
 
@@ -218,8 +207,7 @@ impl Cut<'_, '_> {
         if self.scratch.pending.is_empty() {
             return;
         }
-        self.embree
-            .occluded_batch(&self.scratch.rays, &mut self.scratch.occluded);
+        self.embree.occluded_batch(&self.scratch.rays, &mut self.scratch.occluded);
         self.shadow_rays += self.scratch.rays.len() as u64;
         let pending = std::mem::take(&mut self.scratch.pending);
         for p in &pending {
@@ -240,30 +228,35 @@ pub fn evaluate(
     embree: &EmbreeScene,
     settings: &CutSettings,
     scratch: &mut CutScratch,
+    batch: &mut BatchBuffers,
     stats: &mut ShadingStats,
 ) -> DVec3 {
+    // Small trees first, light by light with the exact renderer's code; their
+    // sum is exact and counts in the total the threshold is relative to.
+    let mut exhaustive = LightBatch::new(embree, sp, batch);
+    let mut exhaustive_lights = 0u64;
+    for tree in trees.iter().filter(|t| t.light_count() <= EXHAUSTIVE_LIGHTS) {
+        exhaustive_lights += tree.light_count() as u64;
+        for i in 0..tree.light_count() {
+            let normal = if tree.kind == LightKind::Oriented { tree.light_normal[i] } else { glam::Vec3::ZERO };
+            exhaustive.add(tree.kind, tree.light_position[i], normal, tree.light_intensity[i]);
+        }
+    }
+    let fixed = exhaustive.finish(stats);
+    scratch.last_error_bound = 0.0;
+    if exhaustive_lights as usize == trees.iter().map(LightTree::light_count).sum::<usize>() {
+        return fixed;
+    }
+
     scratch.entries.clear();
     scratch.heap.clear();
     scratch.pending.clear();
     scratch.rays.clear();
-    let mut cut = Cut {
-        trees,
-        sp,
-        bounds: PointBounds::new(sp),
-        embree,
-        scratch,
-        total: DVec3::ZERO,
-        cut_nodes: 0,
-        shadow_rays: 0,
-    };
+    let mut cut =
+        Cut { trees, sp, bounds: PointBounds::new(sp), embree, scratch, total: fixed, cut_nodes: 0, shadow_rays: 0 };
     for (i, tree) in trees.iter().enumerate() {
-        let Some(root) = tree.root else { continue };
-        if tree.light_count() <= EXHAUSTIVE_LIGHTS {
-            for light in 0..tree.light_count() {
-                cut.add_new(i as u8, NodeRef::leaf(light as u32));
-            }
-        } else {
-            cut.add_new(i as u8, root);
+        if tree.light_count() > EXHAUSTIVE_LIGHTS {
+            cut.add_new(i as u8, tree.root.expect("a tree with lights has a root"));
         }
     }
     cut.flush();
@@ -271,9 +264,7 @@ pub fn evaluate(
         let threshold = settings.error * luminance64(cut.total).max(0.0);
         let mut refined = 0;
         while refined < REFINE_BATCH && cut.cut_nodes + refined < settings.max_cut {
-            let Some(top) = cut.scratch.heap.peek().copied() else {
-                break;
-            };
+            let Some(top) = cut.scratch.heap.peek().copied() else { break };
             if top.bound <= threshold {
                 break;
             }
@@ -298,14 +289,15 @@ pub fn evaluate(
         }
         cut.flush();
     }
-    let radiance = cut
-        .scratch
-        .entries
-        .iter()
-        .filter(|e| e.in_cut)
-        .fold(DVec3::ZERO, |sum, e| sum + e.estimate);
+    let radiance = cut.scratch.entries.iter().filter(|e| e.in_cut).fold(fixed, |sum, e| sum + e.estimate);
+    cut.scratch.last_error_bound = cut.scratch.entries.iter().filter(|e| e.in_cut).map(|e| e.bound).sum();
     stats.shadow_rays += cut.shadow_rays;
+    // The exhaustive part has counted its lights already; the cut's nodes add
+    // to them, and the point's whole cut is both parts.
     stats.cut_nodes += cut.cut_nodes as u64;
-    stats.max_cut = stats.max_cut.max(cut.cut_nodes as u64);
+    stats.max_cut = stats.max_cut.max(cut.cut_nodes as u64 + exhaustive_lights);
     radiance
 }
+
+#[cfg(test)]
+mod tests;

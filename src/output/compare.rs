@@ -47,16 +47,8 @@ pub struct ComparisonResult {
 }
 
 fn luminances(image: &ExrImage, path: &Path) -> Result<Vec<DVec3>, OutputError> {
-    let (r, g, b) = (
-        image.channel(path, "R")?,
-        image.channel(path, "G")?,
-        image.channel(path, "B")?,
-    );
-    Ok(r.iter()
-        .zip(g)
-        .zip(b)
-        .map(|((&r, &g), &b)| DVec3::new(f64::from(r), f64::from(g), f64::from(b)))
-        .collect())
+    let (r, g, b) = (image.channel(path, "R")?, image.channel(path, "G")?, image.channel(path, "B")?);
+    Ok(r.iter().zip(g).zip(b).map(|((&r, &g), &b)| DVec3::new(f64::from(r), f64::from(g), f64::from(b))).collect())
 }
 
 pub fn compare_files(test: &Path, reference: &Path) -> Result<ComparisonResult, OutputError> {
@@ -78,49 +70,26 @@ pub fn compare_files(test: &Path, reference: &Path) -> Result<ComparisonResult, 
             ),
         ));
     }
-    Ok(compare_rgb(
-        &luminances(&t, test)?,
-        &luminances(&r, reference)?,
-        t.width,
-        t.height,
-    ))
+    Ok(compare_rgb(&luminances(&t, test)?, &luminances(&r, reference)?, t.width, t.height))
 }
 
 /// Compares two RGB images of the same size.
 #[must_use]
-pub fn compare_rgb(
-    test: &[DVec3],
-    reference: &[DVec3],
-    width: usize,
-    height: usize,
-) -> ComparisonResult {
+pub fn compare_rgb(test: &[DVec3], reference: &[DVec3], width: usize, height: usize) -> ComparisonResult {
     let n = test.len().max(1);
     let lt: Vec<f64> = test.iter().map(|&c| luminance64(c)).collect();
     let lr: Vec<f64> = reference.iter().map(|&c| luminance64(c)).collect();
     let mean_ref = lr.iter().sum::<f64>() / n as f64;
     // The floor is positive even for a black reference, so 0/0 never happens.
     let floor = (FLOOR_FRACTION * mean_ref).max(f64::MIN_POSITIVE);
-    let relative: Vec<f64> = lt
-        .iter()
-        .zip(&lr)
-        .map(|(&a, &b)| (a - b).abs() / b.max(floor))
-        .collect();
+    let relative: Vec<f64> = lt.iter().zip(&lr).map(|(&a, &b)| (a - b).abs() / b.max(floor)).collect();
     let mut sorted = relative.clone();
     sorted.sort_by(f64::total_cmp);
-    let quantile = |q: f64| {
-        sorted
-            .get(((q * (sorted.len() as f64 - 1.0)).round()) as usize)
-            .copied()
-            .unwrap_or(0.0)
-    };
+    let quantile = |q: f64| sorted.get(((q * (sorted.len() as f64 - 1.0)).round()) as usize).copied().unwrap_or(0.0);
     let above = |x: f64| relative.iter().filter(|&&e| e > x).count() as f64 / n as f64;
     let squared: f64 = lt.iter().zip(&lr).map(|(a, b)| (a - b) * (a - b)).sum();
-    let relative_mse = lt
-        .iter()
-        .zip(&lr)
-        .map(|(a, b)| (a - b) * (a - b) / (b * b + floor * floor))
-        .sum::<f64>()
-        / n as f64;
+    let relative_mse =
+        lt.iter().zip(&lr).map(|(a, b)| (a - b) * (a - b) / (b * b + floor * floor)).sum::<f64>() / n as f64;
     let summary = Comparison {
         pixels: test.len(),
         floor,
@@ -135,18 +104,8 @@ pub fn compare_rgb(
         rmse: (squared / n as f64).sqrt(),
         relative_mse,
     };
-    let difference = test
-        .iter()
-        .zip(reference)
-        .map(|(a, b)| (*a - *b).abs())
-        .collect();
-    ComparisonResult {
-        summary,
-        relative,
-        width,
-        height,
-        difference,
-    }
+    let difference = test.iter().zip(reference).map(|(a, b)| (*a - *b).abs()).collect();
+    ComparisonResult { summary, relative, width, height, difference }
 }
 
 /// Heat-map colour of a relative error: black at 0, then blue (0.5%), green

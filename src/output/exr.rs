@@ -42,19 +42,12 @@ pub fn write_exr(
 ) -> std::result::Result<(), OutputError> {
     let b = film.bounds;
     let size = (b.width() as usize, b.height() as usize);
-    let column = |f: &dyn Fn(&crate::render::Pixel) -> f32| -> Vec<f32> {
-        film.pixels.iter().map(f).collect()
-    };
+    let column = |f: &dyn Fn(&crate::render::Pixel) -> f32| -> Vec<f32> { film.pixels.iter().map(f).collect() };
     let beauty = |name: &str, values: Vec<f32>| {
         if channels.half_beauty {
             AnyChannel::new(
                 name,
-                FlatSamples::F16(
-                    values
-                        .into_iter()
-                        .map(|v| f16::from_f32(v.min(HALF_MAX)))
-                        .collect(),
-                ),
+                FlatSamples::F16(values.into_iter().map(|v| f16::from_f32(v.min(HALF_MAX))).collect()),
             )
         } else {
             AnyChannel::new(name, FlatSamples::F32(values))
@@ -92,61 +85,24 @@ pub fn write_exr(
     let mut other = |key: &str, value: AttributeValue| {
         attributes.other.insert(Text::from(key), value);
     };
-    other(
-        "lightcuts:sceneFile",
-        AttributeValue::Text(Text::from(meta.scene_file.display().to_string().as_str())),
-    );
-    other(
-        "lightcuts:renderMode",
-        AttributeValue::Text(Text::from(meta.render_mode.as_str())),
-    );
-    other(
-        "lightcuts:renderTimeSeconds",
-        AttributeValue::F64(meta.render_seconds),
-    );
-    other(
-        "lightcuts:lights",
-        AttributeValue::Text(Text::from(meta.lights.to_string().as_str())),
-    );
-    other(
-        "lightcuts:samplesPerPixel",
-        AttributeValue::I32(meta.spp.min(i32::MAX as u32) as i32),
-    );
-    other(
-        "lightcuts:seed",
-        AttributeValue::Text(Text::from(meta.seed.to_string().as_str())),
-    );
+    other("lightcuts:sceneFile", AttributeValue::Text(Text::from(meta.scene_file.display().to_string().as_str())));
+    other("lightcuts:renderMode", AttributeValue::Text(Text::from(meta.render_mode.as_str())));
+    other("lightcuts:renderTimeSeconds", AttributeValue::F64(meta.render_seconds));
+    other("lightcuts:lights", AttributeValue::Text(Text::from(meta.lights.to_string().as_str())));
+    other("lightcuts:samplesPerPixel", AttributeValue::I32(meta.spp.min(i32::MAX as u32) as i32));
+    other("lightcuts:seed", AttributeValue::Text(Text::from(meta.seed.to_string().as_str())));
 
-    let encoding = Encoding {
-        compression: Compression::ZIP16,
-        blocks: Blocks::ScanLines,
-        line_order: LineOrder::Increasing,
-    };
-    let layer = Layer::new(
-        size,
-        attributes,
-        encoding,
-        AnyChannels::sort(list.into_iter().map(colour).collect()),
-    );
-    let display = IntegerBounds::new(
-        Vec2(0, 0),
-        Vec2(film.full_width as usize, film.full_height as usize),
-    );
+    let encoding =
+        Encoding { compression: Compression::ZIP16, blocks: Blocks::ScanLines, line_order: LineOrder::Increasing };
+    let layer = Layer::new(size, attributes, encoding, AnyChannels::sort(list.into_iter().map(colour).collect()));
+    let display = IntegerBounds::new(Vec2(0, 0), Vec2(film.full_width as usize, film.full_height as usize));
     let image = Image::new(ImageAttributes::new(display), layer);
-    write_atomically(path, |temporary| {
-        image
-            .write()
-            .to_file(temporary)
-            .map_err(|e| format!("cannot write EXR: {e}"))
-    })
+    write_atomically(path, |temporary| image.write().to_file(temporary).map_err(|e| format!("cannot write EXR: {e}")))
 }
 
 /// Writes a comparison as an EXR: per-channel absolute difference (R, G, B)
 /// and the relative error on luminance (`relative_error`).
-pub fn write_diff_exr(
-    path: &Path,
-    result: &super::compare::ComparisonResult,
-) -> std::result::Result<(), OutputError> {
+pub fn write_diff_exr(path: &Path, result: &super::compare::ComparisonResult) -> std::result::Result<(), OutputError> {
     let channel = |name: &str, v: Vec<f32>| AnyChannel::new(name, FlatSamples::F32(v));
     let d = &result.difference;
     let finite = |x: f64| x.min(f64::from(f32::MAX)) as f32;
@@ -154,19 +110,8 @@ pub fn write_diff_exr(
         channel("R", d.iter().map(|c| finite(c.x)).collect()),
         channel("G", d.iter().map(|c| finite(c.y)).collect()),
         channel("B", d.iter().map(|c| finite(c.z)).collect()),
-        channel(
-            "relative_error",
-            result.relative.iter().map(|&e| finite(e)).collect(),
-        ),
+        channel("relative_error", result.relative.iter().map(|&e| finite(e)).collect()),
     ];
-    let image = Image::from_channels(
-        (result.width, result.height),
-        AnyChannels::sort(channels.into()),
-    );
-    write_atomically(path, |t| {
-        image
-            .write()
-            .to_file(t)
-            .map_err(|e| format!("cannot write EXR: {e}"))
-    })
+    let image = Image::from_channels((result.width, result.height), AnyChannels::sort(channels.into()));
+    write_atomically(path, |t| image.write().to_file(t).map_err(|e| format!("cannot write EXR: {e}")))
 }

@@ -21,41 +21,25 @@ pub struct OutputError {
 
 impl OutputError {
     pub fn new(path: &Path, message: impl Into<String>) -> Self {
-        Self {
-            path: path.to_path_buf(),
-            message: message.into(),
-        }
+        Self { path: path.to_path_buf(), message: message.into() }
     }
 }
 
 /// Writes a file through `write` at a temporary path beside `path`, then
 /// renames it into place; on any failure the temporary file is removed and
 /// nothing appears under `path`.
-pub fn write_atomically(
-    path: &Path,
-    write: impl FnOnce(&Path) -> Result<(), String>,
-) -> Result<(), OutputError> {
+pub fn write_atomically(path: &Path, write: impl FnOnce(&Path) -> Result<(), String>) -> Result<(), OutputError> {
     let dir = match path.parent() {
         Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
         _ => PathBuf::from("."),
     };
     if !dir.is_dir() {
-        return Err(OutputError::new(
-            path,
-            format!("the directory '{}' does not exist", dir.display()),
-        ));
+        return Err(OutputError::new(path, format!("the directory '{}' does not exist", dir.display())));
     }
-    let name = path
-        .file_name()
-        .ok_or_else(|| OutputError::new(path, "not a file name"))?;
-    let temporary = dir.join(format!(
-        ".{}.{}.partial",
-        name.to_string_lossy(),
-        std::process::id()
-    ));
+    let name = path.file_name().ok_or_else(|| OutputError::new(path, "not a file name"))?;
+    let temporary = dir.join(format!(".{}.{}.partial", name.to_string_lossy(), std::process::id()));
     crate::interrupt::register_temporary(&temporary);
-    let result = write(&temporary)
-        .and_then(|()| std::fs::rename(&temporary, path).map_err(|e| e.to_string()));
+    let result = write(&temporary).and_then(|()| std::fs::rename(&temporary, path).map_err(|e| e.to_string()));
     if result.is_err() {
         let _ = std::fs::remove_file(&temporary);
     }

@@ -12,12 +12,7 @@ pub struct PixelBounds {
 impl PixelBounds {
     #[must_use]
     pub fn full(width: u32, height: u32) -> Self {
-        Self {
-            x0: 0,
-            x1: width,
-            y0: 0,
-            y1: height,
-        }
+        Self { x0: 0, x1: width, y0: 0, y1: height }
     }
 
     #[must_use]

@@ -27,28 +27,15 @@ impl<'s> Geometry<'s> {
             let id = builder
                 .attach_triangles(&mesh.positions, &mesh.triangles)
                 .map_err(|source| GeometryError::Mesh { shape: i, source })?;
-            debug_assert_eq!(
-                id as usize,
-                mesh_of_geometry.len(),
-                "Embree assigns ids in order"
-            );
+            debug_assert_eq!(id as usize, mesh_of_geometry.len(), "Embree assigns ids in order");
             mesh_of_geometry.push(i);
         }
         let embree = builder.commit()?;
         let (lo, hi) = scene.bounds();
-        let magnitude = if lo.is_finite() && hi.is_finite() {
-            lo.abs().max(hi.abs()).max_element()
-        } else {
-            0.0
-        };
+        let magnitude = if lo.is_finite() && hi.is_finite() { lo.abs().max(hi.abs()).max_element() } else { 0.0 };
         // The floor keeps the offset positive for a scene of a single point at the origin.
         let ray_epsilon = (magnitude * (1.0 / 65536.0)).max(1e-30);
-        Ok(Self {
-            scene,
-            embree,
-            mesh_of_geometry,
-            ray_epsilon,
-        })
+        Ok(Self { scene, embree, mesh_of_geometry, ray_epsilon })
     }
 
     /// The surface point of a hit along `ray`, with normals facing the ray's origin.
@@ -156,34 +143,19 @@ impl SurfacePoint<'_> {
         if length <= 2.0 * self.epsilon {
             return None;
         }
-        Some(ShadowRay::new(Ray {
-            origin,
-            direction,
-            t_near: 0.0,
-            t_far: 1.0 - self.epsilon / length,
-        }))
+        Some(ShadowRay::new(Ray { origin, direction, t_near: 0.0, t_far: 1.0 - self.epsilon / length }))
     }
 
     /// The shadow ray towards a light at infinity in unit direction `d`.
     #[must_use]
     pub fn shadow_ray_towards(&self, d: Vec3) -> ShadowRay {
-        ShadowRay::new(Ray {
-            origin: self.offset_origin(),
-            direction: d,
-            t_near: 0.0,
-            t_far: f32::INFINITY,
-        })
+        ShadowRay::new(Ray { origin: self.offset_origin(), direction: d, t_near: 0.0, t_far: f32::INFINITY })
     }
 
     /// The mirror-reflected ray.
     #[must_use]
     pub fn mirror_ray(&self) -> Ray {
-        Ray {
-            origin: self.offset_origin(),
-            direction: self.r,
-            t_near: 0.0,
-            t_far: f32::INFINITY,
-        }
+        Ray { origin: self.offset_origin(), direction: self.r, t_near: 0.0, t_far: f32::INFINITY }
     }
 
     /// The distance clamp for point-light singularities: squared distances

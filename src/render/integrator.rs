@@ -7,16 +7,11 @@
 
 use glam::{DVec3, Vec3};
 
+use super::direct::{BatchBuffers, LightBatch};
 use super::geometry::{Geometry, SurfacePoint};
-use crate::embree::ShadowRay;
 use crate::light::Lights;
 use crate::light_tree::LightKind;
-use crate::lightcut::bounds::light_term;
 use crate::lightcut::cut::{self, CutScratch, CutSettings, LightTrees};
-
-/// Shadow rays handed to Embree per call: large enough to amortise the FFI
-/// crossing, small enough to stay in L1/L2 (256 rays x 32 bytes = 8 KiB).
-pub const SHADOW_BATCH: usize = 256;
 
 /// How direct light is computed at each shading point.
 #[derive(Clone, Copy)]
@@ -24,18 +19,13 @@ pub enum DirectLighting<'a> {
     /// Every light, one shadow ray each: the reference.
     Exact,
     /// A lightcut through the scene's light trees.
-    Lightcuts {
-        trees: &'a LightTrees,
-        settings: CutSettings,
-    },
+    Lightcuts { trees: &'a LightTrees, settings: CutSettings },
 }
 
 /// Reusable per-thread buffers (no allocation per shading point).
 #[derive(Default)]
 pub struct Scratch {
-    rays: Vec<ShadowRay>,
-    values: Vec<DVec3>,
-    occluded: Vec<bool>,
+    batch: BatchBuffers,
     cut: CutScratch,
 }
 
@@ -83,11 +73,7 @@ impl Integrator<'_> {
     /// Radiance arriving at the camera along `ray` (camera paths bounce only
     /// off mirrors; every other surface is shaded by direct light).
     pub fn trace(&self, mut ray: crate::embree::Ray, scratch: &mut Scratch) -> SampleResult {
-        let mut result = SampleResult {
-            radiance: DVec3::ZERO,
-            first_hit: None,
-            stats: ShadingStats::default(),
-        };
+        let mut result = SampleResult { radiance: DVec3::ZERO, first_hit: None, stats: ShadingStats::default() };
         let mut throughput = DVec3::ONE;
         for depth in 0..=self.max_mirror_depth {
             let Some(hit) = self.geometry.embree.intersect(&ray) else {
@@ -95,11 +81,7 @@ impl Integrator<'_> {
             };
             let sp = self.geometry.surface(&ray, &hit);
             if depth == 0 {
-                result.first_hit = Some(FirstHit {
-                    albedo: sp.kd,
-                    normal: sp.n,
-                    distance: sp.distance,
-                });
+                result.first_hit = Some(FirstHit { albedo: sp.kd, normal: sp.n, distance: sp.distance });
             }
             let direct = self.direct_light(&sp, scratch, &mut result.stats);
             result.radiance += throughput * direct;
@@ -112,12 +94,7 @@ impl Integrator<'_> {
         result
     }
 
-    fn direct_light(
-        &self,
-        sp: &SurfacePoint<'_>,
-        scratch: &mut Scratch,
-        stats: &mut ShadingStats,
-    ) -> DVec3 {
+    fn direct_light(&self, sp: &SurfacePoint<'_>, scratch: &mut Scratch, stats: &mut ShadingStats) -> DVec3 {
         stats.shading_points += 1;
         match self.direct {
             DirectLighting::Exact => {
@@ -132,14 +109,15 @@ impl Integrator<'_> {
                 &self.geometry.embree,
                 &settings,
                 &mut scratch.cut,
+                &mut scratch.batch,
                 stats,
             ),
         }
     }
 }
 
-/// Every light, one shadow ray each, in batches of `SHADOW_BATCH`; summed
-/// in light order (omni, oriented, directional), so deterministic.
+/// Every light, one shadow ray each, in batches; summed in light order
+/// (omni, oriented, directional), so deterministic.
 fn exact_direct(
     geometry: &Geometry<'_>,
     lights: &Lights,
@@ -147,13 +125,7 @@ fn exact_direct(
     scratch: &mut Scratch,
     stats: &mut ShadingStats,
 ) -> DVec3 {
-    let mut batch = ExactBatch {
-        geometry,
-        sp,
-        scratch,
-        stats,
-        sum: DVec3::ZERO,
-    };
+    let mut batch = LightBatch::new(&geometry.embree, sp, &mut scratch.batch);
     for l in &lights.omni {
         batch.add(LightKind::Omni, l.position, Vec3::ZERO, l.intensity);
     }
@@ -161,61 +133,9 @@ fn exact_direct(
         batch.add(LightKind::Oriented, l.position, l.normal, l.intensity);
     }
     for l in &lights.directional {
-        batch.add(
-            LightKind::Directional,
-            l.direction,
-            Vec3::ZERO,
-            l.irradiance,
-        );
+        batch.add(LightKind::Directional, l.direction, Vec3::ZERO, l.irradiance);
     }
-    batch.flush();
-    batch.sum
-}
-
-/// Collects unoccluded contributions and their shadow rays until a batch is full.
-struct ExactBatch<'a, 'p> {
-    geometry: &'a Geometry<'a>,
-    sp: &'a SurfacePoint<'p>,
-    scratch: &'a mut Scratch,
-    stats: &'a mut ShadingStats,
-    sum: DVec3,
-}
-
-impl ExactBatch<'_, '_> {
-    fn add(&mut self, kind: LightKind, position: Vec3, normal: Vec3, intensity: Vec3) {
-        let value = light_term(kind, self.sp, position, normal) * intensity.as_dvec3();
-        if value == DVec3::ZERO {
-            return;
-        }
-        let ray = match kind {
-            LightKind::Directional => Some(self.sp.shadow_ray_towards(position)),
-            _ => self.sp.shadow_ray_to(position),
-        };
-        match ray {
-            Some(ray) => {
-                self.scratch.rays.push(ray);
-                self.scratch.values.push(value);
-                if self.scratch.rays.len() == SHADOW_BATCH {
-                    self.flush();
-                }
-            }
-            None => self.sum += value,
-        }
-    }
-
-    fn flush(&mut self) {
-        self.geometry
-            .embree
-            .occluded_batch(&self.scratch.rays, &mut self.scratch.occluded);
-        self.stats.shadow_rays += self.scratch.rays.len() as u64;
-        for (value, &occluded) in self.scratch.values.iter().zip(&self.scratch.occluded) {
-            if !occluded {
-                self.sum += *value;
-            }
-        }
-        self.scratch.rays.clear();
-        self.scratch.values.clear();
-    }
+    batch.finish(stats)
 }
 
 /// A finite f32 for the film: NaN becomes 0 and magnitudes beyond f32's

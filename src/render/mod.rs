@@ -6,6 +6,7 @@
 //! tiles are assembled in a fixed order, so the image is bit-identical for any
 //! thread count, tile order and pixel window.
 
+pub mod direct;
 pub mod film;
 pub mod geometry;
 pub mod integrator;
@@ -53,12 +54,7 @@ pub fn tiles(bounds: PixelBounds, tile: u32) -> Vec<PixelBounds> {
     while y < bounds.y1 {
         let mut x = bounds.x0;
         while x < bounds.x1 {
-            out.push(PixelBounds {
-                x0: x,
-                x1: (x + tile).min(bounds.x1),
-                y0: y,
-                y1: (y + tile).min(bounds.y1),
-            });
+            out.push(PixelBounds { x0: x, x1: (x + tile).min(bounds.x1), y0: y, y1: (y + tile).min(bounds.y1) });
             x += tile;
         }
         y += tile;
@@ -126,8 +122,7 @@ fn render_tile(
             let mut z = f32::INFINITY;
             let mut pixel_stats = ShadingStats::default();
             for s in 0..settings.spp {
-                let mut rng =
-                    Rng::from_key(&[settings.seed, u64::from(x), u64::from(y), u64::from(s)]);
+                let mut rng = Rng::from_key(&[settings.seed, u64::from(x), u64::from(y), u64::from(s)]);
                 let ray = camera.ray(x as f32 + rng.next_f32(), y as f32 + rng.next_f32());
                 let sample = integrator.trace(ray, scratch);
                 stats.camera_rays += 1;
@@ -164,8 +159,5 @@ fn render_tile(
 /// A rayon pool of `threads` workers (0: one per CPU), each with Embree's
 /// recommended flush-to-zero and denormals-are-zero modes set.
 pub fn thread_pool(threads: usize) -> Result<rayon::ThreadPool, rayon::ThreadPoolBuildError> {
-    rayon::ThreadPoolBuilder::new()
-        .num_threads(threads)
-        .start_handler(|_| crate::embree::set_flush_denormals())
-        .build()
+    rayon::ThreadPoolBuilder::new().num_threads(threads).start_handler(|_| crate::embree::set_flush_denormals()).build()
 }

@@ -9,13 +9,7 @@ use std::time::Instant;
 pub enum Progress {
     Silent,
     Bar(indicatif::ProgressBar),
-    Lines {
-        label: String,
-        total: AtomicU64,
-        done: AtomicU64,
-        last_decile: Mutex<u64>,
-        start: Mutex<Instant>,
-    },
+    Lines { label: String, total: AtomicU64, done: AtomicU64, last_decile: Mutex<u64>, start: Mutex<Instant> },
 }
 
 impl Progress {
@@ -54,13 +48,7 @@ impl Progress {
                 bar.set_position(0);
                 bar.set_draw_target(indicatif::ProgressDrawTarget::stderr());
             }
-            Self::Lines {
-                total: t,
-                done,
-                last_decile,
-                start,
-                ..
-            } => {
+            Self::Lines { total: t, done, last_decile, start, .. } => {
                 t.store(total, Ordering::Relaxed);
                 done.store(0, Ordering::Relaxed);
                 *last_decile.lock().unwrap_or_else(|e| e.into_inner()) = 0;
@@ -73,24 +61,14 @@ impl Progress {
         match self {
             Self::Silent => {}
             Self::Bar(bar) => bar.inc(1),
-            Self::Lines {
-                label,
-                total,
-                done,
-                last_decile,
-                start,
-            } => {
+            Self::Lines { label, total, done, last_decile, start } => {
                 let d = done.fetch_add(1, Ordering::Relaxed) + 1;
                 let t = total.load(Ordering::Relaxed).max(1);
                 let decile = d * 10 / t;
                 let mut last = last_decile.lock().unwrap_or_else(|e| e.into_inner());
                 if decile > *last {
                     *last = decile;
-                    let elapsed = start
-                        .lock()
-                        .unwrap_or_else(|e| e.into_inner())
-                        .elapsed()
-                        .as_secs_f64();
+                    let elapsed = start.lock().unwrap_or_else(|e| e.into_inner()).elapsed().as_secs_f64();
                     let eta = elapsed * (t - d) as f64 / d as f64;
                     let _ = writeln!(
                         std::io::stderr(),

@@ -18,10 +18,6 @@ pub struct SceneError {
 
 impl SceneError {
     pub fn new(file: &Path, location: impl Into<String>, message: impl Into<String>) -> Self {
-        Self {
-            file: file.to_path_buf(),
-            location: location.into(),
-            message: message.into(),
-        }
+        Self { file: file.to_path_buf(), location: location.into(), message: message.into() }
     }
 }

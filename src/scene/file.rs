@@ -82,18 +82,9 @@ fn unit_scale() -> [f32; 2] {
 #[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
 pub enum ShapeSpec {
     /// A parallelogram: corner, corner + u, corner + u + v, corner + v.
-    Quad {
-        corner: [f32; 3],
-        u: [f32; 3],
-        v: [f32; 3],
-        material: String,
-    },
+    Quad { corner: [f32; 3], u: [f32; 3], v: [f32; 3], material: String },
     /// An axis-aligned box.
-    Box {
-        min: [f32; 3],
-        max: [f32; 3],
-        material: String,
-    },
+    Box { min: [f32; 3], max: [f32; 3], material: String },
     /// A UV sphere tessellated into `segments` longitudes and `segments / 2` latitudes.
     Sphere {
         center: [f32; 3],
@@ -125,19 +116,10 @@ fn unit_f32() -> f32 {
 #[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
 pub enum LightSpec {
     /// One point light; intensity in W/sr per RGB channel.
-    Point {
-        position: [f32; 3],
-        intensity: [f32; 3],
-    },
+    Point { position: [f32; 3], intensity: [f32; 3] },
     /// count[0] x count[1] point lights spread evenly over the parallelogram
     /// corner + s u + t v, each with `intensity` W/sr.
-    Grid {
-        corner: [f32; 3],
-        u: [f32; 3],
-        v: [f32; 3],
-        count: [u32; 2],
-        intensity: [f32; 3],
-    },
+    Grid { corner: [f32; 3], u: [f32; 3], v: [f32; 3], count: [u32; 2], intensity: [f32; 3] },
 }
 
 #[derive(Debug, Clone, Deserialize)]
@@ -150,9 +132,7 @@ pub struct RenderSpec {
 
 impl Default for RenderSpec {
     fn default() -> Self {
-        Self {
-            max_mirror_depth: mirror_depth(),
-        }
+        Self { max_mirror_depth: mirror_depth() }
     }
 }
 

@@ -67,9 +67,7 @@ pub fn brdf(kd: Vec3, material: &Material, r: Vec3, wi: Vec3) -> Vec3 {
         return diffuse;
     }
     let cos_alpha = r.dot(wi).max(0.0);
-    diffuse
-        + material.specular
-            * (phong_normalisation(material.exponent) * cos_alpha.powf(material.exponent))
+    diffuse + material.specular * (phong_normalisation(material.exponent) * cos_alpha.powf(material.exponent))
 }
 
 /// Mirror direction of `wo` about `n` (both unit, pointing away from the surface).

@@ -26,12 +26,7 @@ impl Mesh {
         Self {
             positions: vec![corner, corner + u, corner + u + v, corner + v],
             normals: None,
-            uvs: Some(vec![
-                Vec2::new(0.0, 0.0),
-                Vec2::new(1.0, 0.0),
-                Vec2::new(1.0, 1.0),
-                Vec2::new(0.0, 1.0),
-            ]),
+            uvs: Some(vec![Vec2::new(0.0, 0.0), Vec2::new(1.0, 0.0), Vec2::new(1.0, 1.0), Vec2::new(0.0, 1.0)]),
             triangles: vec![[0, 1, 2], [0, 2, 3]],
             material,
         }
@@ -44,29 +39,13 @@ impl Mesh {
         let d = max - min;
         let faces = [
             (min, Vec3::new(0.0, 0.0, d.z), Vec3::new(0.0, d.y, 0.0)), // -x
-            (
-                Vec3::new(max.x, min.y, min.z),
-                Vec3::new(0.0, d.y, 0.0),
-                Vec3::new(0.0, 0.0, d.z),
-            ), // +x
+            (Vec3::new(max.x, min.y, min.z), Vec3::new(0.0, d.y, 0.0), Vec3::new(0.0, 0.0, d.z)), // +x
             (min, Vec3::new(d.x, 0.0, 0.0), Vec3::new(0.0, 0.0, d.z)), // -y
-            (
-                Vec3::new(min.x, max.y, min.z),
-                Vec3::new(0.0, 0.0, d.z),
-                Vec3::new(d.x, 0.0, 0.0),
-            ), // +y
+            (Vec3::new(min.x, max.y, min.z), Vec3::new(0.0, 0.0, d.z), Vec3::new(d.x, 0.0, 0.0)), // +y
             (min, Vec3::new(0.0, d.y, 0.0), Vec3::new(d.x, 0.0, 0.0)), // -z
-            (
-                Vec3::new(min.x, min.y, max.z),
-                Vec3::new(d.x, 0.0, 0.0),
-                Vec3::new(0.0, d.y, 0.0),
-            ), // +z
+            (Vec3::new(min.x, min.y, max.z), Vec3::new(d.x, 0.0, 0.0), Vec3::new(0.0, d.y, 0.0)), // +z
         ];
-        let mut mesh = Self {
-            material,
-            uvs: Some(Vec::new()),
-            ..Self::default()
-        };
+        let mut mesh = Self { material, uvs: Some(Vec::new()), ..Self::default() };
         for (corner, u, v) in faces {
             mesh.append(&Self::quad(corner, u, v, material));
         }
@@ -86,17 +65,10 @@ impl Mesh {
             let theta = std::f32::consts::PI * j as f32 / stacks as f32;
             for i in 0..=slices {
                 let phi = std::f32::consts::TAU * i as f32 / slices as f32;
-                let n = Vec3::new(
-                    theta.sin() * phi.cos(),
-                    theta.cos(),
-                    theta.sin() * phi.sin(),
-                );
+                let n = Vec3::new(theta.sin() * phi.cos(), theta.cos(), theta.sin() * phi.sin());
                 positions.push(center + radius * n);
                 normals.push(n);
-                uvs.push(Vec2::new(
-                    i as f32 / slices as f32,
-                    j as f32 / stacks as f32,
-                ));
+                uvs.push(Vec2::new(i as f32 / slices as f32, j as f32 / stacks as f32));
             }
         }
         let row = slices + 1;
@@ -114,13 +86,7 @@ impl Mesh {
                 }
             }
         }
-        Self {
-            positions,
-            normals: Some(normals),
-            uvs: Some(uvs),
-            triangles,
-            material,
-        }
+        Self { positions, normals: Some(normals), uvs: Some(uvs), triangles, material }
     }
 
     /// Appends another mesh's triangles (same material), keeping attributes
@@ -128,8 +94,7 @@ impl Mesh {
     fn append(&mut self, other: &Self) {
         let base = self.positions.len() as u32;
         self.positions.extend_from_slice(&other.positions);
-        self.triangles
-            .extend(other.triangles.iter().map(|t| t.map(|i| i + base)));
+        self.triangles.extend(other.triangles.iter().map(|t| t.map(|i| i + base)));
         match (&mut self.uvs, &other.uvs) {
             (Some(a), Some(b)) => a.extend_from_slice(b),
             _ => self.uvs = None,
@@ -141,23 +106,11 @@ impl Mesh {
     }
 
     /// Loads every object of an OBJ file into one mesh, scaled then translated.
-    pub fn load_obj(
-        path: &Path,
-        scale: f32,
-        translate: Vec3,
-        material: usize,
-    ) -> Result<Self, SceneError> {
-        let options = tobj::LoadOptions {
-            triangulate: true,
-            single_index: true,
-            ..Default::default()
-        };
+    pub fn load_obj(path: &Path, scale: f32, translate: Vec3, material: usize) -> Result<Self, SceneError> {
+        let options = tobj::LoadOptions { triangulate: true, single_index: true, ..Default::default() };
         let (models, _materials) = tobj::load_obj(path, &options)
             .map_err(|e| SceneError::new(path, "OBJ", format!("cannot load mesh: {e}")))?;
-        let mut mesh = Self {
-            material,
-            ..Self::default()
-        };
+        let mut mesh = Self { material, ..Self::default() };
         let mut all_normals = true;
         let mut all_uvs = true;
         let mut normals = Vec::new();
@@ -178,11 +131,7 @@ impl Mesh {
                 mesh.positions.push(v * scale + translate);
             }
             if m.normals.len() == m.positions.len() {
-                normals.extend(
-                    m.normals
-                        .chunks_exact(3)
-                        .map(|n| Vec3::new(n[0], n[1], n[2]).normalize_or_zero()),
-                );
+                normals.extend(m.normals.chunks_exact(3).map(|n| Vec3::new(n[0], n[1], n[2]).normalize_or_zero()));
             } else {
                 all_normals = false;
             }
@@ -197,15 +146,11 @@ impl Mesh {
                         return Err(SceneError::new(
                             path,
                             format!("object '{}', face {}", model.name, t + 1),
-                            format!(
-                                "vertex index {} out of range (the object has {count} vertices)",
-                                index + 1
-                            ),
+                            format!("vertex index {} out of range (the object has {count} vertices)", index + 1),
                         ));
                     }
                 }
-                mesh.triangles
-                    .push([tri[0], tri[1], tri[2]].map(|i| i + base as u32));
+                mesh.triangles.push([tri[0], tri[1], tri[2]].map(|i| i + base as u32));
             }
         }
         if mesh.triangles.is_empty() {
@@ -224,10 +169,9 @@ impl Mesh {
     /// Axis-aligned bounds of the positions: (min, max).
     #[must_use]
     pub fn bounds(&self) -> (Vec3, Vec3) {
-        self.positions.iter().fold(
-            (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
-            |(lo, hi), &p| (lo.min(p), hi.max(p)),
-        )
+        self.positions
+            .iter()
+            .fold((Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)), |(lo, hi), &p| (lo.min(p), hi.max(p)))
     }
 }
 
@@ -256,11 +200,7 @@ mod tests {
         let exact = 4.0 * std::f32::consts::PI * 4.0;
         assert!((area(&s) - exact).abs() / exact < 0.01);
         for m in [&q, &b, &s] {
-            assert!(m
-                .triangles
-                .iter()
-                .flatten()
-                .all(|&i| (i as usize) < m.positions.len()));
+            assert!(m.triangles.iter().flatten().all(|&i| (i as usize) < m.positions.len()));
             assert_eq!(m.uvs.as_ref().unwrap().len(), m.positions.len());
         }
         for (p, n) in s.positions.iter().zip(s.normals.as_ref().unwrap()) {

@@ -53,23 +53,12 @@ impl Scene {
     /// Reads, parses and validates a scene file (`.json` as JSON, anything
     /// else as TOML).
     pub fn load(path: &Path) -> Result<Self, SceneError> {
-        let text = std::fs::read(path)
-            .map_err(|e| SceneError::new(path, "file", format!("cannot read scene: {e}")))?;
+        let text = std::fs::read(path).map_err(|e| SceneError::new(path, "file", format!("cannot read scene: {e}")))?;
         let text = String::from_utf8(text).map_err(|e| {
-            SceneError::new(
-                path,
-                format!("byte {}", e.utf8_error().valid_up_to()),
-                "the scene file is not UTF-8 text",
-            )
+            SceneError::new(path, format!("byte {}", e.utf8_error().valid_up_to()), "the scene file is not UTF-8 text")
         })?;
-        let is_json = path
-            .extension()
-            .is_some_and(|e| e.eq_ignore_ascii_case("json"));
-        let spec = if is_json {
-            parse_json(path, &text)?
-        } else {
-            parse_toml(path, &text)?
-        };
+        let is_json = path.extension().is_some_and(|e| e.eq_ignore_ascii_case("json"));
+        let spec = if is_json { parse_json(path, &text)? } else { parse_toml(path, &text)? };
         Self::from_spec(path, spec)
     }
 
@@ -79,17 +68,9 @@ impl Scene {
         let v = Validator { file: path };
         let base = path.parent().unwrap_or(Path::new("."));
 
-        let film = Film {
-            width: spec.film.width,
-            height: spec.film.height,
-            spp: spec.film.spp,
-        };
-        v.check(film.width >= 1, "film.width", || {
-            "must be at least 1".into()
-        })?;
-        v.check(film.height >= 1, "film.height", || {
-            "must be at least 1".into()
-        })?;
+        let film = Film { width: spec.film.width, height: spec.film.height, spp: spec.film.spp };
+        v.check(film.width >= 1, "film.width", || "must be at least 1".into())?;
+        v.check(film.height >= 1, "film.height", || "must be at least 1".into())?;
         v.check(film.spp >= 1, "film.spp", || "must be at least 1".into())?;
         check_resolution(path, "film", film.width, film.height)?;
 
@@ -97,94 +78,60 @@ impl Scene {
         let eye = v.point(cam.eye, "camera.eye")?;
         let look_at = v.point(cam.look_at, "camera.look_at")?;
         let up = v.point(cam.up, "camera.up")?;
-        v.check(
-            cam.fov_y.is_finite() && cam.fov_y > 0.0 && cam.fov_y < 180.0,
-            "camera.fov_y",
-            || {
-                format!(
-                    "must be between 0 and 180 degrees (exclusive), got {}",
-                    cam.fov_y
-                )
-            },
-        )?;
-        let forward = look_at - eye;
-        v.check(forward.length() > 0.0, "camera.look_at", || {
-            "must differ from camera.eye".into()
+        v.check(cam.fov_y.is_finite() && cam.fov_y > 0.0 && cam.fov_y < 180.0, "camera.fov_y", || {
+            format!("must be between 0 and 180 degrees (exclusive), got {}", cam.fov_y)
         })?;
-        v.check(
-            forward.normalize().cross(up).length() > 1e-6,
-            "camera.up",
-            || "must not be parallel to the viewing direction".into(),
-        )?;
+        let forward = look_at - eye;
+        v.check(forward.length() > 0.0, "camera.look_at", || "must differ from camera.eye".into())?;
+        v.check(forward.normalize().cross(up).length() > 1e-6, "camera.up", || {
+            "must not be parallel to the viewing direction".into()
+        })?;
 
         let mut textures = Vec::new();
         let mut materials = Vec::new();
         let mut material_index = HashMap::new();
         for (name, m) in &spec.materials {
             let field = |f: &str| format!("materials.{name}.{f}");
-            let albedo = match (&m.albedo, &m.texture) {
-                (Some(_), Some(_)) => {
-                    return Err(
-                        v.error(&field("texture"), "give either albedo or texture, not both")
-                    );
-                }
-                (None, None) => {
-                    return Err(v.error(&field("albedo"), "missing: give albedo or texture"))
-                }
-                (Some(a), None) => Albedo::Constant(v.unit_rgb(*a, &field("albedo"))?),
-                (None, Some(t)) => {
-                    let scale = Vec2::from_array(m.texture_scale);
-                    v.check(
-                        scale.is_finite() && scale.min_element() > 0.0,
-                        &field("texture_scale"),
-                        || format!("must be finite and > 0, got {:?}", m.texture_scale),
-                    )?;
-                    let texture_path = base.join(t);
-                    textures.push(Texture::load_png(&texture_path).map_err(|e| SceneError {
-                        location: format!("{} ({})", field("texture"), e.location),
-                        ..e
-                    })?);
-                    Albedo::Texture {
-                        texture: textures.len() - 1,
-                        scale,
+            let albedo =
+                match (&m.albedo, &m.texture) {
+                    (Some(_), Some(_)) => {
+                        return Err(v.error(&field("texture"), "give either albedo or texture, not both"));
                     }
-                }
-            };
+                    (None, None) => return Err(v.error(&field("albedo"), "missing: give albedo or texture")),
+                    (Some(a), None) => Albedo::Constant(v.unit_rgb(*a, &field("albedo"))?),
+                    (None, Some(t)) => {
+                        let scale = Vec2::from_array(m.texture_scale);
+                        v.check(scale.is_finite() && scale.min_element() > 0.0, &field("texture_scale"), || {
+                            format!("must be finite and > 0, got {:?}", m.texture_scale)
+                        })?;
+                        let texture_path = base.join(t);
+                        textures.push(Texture::load_png(&texture_path).map_err(|e| SceneError {
+                            location: format!("{} ({})", field("texture"), e.location),
+                            ..e
+                        })?);
+                        Albedo::Texture { texture: textures.len() - 1, scale }
+                    }
+                };
             let specular = v.unit_rgb(m.specular, &field("specular"))?;
-            v.check(
-                m.exponent.is_finite() && (0.0..=1e6).contains(&m.exponent),
-                &field("exponent"),
-                || format!("must be between 0 and 1e6, got {}", m.exponent),
-            )?;
+            v.check(m.exponent.is_finite() && (0.0..=1e6).contains(&m.exponent), &field("exponent"), || {
+                format!("must be between 0 and 1e6, got {}", m.exponent)
+            })?;
             let mirror = v.unit_rgb(m.mirror, &field("mirror"))?;
             material_index.insert(name.clone(), materials.len());
-            materials.push(Material {
-                name: name.clone(),
-                albedo,
-                specular,
-                exponent: m.exponent,
-                mirror,
-            });
+            materials.push(Material { name: name.clone(), albedo, specular, exponent: m.exponent, mirror });
         }
 
         let mut meshes = Vec::new();
         for (i, shape) in spec.shapes.iter().enumerate() {
             let field = |f: &str| format!("shapes[{i}].{f}");
             let material_of = |name: &String| {
-                material_index.get(name).copied().ok_or_else(|| {
-                    v.error(
-                        &field("material"),
-                        &format!("no material named '{name}' in [materials]"),
-                    )
-                })
+                material_index
+                    .get(name)
+                    .copied()
+                    .ok_or_else(|| v.error(&field("material"), &format!("no material named '{name}' in [materials]")))
             };
             let mesh = match shape {
-                ShapeSpec::Quad {
-                    corner,
-                    u,
-                    v: edge_v,
-                    material,
-                } => {
+                ShapeSpec::Quad { corner, u, v: edge_v, material } => {
                     let m = material_of(material)?;
                     let (c, u, w) = (
                         v.point(*corner, &field("corner"))?,
@@ -204,30 +151,18 @@ impl Scene {
                     })?;
                     Mesh::cuboid(lo, hi, m)
                 }
-                ShapeSpec::Sphere {
-                    center,
-                    radius,
-                    material,
-                    segments,
-                } => {
+                ShapeSpec::Sphere { center, radius, material, segments } => {
                     let m = material_of(material)?;
                     let c = v.point(*center, &field("center"))?;
-                    v.check(
-                        radius.is_finite() && *radius > 0.0,
-                        &field("radius"),
-                        || format!("must be finite and > 0, got {radius}"),
-                    )?;
+                    v.check(radius.is_finite() && *radius > 0.0, &field("radius"), || {
+                        format!("must be finite and > 0, got {radius}")
+                    })?;
                     v.check((3..=4096).contains(segments), &field("segments"), || {
                         format!("must be between 3 and 4096, got {segments}")
                     })?;
                     Mesh::sphere(c, *radius, *segments, m)
                 }
-                ShapeSpec::Mesh {
-                    file,
-                    material,
-                    scale,
-                    translate,
-                } => {
+                ShapeSpec::Mesh { file, material, scale, translate } => {
                     let m = material_of(material)?;
                     v.check(scale.is_finite() && *scale > 0.0, &field("scale"), || {
                         format!("must be finite and > 0, got {scale}")
@@ -235,19 +170,13 @@ impl Scene {
                     let t = v.point(*translate, &field("translate"))?;
                     let mesh_path = base.join(file);
                     if !mesh_path.is_file() {
-                        return Err(v.error(
-                            &field("file"),
-                            &format!("mesh file '{}' not found", mesh_path.display()),
-                        ));
+                        return Err(v.error(&field("file"), &format!("mesh file '{}' not found", mesh_path.display())));
                     }
                     Mesh::load_obj(&mesh_path, *scale, t, m)?
                 }
             };
             if let Some(bad) = mesh.positions.iter().position(|p| !p.is_finite()) {
-                return Err(v.error(
-                    &format!("shapes[{i}]"),
-                    &format!("vertex {bad} is not finite after scaling"),
-                ));
+                return Err(v.error(&format!("shapes[{i}]"), &format!("vertex {bad} is not finite after scaling")));
             }
             meshes.push(mesh);
         }
@@ -256,24 +185,12 @@ impl Scene {
         for (i, light) in spec.lights.iter().enumerate() {
             let field = |f: &str| format!("lights[{i}].{f}");
             match light {
-                LightSpec::Point {
-                    position,
-                    intensity,
-                } => {
+                LightSpec::Point { position, intensity } => {
                     let position = v.point(*position, &field("position"))?;
                     let intensity = v.non_negative_rgb(*intensity, &field("intensity"))?;
-                    lights.omni.push(OmniLight {
-                        position,
-                        intensity,
-                    });
+                    lights.omni.push(OmniLight { position, intensity });
                 }
-                LightSpec::Grid {
-                    corner,
-                    u,
-                    v: edge_v,
-                    count,
-                    intensity,
-                } => {
+                LightSpec::Grid { corner, u, v: edge_v, count, intensity } => {
                     let c = v.point(*corner, &field("corner"))?;
                     let (u, w) = (v.point(*u, &field("u"))?, v.point(*edge_v, &field("v"))?);
                     let intensity = v.non_negative_rgb(*intensity, &field("intensity"))?;
@@ -286,10 +203,7 @@ impl Scene {
                             // Cell centres: the grid is symmetric within its parallelogram.
                             let s = (k as f32 + 0.5) / count[0] as f32;
                             let t = (j as f32 + 0.5) / count[1] as f32;
-                            lights.omni.push(OmniLight {
-                                position: c + s * u + t * w,
-                                intensity,
-                            });
+                            lights.omni.push(OmniLight { position: c + s * u + t * w, intensity });
                         }
                     }
                 }
@@ -313,14 +227,7 @@ impl Scene {
     #[must_use]
     pub fn camera(&self, width: u32, height: u32) -> Camera {
         let c = &self.camera_spec;
-        Camera::new(
-            Vec3::from(c.eye),
-            Vec3::from(c.look_at),
-            Vec3::from(c.up),
-            c.fov_y,
-            width,
-            height,
-        )
+        Camera::new(Vec3::from(c.eye), Vec3::from(c.look_at), Vec3::from(c.up), c.fov_y, width, height)
     }
 
     /// Bounds of all geometry and lights: (min, max).
@@ -347,12 +254,7 @@ impl Scene {
 }
 
 /// Checks a film size against [`MAX_PIXELS`]; `what` names the field or flag.
-pub fn check_resolution(
-    file: &Path,
-    what: &str,
-    width: u32,
-    height: u32,
-) -> Result<(), SceneError> {
+pub fn check_resolution(file: &Path, what: &str, width: u32, height: u32) -> Result<(), SceneError> {
     let pixels = u64::from(width) * u64::from(height);
     if pixels > MAX_PIXELS {
         return Err(SceneError::new(
@@ -391,11 +293,7 @@ fn parse_json(path: &Path, text: &str) -> Result<SceneFile, SceneError> {
         };
         // serde_json appends " at line L column C" itself; the location has it.
         let message = inner.to_string();
-        let message = message
-            .split(" at line ")
-            .next()
-            .unwrap_or(&message)
-            .to_string();
+        let message = message.split(" at line ").next().unwrap_or(&message).to_string();
         SceneError::new(path, location, message)
     })?;
     de.end().map_err(|e| {
@@ -426,12 +324,7 @@ impl Validator<'_> {
         SceneError::new(self.file, field, message)
     }
 
-    fn check(
-        &self,
-        ok: bool,
-        field: &str,
-        message: impl FnOnce() -> String,
-    ) -> Result<(), SceneError> {
+    fn check(&self, ok: bool, field: &str, message: impl FnOnce() -> String) -> Result<(), SceneError> {
         if ok {
             Ok(())
         } else {
@@ -441,27 +334,21 @@ impl Validator<'_> {
 
     fn point(&self, p: [f32; 3], field: &str) -> Result<Vec3, SceneError> {
         let v = Vec3::from(p);
-        self.check(v.is_finite(), field, || {
-            format!("must be finite, got {p:?}")
-        })?;
+        self.check(v.is_finite(), field, || format!("must be finite, got {p:?}"))?;
         Ok(v)
     }
 
     fn non_negative_rgb(&self, c: [f32; 3], field: &str) -> Result<Vec3, SceneError> {
         let v = Vec3::from(c);
-        self.check(v.is_finite() && v.min_element() >= 0.0, field, || {
-            format!("must be finite and >= 0, got {c:?}")
-        })?;
+        self.check(v.is_finite() && v.min_element() >= 0.0, field, || format!("must be finite and >= 0, got {c:?}"))?;
         Ok(v)
     }
 
     fn unit_rgb(&self, c: [f32; 3], field: &str) -> Result<Vec3, SceneError> {
         let v = Vec3::from(c);
-        self.check(
-            v.is_finite() && v.min_element() >= 0.0 && v.max_element() <= 1.0,
-            field,
-            || format!("must be between 0 and 1, got {c:?}"),
-        )?;
+        self.check(v.is_finite() && v.min_element() >= 0.0 && v.max_element() <= 1.0, field, || {
+            format!("must be between 0 and 1, got {c:?}")
+        })?;
         Ok(v)
     }
 }

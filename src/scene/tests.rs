@@ -42,10 +42,7 @@ intensity = [0.5, 0.5, 0.5]
 "#;
 
 fn load_str(name: &str, text: &str) -> Result<Scene, SceneError> {
-    let dir = std::env::temp_dir().join(format!(
-        "lightcuts-scene-test-{}-{name}",
-        std::process::id()
-    ));
+    let dir = std::env::temp_dir().join(format!("lightcuts-scene-test-{}-{name}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let path = dir.join(name);
     std::fs::write(&path, text).unwrap();
@@ -57,32 +54,19 @@ fn load_str(name: &str, text: &str) -> Result<Scene, SceneError> {
 fn error_of(name: &str, text: &str) -> String {
     let e = load_str(name, text).expect_err("scene should be rejected");
     let message = e.to_string();
-    assert!(
-        message.contains(name),
-        "message does not name the file: {message}"
-    );
+    assert!(message.contains(name), "message does not name the file: {message}");
     message
 }
 
 #[test]
 fn a_valid_scene_loads_with_its_lights_and_shapes() {
     let scene = load_str("ok.toml", VALID).unwrap();
-    assert_eq!(
-        scene.film,
-        Film {
-            width: 64,
-            height: 48,
-            spp: 1
-        }
-    );
+    assert_eq!(scene.film, Film { width: 64, height: 48, spp: 1 });
     assert_eq!(scene.lights.omni.len(), 1 + 6);
     assert_eq!(scene.meshes.len(), 2);
     // Grid lights sit at cell centres.
     let first = scene.lights.omni[1].position;
-    assert!(
-        (first - Vec3::new(-1.0 + 2.0 / 6.0, 3.0, -0.5)).length() < 1e-6,
-        "{first}"
-    );
+    assert!((first - Vec3::new(-1.0 + 2.0 / 6.0, 3.0, -0.5)).length() < 1e-6, "{first}");
 }
 
 #[test]
@@ -105,17 +89,9 @@ fn negative_and_infinite_values_are_rejected_with_their_field() {
     for (from, to, field) in [
         ("radius = 0.5", "radius = -1", "shapes[1].radius"),
         ("radius = 0.5", "radius = inf", "shapes[1].radius"),
-        (
-            "intensity = [0.5, 0.5, 0.5]",
-            "intensity = [-0.5, 0.5, 0.5]",
-            "lights[1].intensity",
-        ),
+        ("intensity = [0.5, 0.5, 0.5]", "intensity = [-0.5, 0.5, 0.5]", "lights[1].intensity"),
         ("fov_y = 45", "fov_y = 180", "camera.fov_y"),
-        (
-            "albedo = [0.8, 0.8, 0.8]",
-            "albedo = [0.8, 1.5, 0.8]",
-            "materials.white.albedo",
-        ),
+        ("albedo = [0.8, 0.8, 0.8]", "albedo = [0.8, 1.5, 0.8]", "materials.white.albedo"),
         ("width = 64", "width = 0", "film.width"),
         ("count = [3, 2]", "count = [0, 2]", "lights[1].count"),
         ("eye = [0, 1, 4]", "eye = [0, 1, -inf]", "camera.eye"),
@@ -130,19 +106,13 @@ fn negative_and_infinite_values_are_rejected_with_their_field() {
 fn a_misspelt_field_is_an_error_naming_it() {
     let m = error_of("typo.toml", &VALID.replace("radius = 0.5", "raduis = 0.5"));
     assert!(m.contains("shapes[1]") && m.contains("raduis"), "{m}");
-    let m = error_of(
-        "typo2.toml",
-        &VALID.replace("[film]\nwidth", "[film]\nwidht"),
-    );
+    let m = error_of("typo2.toml", &VALID.replace("[film]\nwidth", "[film]\nwidht"));
     assert!(m.contains("widht"), "{m}");
 }
 
 #[test]
 fn wrong_types_and_syntax_errors_give_a_position() {
-    let m = error_of(
-        "type.toml",
-        &VALID.replace("width = 64", "width = \"wide\""),
-    );
+    let m = error_of("type.toml", &VALID.replace("width = 64", "width = \"wide\""));
     assert!(m.contains("film.width"), "{m}");
     let m = error_of("syntax.toml", "[film\nwidth = 3");
     assert!(m.contains("line 1"), "{m}");
@@ -152,35 +122,22 @@ fn wrong_types_and_syntax_errors_give_a_position() {
 
 #[test]
 fn a_missing_mesh_file_names_the_shape_field() {
-    let text = format!(
-        "{VALID}\n[[shapes]]\ntype = \"mesh\"\nfile = \"missing.obj\"\nmaterial = \"white\"\n"
-    );
+    let text = format!("{VALID}\n[[shapes]]\ntype = \"mesh\"\nfile = \"missing.obj\"\nmaterial = \"white\"\n");
     let m = error_of("mesh.toml", &text);
-    assert!(
-        m.contains("shapes[2].file") && m.contains("missing.obj"),
-        "{m}"
-    );
+    assert!(m.contains("shapes[2].file") && m.contains("missing.obj"), "{m}");
 }
 
 #[test]
 fn an_unknown_material_names_the_shape() {
-    let m = error_of(
-        "mat.toml",
-        &VALID.replacen("material = \"white\"", "material = \"black\"", 1),
-    );
-    assert!(
-        m.contains("shapes[0].material") && m.contains("black"),
-        "{m}"
-    );
+    let m = error_of("mat.toml", &VALID.replacen("material = \"white\"", "material = \"black\"", 1));
+    assert!(m.contains("shapes[0].material") && m.contains("black"), "{m}");
 }
 
 #[test]
 fn a_film_too_large_for_memory_is_rejected() {
     let m = error_of(
         "huge.toml",
-        &VALID
-            .replace("width = 64", "width = 4000000000")
-            .replace("height = 48", "height = 4000000000"),
+        &VALID.replace("width = 64", "width = 4000000000").replace("height = 48", "height = 4000000000"),
     );
     assert!(m.contains("film") && m.contains("memory"), "{m}");
 }
@@ -199,14 +156,7 @@ fn obj_meshes_load_relative_to_the_scene_file() {
     std::fs::write(dir.join("scene.toml"), &text).unwrap();
     let scene = Scene::load(&dir.join("scene.toml")).unwrap();
     let mesh = &scene.meshes[2];
-    assert_eq!(
-        mesh.positions,
-        vec![
-            Vec3::new(1.0, 0.0, 0.0),
-            Vec3::new(3.0, 0.0, 0.0),
-            Vec3::new(1.0, 2.0, 0.0)
-        ]
-    );
+    assert_eq!(mesh.positions, vec![Vec3::new(1.0, 0.0, 0.0), Vec3::new(3.0, 0.0, 0.0), Vec3::new(1.0, 2.0, 0.0)]);
     assert_eq!(mesh.normals.as_ref().unwrap()[0], Vec3::Z);
     let bad = text.replace("meshes/tri.obj", "bad.obj");
     std::fs::write(dir.join("bad.toml"), &bad).unwrap();

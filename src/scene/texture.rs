@@ -28,18 +28,13 @@ pub fn srgb_to_linear(c: f32) -> f32 {
 impl Texture {
     pub fn load_png(path: &Path) -> Result<Self, SceneError> {
         let err = |m: String| SceneError::new(path, "PNG", m);
-        let file =
-            std::fs::File::open(path).map_err(|e| err(format!("cannot open texture: {e}")))?;
+        let file = std::fs::File::open(path).map_err(|e| err(format!("cannot open texture: {e}")))?;
         let mut decoder = png::Decoder::new(std::io::BufReader::new(file));
         // Expand palettes and low bit depths to 8 bits; keep 16-bit as is.
         decoder.set_transformations(png::Transformations::EXPAND);
-        let mut reader = decoder
-            .read_info()
-            .map_err(|e| err(format!("not a readable PNG: {e}")))?;
+        let mut reader = decoder.read_info().map_err(|e| err(format!("not a readable PNG: {e}")))?;
         let mut buf = vec![0; reader.output_buffer_size()];
-        let info = reader
-            .next_frame(&mut buf)
-            .map_err(|e| err(format!("corrupt PNG data: {e}")))?;
+        let info = reader.next_frame(&mut buf).map_err(|e| err(format!("corrupt PNG data: {e}")))?;
         let (width, height) = (info.width as usize, info.height as usize);
         let channels = info.color_type.samples();
         let sixteen = info.bit_depth == png::BitDepth::Sixteen;
@@ -57,31 +52,19 @@ impl Texture {
                 1 | 2 => Vec3::splat(sample(base)),
                 _ => Vec3::new(sample(base), sample(base + 1), sample(base + 2)),
             };
-            texels.push(Vec3::new(
-                srgb_to_linear(rgb.x),
-                srgb_to_linear(rgb.y),
-                srgb_to_linear(rgb.z),
-            ));
+            texels.push(Vec3::new(srgb_to_linear(rgb.x), srgb_to_linear(rgb.y), srgb_to_linear(rgb.z)));
         }
         if texels.is_empty() {
             return Err(err("texture has no pixels".into()));
         }
-        Ok(Self {
-            width,
-            height,
-            texels,
-        })
+        Ok(Self { width, height, texels })
     }
 
     /// A texture from linear texels (tests and generated scenes).
     #[must_use]
     pub fn from_texels(width: usize, height: usize, texels: Vec<Vec3>) -> Self {
         assert_eq!(width * height, texels.len());
-        Self {
-            width,
-            height,
-            texels,
-        }
+        Self { width, height, texels }
     }
 
     fn texel(&self, x: i64, y: i64) -> Vec3 {

@@ -45,20 +45,13 @@ impl Drop for TempDir {
 }
 
 pub fn lightcuts(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_lightcuts"))
-        .args(args)
-        .output()
-        .expect("run lightcuts")
+    Command::new(env!("CARGO_BIN_EXE_lightcuts")).args(args).output().expect("run lightcuts")
 }
 
 /// Runs lightcuts and asserts success, returning stdout.
 pub fn lightcuts_ok(args: &[&str]) -> String {
     let out = lightcuts(args);
-    assert!(
-        out.status.success(),
-        "lightcuts {args:?} failed:\n{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    assert!(out.status.success(), "lightcuts {args:?} failed:\n{}", String::from_utf8_lossy(&out.stderr));
     String::from_utf8_lossy(&out.stdout).into_owned()
 }
 
@@ -67,16 +60,9 @@ pub fn lightcuts_fails(args: &[&str]) -> String {
     let out = lightcuts(args);
     let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
     assert!(!out.status.success(), "lightcuts {args:?} should fail");
-    assert_eq!(
-        out.status.code(),
-        Some(1),
-        "exit code for {args:?}: {stderr}"
-    );
+    assert_eq!(out.status.code(), Some(1), "exit code for {args:?}: {stderr}");
     assert!(!stderr.contains("panicked"), "panic for {args:?}: {stderr}");
-    assert!(
-        stderr.starts_with("error: "),
-        "one clear message expected: {stderr}"
-    );
+    assert!(stderr.starts_with("error: "), "one clear message expected: {stderr}");
     stderr
 }
 

@@ -7,11 +7,7 @@ use crate::scene::material::{reflect, Albedo, Material};
 
 fn unit(rng: &mut Rng) -> Vec3 {
     loop {
-        let v = Vec3::new(
-            rng.range_f32(-1.0, 1.0),
-            rng.range_f32(-1.0, 1.0),
-            rng.range_f32(-1.0, 1.0),
-        );
+        let v = Vec3::new(rng.range_f32(-1.0, 1.0), rng.range_f32(-1.0, 1.0), rng.range_f32(-1.0, 1.0));
         if v.length_squared() > 1e-3 && v.length_squared() <= 1.0 {
             return v.normalize();
         }
@@ -40,19 +36,11 @@ fn surface<'m>(rng: &mut Rng, material: &'m Material) -> SurfacePoint<'m> {
         wo = -wo;
     }
     // Geometric normal: usually the shading normal, sometimes tilted from it.
-    let ng = if rng.next_f32() < 0.5 {
-        n
-    } else {
-        (n + 0.3 * unit(rng)).normalize()
-    };
+    let ng = if rng.next_f32() < 0.5 { n } else { (n + 0.3 * unit(rng)).normalize() };
     let ng = if ng.dot(wo) < 0.0 { -ng } else { ng };
     let n = if n.dot(ng) < 0.0 { -n } else { n };
     SurfacePoint {
-        p: Vec3::new(
-            rng.range_f32(-3.0, 3.0),
-            rng.range_f32(-3.0, 3.0),
-            rng.range_f32(-3.0, 3.0),
-        ),
+        p: Vec3::new(rng.range_f32(-3.0, 3.0), rng.range_f32(-3.0, 3.0), rng.range_f32(-3.0, 3.0)),
         n,
         ng,
         wo,
@@ -72,16 +60,8 @@ fn cos_bound_is_above_every_vector_in_the_box() {
     let mut rng = Rng::seeded(1);
     for _ in 0..5000 {
         let axis = unit(&mut rng);
-        let c = Vec3::new(
-            rng.range_f32(-2.0, 2.0),
-            rng.range_f32(-2.0, 2.0),
-            rng.range_f32(-2.0, 2.0),
-        );
-        let e = Vec3::new(
-            rng.range_f32(0.0, 1.5),
-            rng.range_f32(0.0, 1.5),
-            rng.range_f32(0.0, 1.5),
-        );
+        let c = Vec3::new(rng.range_f32(-2.0, 2.0), rng.range_f32(-2.0, 2.0), rng.range_f32(-2.0, 2.0));
+        let e = Vec3::new(rng.range_f32(0.0, 1.5), rng.range_f32(0.0, 1.5), rng.range_f32(0.0, 1.5));
         let (lo, hi) = (c - e, c + e);
         let bound = cos_bound(axis, lo, hi);
         assert!((0.0..=1.0).contains(&bound));
@@ -90,11 +70,7 @@ fn cos_bound_is_above_every_vector_in_the_box() {
             let t = Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32());
             let v = lo + (hi - lo) * t;
             if v.length_squared() > 0.0 {
-                assert!(
-                    axis.dot(v.normalize()) <= bound,
-                    "cos {} > bound {bound}",
-                    axis.dot(v.normalize())
-                );
+                assert!(axis.dot(v.normalize()) <= bound, "cos {} > bound {bound}", axis.dot(v.normalize()));
             }
         }
         for k in 0..8 {
@@ -117,10 +93,7 @@ fn cos_bound_is_tight_for_a_single_direction() {
         let (axis, v) = (unit(&mut rng), unit(&mut rng) * 3.0);
         let bound = cos_bound(axis, v, v);
         let exact = axis.dot(v.normalize()).max(0.0);
-        assert!(
-            bound >= exact && bound <= exact + 1e-4,
-            "{bound} vs {exact}"
-        );
+        assert!(bound >= exact && bound <= exact + 1e-4, "{bound} vs {exact}");
     }
 }
 
@@ -133,59 +106,32 @@ fn check_random_cluster(rng: &mut Rng, kind: LightKind) {
     let centre = if rng.next_f32() < 0.2 {
         sp.p
     } else {
-        Vec3::new(
-            rng.range_f32(-4.0, 4.0),
-            rng.range_f32(-4.0, 4.0),
-            rng.range_f32(-4.0, 4.0),
-        )
+        Vec3::new(rng.range_f32(-4.0, 4.0), rng.range_f32(-4.0, 4.0), rng.range_f32(-4.0, 4.0))
     };
     let spread = [0.0, 0.01, 0.5, 3.0][rng.below(4) as usize];
     let base_normal = unit(rng);
     let lights: Vec<(Vec3, Vec3)> = (0..count)
         .map(|_| {
             let position = match kind {
-                LightKind::Directional => {
-                    (base_normal + spread * unit(rng)).normalize_or(base_normal)
-                }
+                LightKind::Directional => (base_normal + spread * unit(rng)).normalize_or(base_normal),
                 _ => {
                     centre
                         + spread
-                            * Vec3::new(
-                                rng.range_f32(-1.0, 1.0),
-                                rng.range_f32(-1.0, 1.0),
-                                rng.range_f32(-1.0, 1.0),
-                            )
+                            * Vec3::new(rng.range_f32(-1.0, 1.0), rng.range_f32(-1.0, 1.0), rng.range_f32(-1.0, 1.0))
                 }
             };
-            let normal = if rng.next_f32() < 0.5 {
-                (base_normal + 0.4 * unit(rng)).normalize()
-            } else {
-                unit(rng)
-            };
+            let normal = if rng.next_f32() < 0.5 { (base_normal + 0.4 * unit(rng)).normalize() } else { unit(rng) };
             (position, normal)
         })
         .collect();
-    let (lo, hi) = lights
-        .iter()
-        .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), l| {
-            (lo.min(l.0), hi.max(l.0))
-        });
-    let cone = lights
-        .iter()
-        .skip(1)
-        .fold(Cone::of_direction(lights[0].1), |c, l| {
-            c.union(Cone::of_direction(l.1))
-        });
+    let (lo, hi) = lights.iter().fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), l| (lo.min(l.0), hi.max(l.0)));
+    let cone = lights.iter().skip(1).fold(Cone::of_direction(lights[0].1), |c, l| c.union(Cone::of_direction(l.1)));
     let bound = cluster_bound(kind, &sp, lo, hi, cone);
     assert!(bound.is_finite(), "bound {bound} not finite");
     for (position, normal) in &lights {
         let value = light_term(kind, &sp, *position, *normal);
         let ok = value.cmple(bound * (1.0 + 1e-6)).all();
-        assert!(
-            ok,
-            "{kind:?}: light term {value} exceeds bound {bound} at p={} n={} lights={lights:?}",
-            sp.p, sp.n
-        );
+        assert!(ok, "{kind:?}: light term {value} exceeds bound {bound} at p={} n={} lights={lights:?}", sp.p, sp.n);
     }
 }
 

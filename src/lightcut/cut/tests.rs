@@ -1,0 +1,115 @@
+//! The cut against the exact sum at real shading points of a real scene.
+use super::*;
+use crate::embree::Device;
+use crate::render::geometry::Geometry;
+use crate::render::integrator::ShadingStats;
+use crate::sampling::Rng;
+use crate::scene::Scene;
+
+/// A floor, two occluding spheres (one glossy) and `n x n` lights of mixed
+/// brightness over them; returns the scene loaded from text.
+fn scene(n: u32) -> Scene {
+    let text = format!(
+        r#"
+[film]
+width = 64
+height = 48
+[camera]
+eye = [0, 4, 7]
+look_at = [0, 0.5, 0]
+fov_y = 50
+[materials.floor]
+albedo = [0.7, 0.7, 0.7]
+[materials.glossy]
+albedo = [0.5, 0.3, 0.2]
+specular = [0.4, 0.4, 0.4]
+exponent = 60
+[[shapes]]
+type = "quad"
+corner = [-6, 0, 6]
+u = [12, 0, 0]
+v = [0, 0, -12]
+material = "floor"
+[[shapes]]
+type = "sphere"
+center = [-1, 1, 0]
+radius = 1
+material = "glossy"
+[[shapes]]
+type = "sphere"
+center = [1.5, 0.6, 1]
+radius = 0.6
+material = "floor"
+[[lights]]
+type = "grid"
+corner = [-3, 3, -3]
+u = [6, 0, 0]
+v = [0, 0, 6]
+count = [{n}, {n}]
+intensity = [0.05, 0.05, 0.05]
+[[lights]]
+type = "grid"
+corner = [-4, 1.5, -4]
+u = [8, 0, 0]
+v = [0, 0, 8]
+count = [{n}, 2]
+intensity = [0.2, 0.1, 0.05]
+"#
+    );
+    let spec = toml::from_str(&text).unwrap();
+    Scene::from_spec(std::path::Path::new("test.toml"), spec).unwrap()
+}
+
+/// Runs `check(cut, exact, error_bound)` at shading points seen through
+/// random pixels.
+fn at_shading_points(scene: &Scene, settings: CutSettings, mut check: impl FnMut(DVec3, DVec3, f64)) {
+    let device = Device::try_new().unwrap();
+    let geometry = Geometry::try_new(&device, scene).unwrap();
+    let trees = LightTrees::build(&scene.lights, 3);
+    assert!(trees.trees.iter().any(|t| t.light_count() > EXHAUSTIVE_LIGHTS), "the test must exercise the cut");
+    let camera = scene.camera(64, 48);
+    let mut rng = Rng::seeded(5);
+    let (mut scratch, mut batch, mut stats) = (CutScratch::default(), BatchBuffers::default(), ShadingStats::default());
+    let mut points = 0;
+    while points < 400 {
+        let ray = camera.ray(rng.range_f32(0.0, 64.0), rng.range_f32(0.0, 48.0));
+        let Some(hit) = geometry.embree.intersect(&ray) else { continue };
+        let sp = geometry.surface(&ray, &hit);
+        let cut = evaluate(&trees.trees, &sp, &geometry.embree, &settings, &mut scratch, &mut batch, &mut stats);
+        let bound = scratch.last_error_bound;
+        let mut exact = LightBatch::new(&geometry.embree, &sp, &mut batch);
+        for tree in &trees.trees {
+            for i in 0..tree.light_count() {
+                exact.add(tree.kind, tree.light_position[i], glam::Vec3::ZERO, tree.light_intensity[i]);
+            }
+        }
+        let exact = exact.finish(&mut ShadingStats::default());
+        check(cut, exact, bound);
+        points += 1;
+    }
+}
+
+#[test]
+fn the_error_of_every_cut_is_within_the_sum_of_its_bounds() {
+    let scene = scene(24);
+    let settings = CutSettings { error: 0.02, max_cut: 1000 };
+    let mut worst = 0.0f64;
+    at_shading_points(&scene, settings, |cut, exact, bound| {
+        let error = (luminance64(cut) - luminance64(exact)).abs();
+        // 1e-9 relative: f64 summation order differs between the two.
+        assert!(error <= bound + 1e-9 * luminance64(exact), "error {error} > bound sum {bound}");
+        worst = worst.max(error / luminance64(exact).max(1e-12));
+    });
+    assert!(worst > 0.0, "at 2% the cut must actually approximate somewhere");
+}
+
+#[test]
+fn error_zero_refines_to_the_exact_sum_at_every_point() {
+    let scene = scene(24);
+    let settings = CutSettings { error: 0.0, max_cut: usize::MAX };
+    at_shading_points(&scene, settings, |cut, exact, bound| {
+        assert_eq!(bound, 0.0, "error 0 refines every cluster with a non-zero bound");
+        let diff = (cut - exact).abs().max_element();
+        assert!(diff <= 1e-9 * exact.max_element().max(1e-300), "error 0: {cut} vs {exact}");
+    });
+}

@@ -1,0 +1,147 @@
+//! Lightcuts mode, run as the real binary, against the exact renderer.
+
+mod common;
+use common::*;
+
+fn bits(image: &ExrImage, name: &str) -> Vec<f32> {
+    image.channels[name].clone()
+}
+
+#[test]
+fn error_zero_reproduces_the_exact_image() {
+    let dir = TempDir::new("error-zero");
+    // 16 x 16 = 256 lights: above the exhaustive limit, so the cut runs.
+    let scene = dir.write("s.toml", &small_scene(16));
+    let (lc, exact) = (dir.path("lc.exr"), dir.path("exact.exr"));
+    let stdout = lightcuts_ok(&["render", s(&scene), "-o", s(&lc), "--error", "0", "--max-cut", "100000", "--quiet"]);
+    assert!(stdout.contains("cut size"), "{stdout}");
+    lightcuts_ok(&["render", s(&scene), "-o", s(&exact), "--exact", "--quiet"]);
+    let (a, b) = (read_exr(&lc).unwrap(), read_exr(&exact).unwrap());
+    for name in ["R", "G", "B", "A", "Z", "N.X", "albedo.G"] {
+        for (x, y) in bits(&a, name).iter().zip(bits(&b, name)) {
+            // The two sum the same terms in different orders (in f64).
+            assert!((x - y).abs() <= 1e-6 * y.abs().max(1e-30), "{name}: {x} vs {y}");
+        }
+    }
+    assert!(a.channels.contains_key("lightcuts.cut_size") && a.channels.contains_key("lightcuts.shadow_rays"));
+    assert!(!b.channels.contains_key("lightcuts.cut_size"), "the exact render writes no cut AOVs");
+}
+
+#[test]
+fn lightcuts_at_two_percent_stays_close_to_exact_and_casts_fewer_rays() {
+    let dir = TempDir::new("accuracy");
+    let scene = dir.write("s.toml", &small_scene(24));
+    let (lc, exact) = (dir.path("lc.exr"), dir.path("exact.exr"));
+    lightcuts_ok(&["render", s(&scene), "-o", s(&lc), "--quiet"]);
+    lightcuts_ok(&["render", s(&scene), "-o", s(&exact), "--exact", "--quiet"]);
+    let out = lightcuts_ok(&["compare", s(&lc), s(&exact), "--json"]);
+    let c: serde_json::Value = serde_json::from_str(&out).unwrap();
+    let mean = c["mean_relative_error"].as_f64().unwrap();
+    let p99 = c["p99_relative_error"].as_f64().unwrap();
+    // Each cluster's error is at most 2% of its point's total; errors of
+    // different clusters partly cancel, so the image stays within a few percent.
+    assert!(mean > 0.0 && mean < 0.01, "mean relative error {mean}");
+    assert!(p99 < 0.05, "99th percentile {p99}");
+    let rays = |p: &std::path::Path| read_exr(p).unwrap().channels["lightcuts.shadow_rays"].iter().sum::<f32>();
+    let lc_rays = rays(&lc);
+    let exact_out = lightcuts_ok(&["render", s(&scene), "-o", s(&exact), "--exact", "--quiet"]);
+    let exact_rays: f64 = exact_out
+        .lines()
+        .find(|l| l.contains("shadow rays  "))
+        .unwrap()
+        .split_whitespace()
+        .nth(2)
+        .unwrap()
+        .parse()
+        .unwrap();
+    assert!(f64::from(lc_rays) < 0.5 * exact_rays, "lightcuts {lc_rays} vs exact {exact_rays} shadow rays");
+}
+
+/// 300 coincident lights at the centre of a sphere seen from inside: the
+/// cut path runs (300 > the exhaustive limit) and must hit the known answer
+/// L = k_d / pi * sum(I) / R^2.
+#[test]
+fn known_answer_holds_in_lightcuts_mode() {
+    let dir = TempDir::new("lc-known");
+    let scene = dir.write(
+        "inside.toml",
+        r#"
+[film]
+width = 24
+height = 16
+[camera]
+eye = [0.2, 0.1, 0]
+look_at = [1, 0, 0.4]
+fov_y = 60
+[materials.inner]
+albedo = [0.5, 0.5, 0.5]
+[[shapes]]
+type = "sphere"
+center = [0, 0, 0]
+radius = 2
+segments = 512
+material = "inner"
+[[lights]]
+type = "grid"
+corner = [0, 0, 0]
+u = [0, 0, 0]
+v = [0, 0, 0]
+count = [20, 15]
+intensity = [0.01, 0.02, 0.03]
+"#,
+    );
+    let out = dir.path("o.exr");
+    lightcuts_ok(&["render", s(&scene), "-o", s(&out), "--quiet"]);
+    let image = read_exr(&out).unwrap();
+    for (c, name) in ["R", "G", "B"].iter().enumerate() {
+        let expected = 0.5 / std::f32::consts::PI * 300.0 * 0.01 * (c as f32 + 1.0) / 4.0;
+        for &v in image.channel(&out, name).unwrap() {
+            assert!((v - expected).abs() <= 1e-3 * expected, "{name}: {v} vs {expected}");
+        }
+    }
+    // Every light is in one place: the root alone is exact.
+    assert!(image.channels["lightcuts.cut_size"].iter().all(|&c| c == 1.0));
+}
+
+#[test]
+fn lightcuts_images_are_identical_for_any_thread_count_and_window() {
+    let dir = TempDir::new("lc-threads");
+    let scene = dir.write("s.toml", &small_scene(16));
+    let (a, b, w) = (dir.path("a.exr"), dir.path("b.exr"), dir.path("w.exr"));
+    lightcuts_ok(&["render", s(&scene), "-o", s(&a), "--quiet", "--threads", "1"]);
+    lightcuts_ok(&["render", s(&scene), "-o", s(&b), "--quiet", "--threads", "2"]);
+    lightcuts_ok(&["render", s(&scene), "-o", s(&w), "--quiet", "--threads", "2", "--pixel-bounds", "5,50,9,40"]);
+    let (a, b, w) = (read_exr(&a).unwrap(), read_exr(&b).unwrap(), read_exr(&w).unwrap());
+    for name in a.channels.keys() {
+        let (x, y) = (&a.channels[name], &b.channels[name]);
+        assert!(x.iter().zip(y).all(|(p, q)| p.to_bits() == q.to_bits()), "{name}: 1 vs 2 threads");
+        for yy in 0..31 {
+            for xx in 0..45 {
+                assert_eq!(
+                    x[(yy + 9) * 96 + xx + 5].to_bits(),
+                    w.channels[name][yy * 45 + xx].to_bits(),
+                    "{name} window"
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn compare_rejects_mismatched_images_and_writes_a_heat_map() {
+    let dir = TempDir::new("compare");
+    let scene = dir.write("s.toml", &small_scene(2));
+    let (a, b) = (dir.path("a.exr"), dir.path("b.exr"));
+    lightcuts_ok(&["render", s(&scene), "-o", s(&a), "--quiet", "--exact"]);
+    lightcuts_ok(&["render", s(&scene), "-o", s(&b), "--quiet", "--exact", "--resolution", "48x36"]);
+    let stderr = lightcuts_fails(&["compare", s(&a), s(&b)]);
+    assert!(stderr.contains("data window"), "{stderr}");
+    let (diff, diff_exr) = (dir.path("d.png"), dir.path("d.exr"));
+    let out = lightcuts_ok(&["compare", s(&a), s(&a), "--diff", s(&diff), "--diff-exr", s(&diff_exr)]);
+    assert!(out.contains("mean"), "{out}");
+    assert!(diff.exists());
+    let d = read_exr(&diff_exr).unwrap();
+    assert!(d.channels["relative_error"].iter().all(|&e| e == 0.0));
+    let stderr = lightcuts_fails(&["compare", s(&a), s(&dir.path("missing.exr"))]);
+    assert!(stderr.contains("missing.exr"), "{stderr}");
+}
