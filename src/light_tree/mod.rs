@@ -83,40 +83,59 @@ pub struct TreeLight {
     pub intensity: Vec3,
 }
 
+/// A leaf: one light (omni and oriented: position; directional: direction).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Leaf {
+    pub position: Vec3,
+    pub intensity: Vec3,
+}
+
+/// An internal node, 48 bytes: what one cut step reads sits in one or two
+/// cache lines instead of five arrays.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Node {
+    /// Box of positions (omni, oriented) or of directions (directional).
+    pub min: Vec3,
+    pub max: Vec3,
+    /// Summed RGB intensity.
+    pub intensity: Vec3,
+    /// Index of the representative light.
+    pub representative: u32,
+    pub children: [NodeRef; 2],
+}
+
 /// A built light tree. Leaves are the lights in input order.
 #[derive(Debug, Clone)]
 pub struct LightTree {
     pub kind: LightKind,
-    /// Leaf data (omni and oriented: position; directional: direction).
-    pub light_position: Vec<Vec3>,
+    pub leaves: Vec<Leaf>,
     /// Oriented only: each light's unit normal.
     pub light_normal: Vec<Vec3>,
-    pub light_intensity: Vec<Vec3>,
     /// Internal nodes (n - 1 of them for n lights).
-    pub intensity: Vec<Vec3>,
-    /// Box of positions (omni, oriented) or of directions (directional).
-    pub bounds_min: Vec<Vec3>,
-    pub bounds_max: Vec<Vec3>,
-    /// Oriented only: cone of normals.
-    pub cone: Vec<Cone>,
-    /// Index of the representative light.
-    pub representative: Vec<u32>,
-    pub children: Vec<[NodeRef; 2]>,
+    pub nodes: Vec<Node>,
+    /// Oriented only: each internal node's cone of normals.
+    pub cones: Vec<Cone>,
     pub root: Option<NodeRef>,
 }
 
 impl LightTree {
     #[must_use]
     pub fn light_count(&self) -> usize {
-        self.light_intensity.len()
+        self.leaves.len()
+    }
+
+    /// A light's normal (oriented trees), or zero.
+    #[must_use]
+    pub fn light_normal(&self, light: usize) -> Vec3 {
+        self.light_normal.get(light).copied().unwrap_or(Vec3::ZERO)
     }
 
     #[must_use]
     pub fn node_intensity(&self, node: NodeRef) -> Vec3 {
         if node.is_leaf() {
-            self.light_intensity[node.index()]
+            self.leaves[node.index()].intensity
         } else {
-            self.intensity[node.index()]
+            self.nodes[node.index()].intensity
         }
     }
 
@@ -124,10 +143,11 @@ impl LightTree {
     #[must_use]
     pub fn node_bounds(&self, node: NodeRef) -> (Vec3, Vec3) {
         if node.is_leaf() {
-            let p = self.light_position[node.index()];
+            let p = self.leaves[node.index()].position;
             (p, p)
         } else {
-            (self.bounds_min[node.index()], self.bounds_max[node.index()])
+            let n = &self.nodes[node.index()];
+            (n.min, n.max)
         }
     }
 
@@ -137,7 +157,7 @@ impl LightTree {
         if node.is_leaf() {
             Cone::of_direction(self.light_normal[node.index()])
         } else {
-            self.cone[node.index()]
+            self.cones[node.index()]
         }
     }
 
@@ -146,7 +166,7 @@ impl LightTree {
         if node.is_leaf() {
             node.index() as u32
         } else {
-            self.representative[node.index()]
+            self.nodes[node.index()].representative
         }
     }
 
@@ -154,7 +174,7 @@ impl LightTree {
     #[must_use]
     pub fn node_children(&self, node: NodeRef) -> [NodeRef; 2] {
         debug_assert!(!node.is_leaf());
-        self.children[node.index()]
+        self.nodes[node.index()].children
     }
 
     /// Heap bytes the finished tree holds (leaf and node arrays).
@@ -163,30 +183,25 @@ impl LightTree {
         fn bytes<T>(v: &Vec<T>) -> usize {
             v.capacity() * std::mem::size_of::<T>()
         }
-        bytes(&self.light_position)
-            + bytes(&self.light_normal)
-            + bytes(&self.light_intensity)
-            + bytes(&self.intensity)
-            + bytes(&self.bounds_min)
-            + bytes(&self.bounds_max)
-            + bytes(&self.cone)
-            + bytes(&self.representative)
-            + bytes(&self.children)
+        bytes(&self.leaves) + bytes(&self.light_normal) + bytes(&self.nodes) + bytes(&self.cones)
     }
 
     /// Sum of [LC05]'s cluster size over internal nodes: the quantity the
     /// builders minimise greedily (smaller is a better tree).
     #[must_use]
     pub fn total_cluster_size(&self) -> f64 {
-        let metric = metric_for(self.kind, &self.light_position);
-        (0..self.intensity.len())
-            .map(|i| {
+        let positions: Vec<Vec3> = self.leaves.iter().map(|l| l.position).collect();
+        let metric = metric_for(self.kind, &positions);
+        self.nodes
+            .iter()
+            .enumerate()
+            .map(|(i, n)| {
                 let c = Cluster {
-                    min: self.bounds_min[i],
-                    max: self.bounds_max[i],
-                    cone: if self.kind == LightKind::Oriented { self.cone[i] } else { Cone::of_direction(Vec3::Z) },
-                    intensity: self.intensity[i],
-                    weight: luminance(self.intensity[i]),
+                    min: n.min,
+                    max: n.max,
+                    cone: if self.kind == LightKind::Oriented { self.cones[i] } else { Cone::of_direction(Vec3::Z) },
+                    intensity: n.intensity,
+                    weight: luminance(n.intensity),
                     node: NodeRef::internal(i as u32),
                 };
                 metric.size(&c)
@@ -218,43 +233,36 @@ pub(crate) struct TreeBuilder {
 impl TreeBuilder {
     fn new(kind: LightKind, lights: &[TreeLight], seed: u64) -> Self {
         let n = lights.len();
-        let internal = n.saturating_sub(1);
         let positions: Vec<Vec3> = lights.iter().map(|l| l.position).collect();
         let metric = metric_for(kind, &positions);
         let oriented = kind == LightKind::Oriented;
         let tree = LightTree {
             kind,
-            light_position: positions,
+            leaves: lights.iter().map(|l| Leaf { position: l.position, intensity: l.intensity }).collect(),
             light_normal: if oriented {
                 lights.iter().map(|l| l.normal.normalize_or_zero()).collect()
             } else {
                 Vec::new()
             },
-            light_intensity: lights.iter().map(|l| l.intensity).collect(),
-            intensity: Vec::with_capacity(internal),
-            bounds_min: Vec::with_capacity(internal),
-            bounds_max: Vec::with_capacity(internal),
-            cone: Vec::with_capacity(if oriented { internal } else { 0 }),
-            representative: Vec::with_capacity(internal),
-            children: Vec::with_capacity(internal),
-            root: (n > 0).then_some(NodeRef::leaf(0)),
+            nodes: Vec::with_capacity(n.saturating_sub(1)),
+            cones: Vec::with_capacity(if oriented { n.saturating_sub(1) } else { 0 }),
+            root: None,
         };
         Self { tree, metric, seed }
     }
 
     fn leaf_cluster(&self, light: usize) -> Cluster {
-        let p = self.tree.light_position[light];
-        let intensity = self.tree.light_intensity[light];
+        let leaf = self.tree.leaves[light];
         Cluster {
-            min: p,
-            max: p,
+            min: leaf.position,
+            max: leaf.position,
             cone: if self.metric.kind == LightKind::Oriented {
                 Cone::of_direction(self.tree.light_normal[light])
             } else {
                 Cone::of_direction(Vec3::Z)
             },
-            intensity,
-            weight: luminance(intensity),
+            intensity: leaf.intensity,
+            weight: luminance(leaf.intensity),
             node: NodeRef::leaf(light as u32),
         }
     }
@@ -265,7 +273,7 @@ impl TreeBuilder {
     /// does not depend on thread timing. By induction every light is its
     /// node's representative with probability w_light / w_node ([LC05] sec. 4.1).
     fn merge(&mut self, a: &Cluster, b: &Cluster) -> Cluster {
-        let index = self.tree.intensity.len() as u32;
+        let index = self.tree.nodes.len() as u32;
         let node = NodeRef::internal(index);
         let total = f64::from(a.weight) + f64::from(b.weight);
         let u = Rng::from_key(&[self.seed, u64::from(index)]).next_f64();
@@ -281,14 +289,16 @@ impl TreeBuilder {
             weight: a.weight + b.weight,
             node,
         };
-        self.tree.intensity.push(merged.intensity);
-        self.tree.bounds_min.push(merged.min);
-        self.tree.bounds_max.push(merged.max);
+        self.tree.nodes.push(Node {
+            min: merged.min,
+            max: merged.max,
+            intensity: merged.intensity,
+            representative,
+            children: [a.node, b.node],
+        });
         if self.metric.kind == LightKind::Oriented {
-            self.tree.cone.push(merged.cone);
+            self.tree.cones.push(merged.cone);
         }
-        self.tree.representative.push(representative);
-        self.tree.children.push([a.node, b.node]);
         merged
     }
 

@@ -42,7 +42,8 @@ pub fn build_with_radius(kind: LightKind, lights: &[TreeLight], seed: u64, radiu
         let root = (!lights.is_empty()).then(|| builder.leaf_cluster(0).node);
         return builder.finish(root);
     }
-    let order = morton_order(&builder.tree.light_position);
+    let positions: Vec<Vec3> = builder.tree.leaves.iter().map(|l| l.position).collect();
+    let order = morton_order(&positions);
     let mut clusters: Vec<Cluster> = order.iter().map(|&i| builder.leaf_cluster(i as usize)).collect();
     let metric = builder.metric;
     let mut sizes: Vec<f64> = Vec::new();

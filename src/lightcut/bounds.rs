@@ -37,31 +37,26 @@ impl Frame {
 /// [lo, hi] (LIGHTCUTS.md section 3).
 #[must_use]
 pub fn cos_bound(axis: Vec3, lo: Vec3, hi: Vec3) -> f32 {
-    cos_bound_in(&Frame::new(axis), lo, hi)
+    cos_bound_in(&Frame::new(axis), 0.5 * (lo + hi), 0.5 * (hi - lo))
 }
 
-/// [`cos_bound`] in a prepared frame: the box of the rotated box, by interval
-/// arithmetic, then w / sqrt(u^2 + v^2 + w^2) at the largest w and smallest |u|, |v|.
+/// [`cos_bound`] in a prepared frame, for the box with centre `c` and
+/// half-extent `h` (>= 0): along a unit axis e the box spans
+/// e.c -/+ |e|.h, which gives the box of the rotated box; then
+/// w / sqrt(u^2 + v^2 + w^2) at the largest w and the smallest |u|, |v|.
 #[must_use]
-pub fn cos_bound_in(frame: &Frame, lo: Vec3, hi: Vec3) -> f32 {
-    let range = |e: Vec3| {
-        let (a, b) = (e * lo, e * hi);
-        (a.min(b).element_sum(), a.max(b).element_sum())
-    };
-    let z1 = (frame.axis * lo).max(frame.axis * hi).element_sum();
+pub fn cos_bound_in(frame: &Frame, c: Vec3, h: Vec3) -> f32 {
+    let z1 = frame.axis.dot(c) + frame.axis.abs().dot(h);
     if z1 <= 0.0 {
         return 0.0;
     }
-    let (x0, x1) = range(frame.tangent);
-    let (y0, y1) = range(frame.bitangent);
-    let nearest = |a: f32, b: f32| {
-        if a <= 0.0 && 0.0 <= b {
-            0.0
-        } else {
-            a.abs().min(b.abs())
-        }
-    };
-    let (mx, my) = (nearest(x0, x1), nearest(y0, y1));
+    // Distance from 0 to the interval m -/+ r, 0 when it contains 0.
+    let nearest = |e: Vec3| (e.dot(c).abs() - e.abs().dot(h)).max(0.0);
+    let (mx, my) = (nearest(frame.tangent), nearest(frame.bitangent));
+    if mx == 0.0 && my == 0.0 {
+        // The box reaches the axis itself: the bound is 1 (saves a divide).
+        return 1.0;
+    }
     let bound = z1 / (mx * mx + my * my + z1 * z1).sqrt();
     (bound * (1.0 + COS_SLACK) + COS_SLACK).min(1.0)
 }
@@ -103,13 +98,14 @@ impl<'a, 'p> PointBounds<'a, 'p> {
     /// channel (LIGHTCUTS.md section 4).
     #[must_use]
     pub fn material(&self, lo: Vec3, hi: Vec3) -> DVec3 {
-        let cos_theta = cos_bound_in(&self.normal_frame, lo, hi);
+        let (c, h) = (0.5 * (lo + hi), 0.5 * (hi - lo));
+        let cos_theta = cos_bound_in(&self.normal_frame, c, h);
         if cos_theta == 0.0 {
             return DVec3::ZERO;
         }
         let mut f = self.diffuse;
         if let Some((frame, lobe, exponent)) = &self.phong {
-            f += *lobe * cos_bound_in(frame, lo, hi).powf(*exponent);
+            f += *lobe * cos_bound_in(frame, c, h).powf(*exponent);
         }
         (f * cos_theta).as_dvec3()
     }

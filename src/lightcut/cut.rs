@@ -155,8 +155,8 @@ impl Cut<'_, '_> {
     fn add_new(&mut self, tree: u8, node: NodeRef) {
         let t = &self.trees[tree as usize];
         let rep = t.node_representative(node) as usize;
-        let normal = if t.kind == LightKind::Oriented { t.light_normal[rep] } else { glam::Vec3::ZERO };
-        let position = t.light_position[rep];
+        let normal = t.light_normal(rep);
+        let position = t.leaves[rep].position;
         let unoccluded = light_term(t.kind, self.sp, position, normal);
         let ray = if unoccluded == DVec3::ZERO {
             None
@@ -238,8 +238,8 @@ pub fn evaluate(
     for tree in trees.iter().filter(|t| t.light_count() <= EXHAUSTIVE_LIGHTS) {
         exhaustive_lights += tree.light_count() as u64;
         for i in 0..tree.light_count() {
-            let normal = if tree.kind == LightKind::Oriented { tree.light_normal[i] } else { glam::Vec3::ZERO };
-            exhaustive.add(tree.kind, tree.light_position[i], normal, tree.light_intensity[i]);
+            let leaf = tree.leaves[i];
+            exhaustive.add(tree.kind, leaf.position, tree.light_normal(i), leaf.intensity);
         }
     }
     let fixed = exhaustive.finish(stats);

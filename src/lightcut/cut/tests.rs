@@ -80,7 +80,7 @@ fn at_shading_points(scene: &Scene, settings: CutSettings, mut check: impl FnMut
         let mut exact = LightBatch::new(&geometry.embree, &sp, &mut batch);
         for tree in &trees.trees {
             for i in 0..tree.light_count() {
-                exact.add(tree.kind, tree.light_position[i], glam::Vec3::ZERO, tree.light_intensity[i]);
+                exact.add(tree.kind, tree.leaves[i].position, tree.light_normal(i), tree.leaves[i].intensity);
             }
         }
         let exact = exact.finish(&mut ShadingStats::default());
