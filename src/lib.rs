@@ -5,6 +5,7 @@
 //! cuts), `render` (integrator, tiles), `output` (EXR, PNG, comparison), `cli`.
 #![deny(unsafe_code)]
 
+pub mod bench;
 pub mod cli;
 pub mod embree;
 pub mod interrupt;

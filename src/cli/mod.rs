@@ -1,6 +1,7 @@
 //! The command line. This is the only place an error becomes an exit code:
 //! everything below returns `Result`s.
 
+mod bench_cmd;
 mod compare_cmd;
 mod render_cmd;
 
@@ -26,6 +27,8 @@ pub enum Command {
     Render(render_cmd::RenderArgs),
     /// Compare a render against a reference on luminance (relative error).
     Compare(compare_cmd::CompareArgs),
+    /// Benchmarks that print measured figures (--json for machines).
+    Bench(bench_cmd::BenchArgs),
 }
 
 /// Everything that can stop a command, each naming its cause.
@@ -59,6 +62,7 @@ pub fn main() -> i32 {
     let result = match cli.command {
         Command::Render(args) => render_cmd::run(&args),
         Command::Compare(args) => compare_cmd::run(&args),
+        Command::Bench(args) => bench_cmd::run(&args),
     };
     match result {
         Ok(()) => 0,

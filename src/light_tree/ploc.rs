@@ -46,7 +46,7 @@ pub fn build_with_radius(kind: LightKind, lights: &[TreeLight], seed: u64, radiu
     let order = morton_order(&positions);
     let mut clusters: Vec<Cluster> = order.iter().map(|&i| builder.leaf_cluster(i as usize)).collect();
     let metric = builder.metric;
-    let mut sizes: Vec<f64> = Vec::new();
+    let mut sizes: Vec<f32> = Vec::new();
     let mut nearest: Vec<u32> = Vec::new();
     let mut next: Vec<Cluster> = Vec::with_capacity(clusters.len());
     while clusters.len() > 1 {
@@ -72,17 +72,20 @@ pub fn build_with_radius(kind: LightKind, lights: &[TreeLight], seed: u64, radiu
 }
 
 /// sizes[i * radius + (k - 1)] = size(C_i u C_{i+k}) for k in 1..=radius
-/// (infinity past the end). Computed in parallel, each pair once.
-fn pair_sizes(metric: &Metric, clusters: &[Cluster], radius: usize, sizes: &mut Vec<f64>) {
+/// (infinity past the end). Computed in f64 and stored as f32 (half the
+/// memory traffic; values beyond f32's range become infinity, whose ties
+/// are broken by index like any other). Parallel, each pair once.
+fn pair_sizes(metric: &Metric, clusters: &[Cluster], radius: usize, sizes: &mut Vec<f32>) {
     let n = clusters.len();
-    sizes.resize(n * radius, f64::INFINITY);
+    sizes.resize(n * radius, f32::INFINITY);
     sizes.par_chunks_mut(CHUNK * radius).enumerate().for_each(|(chunk, out)| {
         let first = chunk * CHUNK;
         for (local, row) in out.chunks_mut(radius).enumerate() {
             let i = first + local;
+            let ci = &clusters[i];
             for (k, slot) in row.iter_mut().enumerate() {
                 let j = i + k + 1;
-                *slot = if j < n { metric.merged_size(&clusters[i], &clusters[j]) } else { f64::INFINITY };
+                *slot = if j < n { metric.merged_size(ci, &clusters[j]) as f32 } else { f32::INFINITY };
             }
         }
     });
@@ -90,45 +93,33 @@ fn pair_sizes(metric: &Metric, clusters: &[Cluster], radius: usize, sizes: &mut 
 
 /// nearest[i] = the j within `radius` of i minimising (size(i u j), min(i,j),
 /// max(i,j)): a strict total order on pairs, so the globally smallest pair is
-/// always mutual and every pass makes progress.
-fn nearest_neighbours(sizes: &[f64], n: usize, radius: usize, nearest: &mut Vec<u32>) {
+/// always mutual and every pass makes progress. Candidates are visited in
+/// increasing j, which is increasing (min, max) order, so keeping the first
+/// strictly smaller size implements the tie-break. NaN never wins.
+fn nearest_neighbours(sizes: &[f32], n: usize, radius: usize, nearest: &mut Vec<u32>) {
     nearest.resize(n, 0);
     nearest.par_chunks_mut(CHUNK).enumerate().for_each(|(chunk, out)| {
         for (local, slot) in out.iter_mut().enumerate() {
             let i = chunk * CHUNK + local;
-            let mut best = (f64::INFINITY, usize::MAX, usize::MAX);
-            // Backward neighbours j < i: the pair is stored at row j.
-            for k in 1..=radius.min(i) {
-                let j = i - k;
-                let key = (sizes[j * radius + k - 1], j, i);
-                if less(key, best) {
-                    best = key;
+            let mut best_size = f32::INFINITY;
+            let mut best = usize::MAX;
+            for j in i.saturating_sub(radius)..i {
+                let size = sizes[j * radius + (i - j - 1)];
+                if size < best_size || best == usize::MAX {
+                    best_size = size;
+                    best = j;
                 }
             }
-            for k in 1..=radius {
-                let j = i + k;
-                if j >= n {
-                    break;
-                }
-                let key = (sizes[i * radius + k - 1], i, j);
-                if less(key, best) {
-                    best = key;
+            let row = &sizes[i * radius..i * radius + radius.min(n - 1 - i)];
+            for (k, &size) in row.iter().enumerate() {
+                if size < best_size || best == usize::MAX {
+                    best_size = size;
+                    best = i + k + 1;
                 }
             }
-            *slot = if best.1 == i { best.2 as u32 } else { best.1 as u32 };
+            *slot = best as u32;
         }
     });
-}
-
-/// Lexicographic order on (size, lower index, upper index); NaN sizes (which
-/// the f64 metric does not produce for finite input) sort last.
-fn less(a: (f64, usize, usize), b: (f64, usize, usize)) -> bool {
-    match a.0.partial_cmp(&b.0) {
-        Some(std::cmp::Ordering::Less) => true,
-        Some(std::cmp::Ordering::Greater) => false,
-        Some(std::cmp::Ordering::Equal) => (a.1, a.2) < (b.1, b.2),
-        None => !a.0.is_nan() || b.1 == usize::MAX,
-    }
 }
 
 /// Light indices sorted by the 63-bit Morton code of their position in the

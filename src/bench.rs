@@ -1,0 +1,4 @@
+//! Benchmarks printed as figures (never timed assertions): the light-tree
+//! build (`lightcuts bench tree`).
+
+pub mod tree;

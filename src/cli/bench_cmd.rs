@@ -1,0 +1,145 @@
+//! `lightcuts bench ...`: benchmarks that print measured figures (a table,
+//! or JSON with --json). Targets are checked by reading them, never by
+//! timed assertions.
+
+use clap::{Args, Subcommand, ValueEnum};
+use serde::Serialize;
+
+use super::CliError;
+use crate::bench::tree::{measure_build, measure_quality, random_lights, BuildFigure, Distribution, QualityFigure};
+use crate::light_tree::LightKind;
+
+#[derive(Debug, Args)]
+pub struct BenchArgs {
+    #[command(subcommand)]
+    pub bench: Bench,
+}
+
+#[derive(Debug, Subcommand)]
+pub enum Bench {
+    /// Light-tree build time, memory and quality.
+    Tree(TreeArgs),
+}
+
+#[derive(Debug, Clone, Copy, ValueEnum)]
+pub enum KindArg {
+    Omni,
+    Oriented,
+    Directional,
+}
+
+impl From<KindArg> for LightKind {
+    fn from(k: KindArg) -> Self {
+        match k {
+            KindArg::Omni => Self::Omni,
+            KindArg::Oriented => Self::Oriented,
+            KindArg::Directional => Self::Directional,
+        }
+    }
+}
+
+#[derive(Debug, Args)]
+pub struct TreeArgs {
+    /// Light counts to build, comma-separated.
+    #[arg(long, value_delimiter = ',', default_values_t = [10_000usize, 100_000, 1_000_000, 4_000_000])]
+    pub lights: Vec<usize>,
+    #[arg(long, value_enum, default_value = "omni")]
+    pub kind: KindArg,
+    /// Lights for the quality comparison against the greedy tree (O(n^2)).
+    #[arg(long, default_value_t = 10_000)]
+    pub quality_lights: usize,
+    /// Worker threads (0: one per CPU); the tree does not depend on it.
+    #[arg(long, default_value_t = 0)]
+    pub threads: usize,
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Print JSON instead of a table.
+    #[arg(long)]
+    pub json: bool,
+}
+
+#[derive(Debug, Serialize)]
+struct TreeReport {
+    threads: usize,
+    builds: Vec<BuildFigure>,
+    quality: Vec<QualityFigure>,
+}
+
+pub fn run(args: &BenchArgs) -> Result<(), CliError> {
+    match &args.bench {
+        Bench::Tree(t) => tree(t),
+    }
+}
+
+fn tree(args: &TreeArgs) -> Result<(), CliError> {
+    if args.lights.iter().any(|&n| n == 0 || n >= 1 << 31) {
+        return Err(CliError::Usage { flag: "--lights", message: "every count must be between 1 and 2^31 - 1".into() });
+    }
+    let pool = crate::render::thread_pool(args.threads)
+        .map_err(|e| CliError::Threads { threads: args.threads, message: e.to_string() })?;
+    let kind = LightKind::from(args.kind);
+    let mut builds = Vec::new();
+    for distribution in [Distribution::Uniform, Distribution::Clustered] {
+        let mut previous: Option<(usize, f64)> = None;
+        for &n in &args.lights {
+            let lights = random_lights(kind, n, distribution, args.seed);
+            let (mut figure, tree) = pool.install(|| measure_build(kind, distribution, &lights, args.seed));
+            drop(tree);
+            if let Some((pn, pt)) = previous {
+                figure.growth = Some(figure.build_seconds / pt);
+                figure.growth_per_light = Some((figure.build_seconds / n as f64) / (pt / pn as f64));
+            }
+            previous = Some((n, figure.build_seconds));
+            if !args.json {
+                print_build(&figure);
+            }
+            builds.push(figure);
+        }
+    }
+    let mut quality = Vec::new();
+    if args.quality_lights > 0 {
+        for distribution in [Distribution::Uniform, Distribution::Clustered] {
+            let q = pool.install(|| measure_quality(kind, distribution, args.quality_lights, args.seed))?;
+            if !args.json {
+                print_quality(&q);
+            }
+            quality.push(q);
+        }
+    }
+    if args.json {
+        let report = TreeReport { threads: pool.current_num_threads(), builds, quality };
+        println!("{}", serde_json::to_string_pretty(&report).expect("plain data serialises"));
+    }
+    Ok(())
+}
+
+fn print_build(f: &BuildFigure) {
+    let growth = f.growth.map_or(String::from("-"), |g| format!("{g:.2}x"));
+    let per_light = f.growth_per_light.map_or(String::from("-"), |g| format!("{g:.2}"));
+    let peak = f.peak_build_mib.map_or(String::from("n/a"), |m| format!("{m:.0} MiB"));
+    println!(
+        "tree build  {:<11} {:<9} {:>9} lights  {:>8.3} s  growth {:>7} (per light {:>5})  peak {:>9}  {:>5.1} B/light",
+        f.kind,
+        format!("{:?}", f.distribution).to_lowercase(),
+        f.lights,
+        f.build_seconds,
+        growth,
+        per_light,
+        peak,
+        f.tree_bytes_per_light
+    );
+}
+
+fn print_quality(q: &QualityFigure) {
+    println!(
+        "quality     {:<11} {:<9} {:>9} lights  cluster size PLOC {:.4e} greedy {:.4e}  average cut at 2% PLOC {:.1} greedy {:.1} ({:+.1}%)",
+        q.kind,
+        format!("{:?}", q.distribution).to_lowercase(),
+        q.lights,
+        q.ploc_total_cluster_size,
+        q.greedy_total_cluster_size,
+        q.ploc_average_cut,
+        q.greedy_average_cut,
+        100.0 * q.cut_excess
+    );
+}
