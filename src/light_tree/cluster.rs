@@ -42,6 +42,18 @@ impl Cone {
         Self { axis, half_angle: (half_angle + 1e-5).min(std::f32::consts::PI) }
     }
 
+    /// The half-angle of `self.union(other)`, without computing its axis
+    /// (what the size metric needs; one acos instead of acos, sin and cos).
+    #[must_use]
+    pub fn union_half_angle(self, other: Self) -> f32 {
+        let (a, b) = if self.half_angle >= other.half_angle { (self, other) } else { (other, self) };
+        let between = a.axis.dot(b.axis).clamp(-1.0, 1.0).acos();
+        if between + b.half_angle <= a.half_angle {
+            return a.half_angle;
+        }
+        (0.5 * (a.half_angle + between + b.half_angle) + 1e-5).min(std::f32::consts::PI)
+    }
+
     /// Whether direction `d` (unit) lies inside the cone.
     #[must_use]
     pub fn contains(&self, d: Vec3) -> bool {
