@@ -190,8 +190,7 @@ impl LightTree {
     /// builders minimise greedily (smaller is a better tree).
     #[must_use]
     pub fn total_cluster_size(&self) -> f64 {
-        let positions: Vec<Vec3> = self.leaves.iter().map(|l| l.position).collect();
-        let metric = metric_for(self.kind, &positions);
+        let metric = metric_for(self.kind, self.leaves.iter().map(|l| l.position));
         self.nodes
             .iter()
             .enumerate()
@@ -211,10 +210,9 @@ impl LightTree {
 }
 
 /// The metric's constants for a set of light positions.
-fn metric_for(kind: LightKind, positions: &[Vec3]) -> Metric {
+fn metric_for(kind: LightKind, positions: impl Iterator<Item = Vec3>) -> Metric {
     let c_squared = if kind == LightKind::Oriented {
-        let (lo, hi) =
-            positions.iter().fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), &p| (lo.min(p), hi.max(p)));
+        let (lo, hi) = positions.fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), p| (lo.min(p), hi.max(p)));
         (hi - lo).as_dvec3().length_squared()
     } else {
         0.0
@@ -233,8 +231,7 @@ pub(crate) struct TreeBuilder {
 impl TreeBuilder {
     fn new(kind: LightKind, lights: &[TreeLight], seed: u64) -> Self {
         let n = lights.len();
-        let positions: Vec<Vec3> = lights.iter().map(|l| l.position).collect();
-        let metric = metric_for(kind, &positions);
+        let metric = metric_for(kind, lights.iter().map(|l| l.position));
         let oriented = kind == LightKind::Oriented;
         let tree = LightTree {
             kind,

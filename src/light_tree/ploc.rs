@@ -74,6 +74,9 @@ pub fn build_with_radius(kind: LightKind, lights: &[TreeLight], seed: u64, radiu
     let mut clusters: Vec<Slim> = order.iter().map(|&i| Slim::of(&builder.leaf_cluster(i as usize))).collect();
     let mut cones: Vec<Cone> =
         if oriented { order.iter().map(|&i| builder.leaf_cluster(i as usize).cone).collect() } else { Vec::new() };
+    // Intensities travel beside the clusters (the neighbour search never
+    // reads them), so merges read them in order instead of from the tree.
+    let mut intensities: Vec<Vec3> = order.iter().map(|&i| builder.tree.leaves[i as usize].intensity).collect();
     drop(order);
     let metric = builder.metric;
     let mut nearest: Vec<u32> = Vec::new();
@@ -91,6 +94,7 @@ pub fn build_with_radius(kind: LightKind, lights: &[TreeLight], seed: u64, radiu
             let mutual = nearest[j] as usize == i;
             if !mutual {
                 clusters[write] = clusters[i];
+                intensities[write] = intensities[i];
                 if oriented {
                     cones[write] = cones[i];
                 }
@@ -100,13 +104,14 @@ pub fn build_with_radius(kind: LightKind, lights: &[TreeLight], seed: u64, radiu
                     min: clusters[k].min,
                     max: clusters[k].max,
                     cone: if oriented { cones[k] } else { Cone::of_direction(Vec3::Z) },
-                    intensity: builder.tree.node_intensity(clusters[k].node),
+                    intensity: intensities[k],
                     weight: clusters[k].weight,
                     node: clusters[k].node,
                 };
                 let (a, b) = (full(i), full(j));
                 let merged = builder.merge(&a, &b);
                 clusters[write] = Slim::of(&merged);
+                intensities[write] = merged.intensity;
                 if oriented {
                     cones[write] = merged.cone;
                 }
@@ -115,6 +120,7 @@ pub fn build_with_radius(kind: LightKind, lights: &[TreeLight], seed: u64, radiu
         }
         debug_assert!(write < n, "every pass merges at least the globally closest pair");
         clusters.truncate(write);
+        intensities.truncate(write);
         cones.truncate(if oriented { write } else { 0 });
     }
     let root = Some(clusters[0].node);
