@@ -145,27 +145,40 @@ fn pair_size(metric: &Metric, clusters: &[Slim], cones: &[Cone], i: usize, j: us
     }
 }
 
-/// nearest[i] = the j within `radius` of i minimising (size(i u j), min(i,j),
-/// max(i,j)): a strict total order on pairs, so the globally smallest pair is
-/// always mutual and every pass makes progress.
+/// Tie-break of a pair with equal sizes: a hash of its indices. Ranking
+/// ties by index instead makes every cluster of a run of equal sizes (100,000
+/// coincident lights, say) choose the same neighbour, so each pass merges one
+/// pair and the tree degenerates into a chain; hashed ties give many mutual
+/// pairs per pass.
+#[inline]
+fn tie_break(a: usize, b: usize) -> u64 {
+    crate::sampling::mix64(((a as u64) << 32) ^ b as u64)
+}
+
+/// nearest[i] = the j within `radius` of i minimising (size(i u j),
+/// tie_break(i, j), min(i,j), max(i,j)): a strict total order on pairs, so
+/// the globally smallest pair is always mutual and every pass makes progress.
 ///
 /// Each chunk walks its rows i in increasing order and computes size(i, i+k)
 /// for k = 1..=radius once, offering it to both ends; it starts `radius` rows
 /// early so its first clusters also see their backward neighbours. Every
 /// cluster thus receives its candidates in increasing j, i.e. increasing
-/// (min, max) order, so keeping the first strictly smaller size implements
-/// the tie-break. No n x radius table is written or read back.
+/// (min, max) order, so keeping the first strictly smaller (size, tie-break)
+/// implements the order. No n x radius table is written or read back.
 fn nearest_neighbours(metric: &Metric, clusters: &[Slim], cones: &[Cone], radius: usize, nearest: &mut Vec<u32>) {
     let n = clusters.len();
     nearest.resize(n, 0);
     nearest.par_chunks_mut(CHUNK).enumerate().for_each(|(chunk, out)| {
         let (start, end) = (chunk * CHUNK, chunk * CHUNK + out.len());
         let mut best_size = vec![f32::INFINITY; out.len()];
+        let mut best_tie = vec![u64::MAX; out.len()];
         let mut best = vec![usize::MAX; out.len()];
-        let mut offer = |target: usize, candidate: usize, size: f32| {
+        let mut offer = |target: usize, candidate: usize, size: f32, tie: u64| {
             let t = target - start;
-            if size < best_size[t] || best[t] == usize::MAX {
+            let better = size < best_size[t] || (size == best_size[t] && tie < best_tie[t]);
+            if better || best[t] == usize::MAX {
                 best_size[t] = size;
+                best_tie[t] = tie;
                 best[t] = candidate;
             }
         };
@@ -175,11 +188,12 @@ fn nearest_neighbours(metric: &Metric, clusters: &[Slim], cones: &[Cone], radius
                     break;
                 }
                 let size = pair_size(metric, clusters, cones, i, j);
+                let tie = tie_break(i, j);
                 if i >= start {
-                    offer(i, j, size);
+                    offer(i, j, size, tie);
                 }
                 if (start..end).contains(&j) {
-                    offer(j, i, size);
+                    offer(j, i, size, tie);
                 }
             }
         }

@@ -174,3 +174,26 @@ fn memory_stays_under_100_bytes_per_omni_light() {
     let tree = ploc::build(LightKind::Omni, &lights, 1);
     assert!(tree.memory_bytes() <= 100 * lights.len(), "{} bytes", tree.memory_bytes());
 }
+
+fn depth(tree: &LightTree, node: NodeRef) -> usize {
+    if node.is_leaf() {
+        1
+    } else {
+        let [a, b] = tree.node_children(node);
+        1 + depth(tree, a).max(depth(tree, b))
+    }
+}
+
+#[test]
+fn coincident_lights_build_a_shallow_tree_not_a_chain() {
+    // All pair sizes are 0: ties must not make every cluster pick the same
+    // neighbour (one merge per pass, a chain of depth n).
+    let lights: Vec<TreeLight> =
+        (0..100_000).map(|_| TreeLight { position: Vec3::ONE, normal: Vec3::Y, intensity: Vec3::ONE }).collect();
+    let tree = ploc::build(LightKind::Omni, &lights, 1);
+    let d = depth(&tree, tree.root.unwrap());
+    assert!(d <= 64, "depth {d} for 100,000 coincident lights");
+    // Balanced sums keep the f32 total accurate.
+    let total = tree.node_intensity(tree.root.unwrap()).x;
+    assert!((total - 100_000.0).abs() <= 1e-3, "total {total}");
+}

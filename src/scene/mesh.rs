@@ -108,8 +108,10 @@ impl Mesh {
     /// Loads every object of an OBJ file into one mesh, scaled then translated.
     pub fn load_obj(path: &Path, scale: f32, translate: Vec3, material: usize) -> Result<Self, SceneError> {
         let options = tobj::LoadOptions { triangulate: true, single_index: true, ..Default::default() };
-        let (models, _materials) = tobj::load_obj(path, &options)
-            .map_err(|e| SceneError::new(path, "OBJ", format!("cannot load mesh: {e}")))?;
+        let (models, _materials) = tobj::load_obj(path, &options).map_err(|e| match locate_obj_error(path) {
+            Some((line, message)) => SceneError::new(path, format!("line {line}"), message),
+            None => SceneError::new(path, "OBJ", format!("cannot load mesh: {e}")),
+        })?;
         let mut mesh = Self { material, ..Self::default() };
         let mut all_normals = true;
         let mut all_uvs = true;
@@ -175,9 +177,74 @@ impl Mesh {
     }
 }
 
+/// Finds the first line of an OBJ file that tobj would reject (tobj's errors
+/// carry no position): vertex coordinates that are not numbers, and face
+/// indices that are not integers or refer past the vertices defined so far.
+/// Returns (1-based line, message).
+fn locate_obj_error(path: &Path) -> Option<(usize, String)> {
+    let bytes = std::fs::read(path).ok()?;
+    let Ok(text) = std::str::from_utf8(&bytes) else {
+        let line =
+            bytes[..std::str::from_utf8(&bytes).err()?.valid_up_to()].iter().filter(|&&b| b == b'\n').count() + 1;
+        return Some((line, "not UTF-8 text: not an OBJ file".into()));
+    };
+    let mut vertices = 0i64;
+    for (number, line) in text.lines().enumerate() {
+        let mut words = line.split_whitespace();
+        match words.next() {
+            Some("v") => {
+                let coordinates: Vec<&str> = words.collect();
+                if coordinates.len() < 3 || coordinates.iter().any(|c| c.parse::<f32>().is_err()) {
+                    return Some((number + 1, format!("vertex '{}' needs three numbers", line.trim())));
+                }
+                vertices += 1;
+            }
+            Some("f") => {
+                let refs: Vec<&str> = words.collect();
+                if refs.len() < 3 {
+                    return Some((number + 1, format!("face '{}' needs at least three vertices", line.trim())));
+                }
+                for r in refs {
+                    let index = r.split('/').next().unwrap_or("");
+                    let Ok(i) = index.parse::<i64>() else {
+                        return Some((number + 1, format!("face index '{index}' is not an integer")));
+                    };
+                    let resolved = if i < 0 { vertices + i + 1 } else { i };
+                    if resolved < 1 || resolved > vertices {
+                        return Some((
+                            number + 1,
+                            format!("face index {i} is out of range ({vertices} vertices defined so far)"),
+                        ));
+                    }
+                }
+            }
+            _ => {}
+        }
+    }
+    None
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn obj_errors_name_their_line() {
+        let dir = std::env::temp_dir().join(format!("lightcuts-obj-lines-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        for (name, text, expect) in [
+            ("range.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n", "line 4"),
+            ("negative.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 -7\n", "line 4"),
+            ("text.obj", "v 0 0 0\nv 1 zero 0\nv 0 1 0\nf 1 2 3\n", "line 2"),
+            ("face.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 x\n", "line 4"),
+        ] {
+            let path = dir.join(name);
+            std::fs::write(&path, text).unwrap();
+            let e = Mesh::load_obj(&path, 1.0, Vec3::ZERO, 0).expect_err(name).to_string();
+            assert!(e.contains(name) && e.contains(expect), "{e}");
+        }
+        let _ = std::fs::remove_dir_all(&dir);
+    }
 
     fn area(mesh: &Mesh) -> f32 {
         mesh.triangles

@@ -1,0 +1,208 @@
+//! Numerical extremes: every render finishes, every channel of every pixel is
+//! finite, and where the answer is known it is asserted. Both render modes.
+
+mod common;
+use common::*;
+
+const MODES: [&[&str]; 2] = [&["--exact"], &[]];
+
+/// A floor and a sphere at `scale`, lights given as TOML.
+fn scene(scale: f64, lights: &str) -> String {
+    let s = |v: f64| v * scale;
+    format!(
+        r#"
+[film]
+width = 40
+height = 30
+[camera]
+eye = [0, {}, {}]
+look_at = [0, {}, 0]
+fov_y = 50
+[materials.floor]
+albedo = [0.7, 0.7, 0.7]
+specular = [0.2, 0.2, 0.2]
+exponent = 20
+[[shapes]]
+type = "quad"
+corner = [{}, 0, {}]
+u = [{}, 0, 0]
+v = [0, 0, {}]
+material = "floor"
+[[shapes]]
+type = "sphere"
+center = [0, {}, 0]
+radius = {}
+material = "floor"
+{lights}
+"#,
+        s(3.0),
+        s(6.0),
+        s(0.5),
+        s(-5.0),
+        s(5.0),
+        s(10.0),
+        s(-10.0),
+        s(0.8),
+        s(0.8)
+    )
+}
+
+fn grid(scale: f64, n: u32, intensity: f64) -> String {
+    format!(
+        "[[lights]]\ntype = \"grid\"\ncorner = [{}, {}, {}]\nu = [{}, 0, 0]\nv = [0, 0, {}]\ncount = [{n}, {n}]\nintensity = [{intensity:e}, {intensity:e}, {intensity:e}]\n",
+        -2.0 * scale,
+        3.0 * scale,
+        -2.0 * scale,
+        4.0 * scale,
+        4.0 * scale
+    )
+}
+
+fn render(dir: &TempDir, name: &str, text: &str, extra: &[&str]) -> ExrImage {
+    let scene = dir.write(&format!("{name}.toml"), text);
+    let out = dir.path(&format!("{name}.exr"));
+    let mut args = vec!["render", s(&scene), "-o", s(&out), "--quiet"];
+    args.extend_from_slice(extra);
+    lightcuts_ok(&args);
+    let image = read_exr(&out).unwrap();
+    for (channel, values) in &image.channels {
+        assert!(values.iter().all(|v| v.is_finite()), "{name} {extra:?}: channel {channel} has NaN or Inf");
+    }
+    image
+}
+
+fn luminance(image: &ExrImage) -> Vec<f64> {
+    let (r, g, b) = (&image.channels["R"], &image.channels["G"], &image.channels["B"]);
+    (0..r.len()).map(|i| 0.2126 * f64::from(r[i]) + 0.7152 * f64::from(g[i]) + 0.0722 * f64::from(b[i])).collect()
+}
+
+#[test]
+fn intensities_from_1e_minus_30_to_1e30_in_one_scene() {
+    let dir = TempDir::new("extreme-intensities");
+    let lights = format!(
+        "{}{}[[lights]]\ntype = \"point\"\nposition = [1, 2, 1]\nintensity = [1e30, 1e30, 1e30]\n[[lights]]\ntype = \"point\"\nposition = [-1, 2, -1]\nintensity = [1e-30, 1e-30, 1e-30]\n",
+        grid(1.0, 15, 1e-30),
+        grid(1.0, 2, 1.0)
+    );
+    for mode in MODES {
+        let image = render(&dir, "mixed", &scene(1.0, &lights), mode);
+        assert!(luminance(&image).iter().any(|&l| l > 1e20), "the 1e30 light must show");
+    }
+}
+
+#[test]
+fn a_hundred_thousand_lights_at_one_point() {
+    let dir = TempDir::new("one-point");
+    let lights = "[[lights]]\ntype = \"grid\"\ncorner = [0.5, 2, 0.5]\nu = [0, 0, 0]\nv = [0, 0, 0]\ncount = [400, 250]\nintensity = [1e-5, 1e-5, 1e-5]\n[[lights]]\ntype = \"point\"\nposition = [0.5, 2, 0.5]\nintensity = [0, 0, 0]\n";
+    // Lightcuts: the coincident cluster is exact, so the cut stays tiny.
+    let lc = render(&dir, "lc", &scene(1.0, lights), &[]);
+    assert!(lc.channels["lightcuts.cut_size"].iter().all(|&c| c <= 2.0));
+    // Exact on a small window (100,000 shadow rays per pixel), same pixels.
+    let ex = render(&dir, "ex", &scene(1.0, lights), &["--exact", "--pixel-bounds", "18,22,20,24"]);
+    let lcl = luminance(&lc);
+    for (i, l) in luminance(&ex).iter().enumerate() {
+        let (x, y) = (18 + i % 4, 20 + i / 4);
+        let a = lcl[y * 40 + x];
+        assert!((a - l).abs() <= 1e-4 * l.max(1e-12), "({x}, {y}): {a} vs {l}");
+    }
+}
+
+#[test]
+fn a_light_on_a_surface_and_shading_points_at_a_light() {
+    let dir = TempDir::new("on-surface");
+    // One light exactly on the floor, one exactly on the sphere's top vertex.
+    let lights = "[[lights]]\ntype = \"point\"\nposition = [0, 0, 2]\nintensity = [5, 5, 5]\n[[lights]]\ntype = \"point\"\nposition = [0, 1.6, 0]\nintensity = [5, 5, 5]\n";
+    for mode in MODES {
+        let image = render(&dir, "on", &scene(1.0, lights), mode);
+        assert!(luminance(&image).iter().any(|&l| l > 0.0));
+    }
+}
+
+#[test]
+fn no_lights_is_a_black_image_and_one_light_works() {
+    let dir = TempDir::new("few");
+    for mode in MODES {
+        let black = render(&dir, "none", &scene(1.0, ""), mode);
+        assert!(luminance(&black).iter().all(|&l| l == 0.0));
+        assert!(black.channels["A"].iter().any(|&a| a == 1.0), "geometry is still there");
+        let one = render(
+            &dir,
+            "one",
+            &scene(1.0, "[[lights]]\ntype = \"point\"\nposition = [0, 3, 0]\nintensity = [1, 1, 1]\n"),
+            mode,
+        );
+        assert!(luminance(&one).iter().any(|&l| l > 0.0));
+    }
+}
+
+#[test]
+fn scaling_intensities_by_k_scales_the_image_by_k() {
+    let dir = TempDir::new("scale-k");
+    for mode in MODES {
+        let a = luminance(&render(&dir, "a", &scene(1.0, &grid(1.0, 16, 0.01)), mode));
+        // A power of two: every product scales exactly, and the cut (which
+        // compares ratios) is the same.
+        let b = luminance(&render(&dir, "b", &scene(1.0, &grid(1.0, 16, 0.01 * 1024.0)), mode));
+        for (x, y) in a.iter().zip(&b) {
+            assert!((x * 1024.0 - y).abs() <= 1e-5 * y.abs(), "{mode:?}: {x} * 1024 vs {y}");
+        }
+    }
+}
+
+#[test]
+fn scaling_the_scene_and_intensities_together_leaves_the_image_unchanged() {
+    let dir = TempDir::new("scale-scene");
+    for mode in MODES {
+        let reference = luminance(&render(&dir, "one", &scene(1.0, &grid(1.0, 16, 0.01)), mode));
+        // Radiance from a point light goes as I / d^2: scale lengths by s and
+        // intensities by s^2. Scales of about 1e-4 and 1e6 metres, as powers
+        // of two (2^-13, 2^20) so that every coordinate scales exactly and
+        // both modes see the same numbers up to exponent.
+        for s in [2f64.powi(-13), 2f64.powi(20)] {
+            let image = luminance(&render(&dir, "scaled", &scene(s, &grid(s, 16, 0.01 * s * s)), mode));
+            let mean: f64 = reference.iter().sum::<f64>() / reference.len() as f64;
+            let mut worst = 0.0f64;
+            for (a, b) in reference.iter().zip(&image) {
+                worst = worst.max((a - b).abs() / mean);
+            }
+            assert!(worst <= 1e-4, "{mode:?} scale {s}: worst difference {worst} of the mean");
+        }
+    }
+}
+
+#[test]
+fn degenerate_and_zero_area_triangles_render() {
+    let dir = TempDir::new("degenerate");
+    std::fs::write(
+        dir.path("bad.obj"),
+        "v 0 0 0\nv 0 0 0\nv 0 0 0\nv 1 0.5 0\nv 2 0.5 0\nv 3 0.5 0\nv 0 1 0\nv 1 1 0\nv 0 2 0\nf 1 2 3\nf 4 5 6\nf 7 8 9\n",
+    )
+    .unwrap();
+    let text = format!(
+        "{}\n[[shapes]]\ntype = \"mesh\"\nfile = \"bad.obj\"\nmaterial = \"floor\"\n",
+        scene(1.0, &grid(1.0, 16, 0.01))
+    );
+    for mode in MODES {
+        render(&dir, "deg", &text, mode);
+    }
+}
+
+#[test]
+fn error_and_cut_extremes_terminate_with_finite_images() {
+    let dir = TempDir::new("cut-extremes");
+    let text = scene(1.0, &grid(1.0, 16, 0.01));
+    for args in [&["--error", "0"][..], &["--error", "1"], &["--max-cut", "1"], &["--error", "1e9"]] {
+        let image = render(&dir, "cut", &text, args);
+        assert!(luminance(&image).iter().any(|&l| l > 0.0), "{args:?}");
+    }
+}
+
+#[test]
+fn a_camera_inside_geometry() {
+    let dir = TempDir::new("inside");
+    let text = scene(1.0, &grid(1.0, 16, 0.01)).replace("eye = [0, 3, 6]", "eye = [0.1, 0.6, 0.2]");
+    for mode in MODES {
+        let image = render(&dir, "inside", &text, mode);
+        assert!(image.channels["A"].iter().all(|&a| a == 1.0), "every ray hits the inside of the sphere");
+    }
+}
