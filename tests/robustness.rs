@@ -124,7 +124,7 @@ fn no_lights_is_a_black_image_and_one_light_works() {
     for mode in MODES {
         let black = render(&dir, "none", &scene(1.0, ""), mode);
         assert!(luminance(&black).iter().all(|&l| l == 0.0));
-        assert!(black.channels["A"].iter().any(|&a| a == 1.0), "geometry is still there");
+        assert!(black.channels["A"].contains(&1.0), "geometry is still there");
         let one = render(
             &dir,
             "one",
