@@ -17,7 +17,11 @@ pub struct SceneError {
 }
 
 impl SceneError {
+    /// The message is folded onto one line (parsers' messages span several):
+    /// one error, one line.
     pub fn new(file: &Path, location: impl Into<String>, message: impl Into<String>) -> Self {
-        Self { file: file.to_path_buf(), location: location.into(), message: message.into() }
+        let message: String = message.into();
+        let message = message.lines().map(str::trim).filter(|l| !l.is_empty()).collect::<Vec<_>>().join("; ");
+        Self { file: file.to_path_buf(), location: location.into(), message }
     }
 }

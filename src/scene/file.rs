@@ -13,10 +13,14 @@ pub struct SceneFile {
     pub camera: CameraSpec,
     #[serde(default)]
     pub materials: BTreeMap<String, MaterialSpec>,
+    /// Each a table with a `type`; parsed into [`ShapeSpec`] by
+    /// [`ShapeSpec::parse`] (serde's internally tagged enums buffer their
+    /// content and lose the field path of errors inside it).
     #[serde(default)]
-    pub shapes: Vec<ShapeSpec>,
+    pub shapes: Vec<toml::Value>,
+    /// Each a table with a `type`; parsed into [`LightSpec`] by [`LightSpec::parse`].
     #[serde(default)]
-    pub lights: Vec<LightSpec>,
+    pub lights: Vec<toml::Value>,
     #[serde(default)]
     pub render: RenderSpec,
 }
@@ -78,30 +82,54 @@ fn unit_scale() -> [f32; 2] {
     [1.0, 1.0]
 }
 
+/// A parallelogram: corner, corner + u, corner + u + v, corner + v.
 #[derive(Debug, Clone, Deserialize)]
-#[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
+#[serde(deny_unknown_fields)]
+pub struct QuadSpec {
+    pub corner: [f32; 3],
+    pub u: [f32; 3],
+    pub v: [f32; 3],
+    pub material: String,
+}
+
+/// An axis-aligned box.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BoxSpec {
+    pub min: [f32; 3],
+    pub max: [f32; 3],
+    pub material: String,
+}
+
+/// A UV sphere tessellated into `segments` longitudes and `segments / 2` latitudes.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SphereSpec {
+    pub center: [f32; 3],
+    pub radius: f32,
+    pub material: String,
+    #[serde(default = "sphere_segments")]
+    pub segments: u32,
+}
+
+/// A Wavefront OBJ file (relative to the scene file), scaled then translated.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MeshSpec {
+    pub file: String,
+    pub material: String,
+    #[serde(default = "unit_f32")]
+    pub scale: f32,
+    #[serde(default)]
+    pub translate: [f32; 3],
+}
+
+#[derive(Debug, Clone)]
 pub enum ShapeSpec {
-    /// A parallelogram: corner, corner + u, corner + u + v, corner + v.
-    Quad { corner: [f32; 3], u: [f32; 3], v: [f32; 3], material: String },
-    /// An axis-aligned box.
-    Box { min: [f32; 3], max: [f32; 3], material: String },
-    /// A UV sphere tessellated into `segments` longitudes and `segments / 2` latitudes.
-    Sphere {
-        center: [f32; 3],
-        radius: f32,
-        material: String,
-        #[serde(default = "sphere_segments")]
-        segments: u32,
-    },
-    /// A Wavefront OBJ file (relative to the scene file), scaled then translated.
-    Mesh {
-        file: String,
-        material: String,
-        #[serde(default = "unit_f32")]
-        scale: f32,
-        #[serde(default)]
-        translate: [f32; 3],
-    },
+    Quad(QuadSpec),
+    Box(BoxSpec),
+    Sphere(SphereSpec),
+    Mesh(MeshSpec),
 }
 
 fn sphere_segments() -> u32 {
@@ -112,14 +140,79 @@ fn unit_f32() -> f32 {
     1.0
 }
 
+/// One point light; intensity in W/sr per RGB channel.
 #[derive(Debug, Clone, Deserialize)]
-#[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
+#[serde(deny_unknown_fields)]
+pub struct PointSpec {
+    pub position: [f32; 3],
+    pub intensity: [f32; 3],
+}
+
+/// count[0] x count[1] point lights spread evenly over the parallelogram
+/// corner + s u + t v, each with `intensity` W/sr.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct GridSpec {
+    pub corner: [f32; 3],
+    pub u: [f32; 3],
+    pub v: [f32; 3],
+    pub count: [u32; 2],
+    pub intensity: [f32; 3],
+}
+
+#[derive(Debug, Clone)]
 pub enum LightSpec {
-    /// One point light; intensity in W/sr per RGB channel.
-    Point { position: [f32; 3], intensity: [f32; 3] },
-    /// count[0] x count[1] point lights spread evenly over the parallelogram
-    /// corner + s u + t v, each with `intensity` W/sr.
-    Grid { corner: [f32; 3], u: [f32; 3], v: [f32; 3], count: [u32; 2], intensity: [f32; 3] },
+    Point(PointSpec),
+    Grid(GridSpec),
+}
+
+/// Splits a `{ type = "...", ... }` table into its type and the rest;
+/// errors are (field path below the item, message).
+fn tagged(value: &toml::Value) -> Result<(String, toml::Value), (String, String)> {
+    let toml::Value::Table(table) = value else {
+        return Err((String::new(), format!("expected a table with a `type`, got {}", value.type_str())));
+    };
+    let mut rest = table.clone();
+    match rest.remove("type") {
+        Some(toml::Value::String(kind)) => Ok((kind, toml::Value::Table(rest))),
+        Some(other) => Err((".type".into(), format!("expected a string, got {}", other.type_str()))),
+        None => Err((String::new(), "missing field `type`".into())),
+    }
+}
+
+/// Deserializes one variant's fields, keeping the path of any error.
+fn fields<T: serde::de::DeserializeOwned>(value: toml::Value) -> Result<T, (String, String)> {
+    serde_path_to_error::deserialize(value).map_err(|e| {
+        let path = e.path().to_string();
+        let path = if path == "." { String::new() } else { format!(".{path}") };
+        (path, e.into_inner().to_string())
+    })
+}
+
+impl ShapeSpec {
+    /// Parses one `[[shapes]]` entry; errors are (path below `shapes[i]`, message).
+    pub fn parse(value: &toml::Value) -> Result<Self, (String, String)> {
+        let (kind, rest) = tagged(value)?;
+        match kind.as_str() {
+            "quad" => fields(rest).map(Self::Quad),
+            "box" => fields(rest).map(Self::Box),
+            "sphere" => fields(rest).map(Self::Sphere),
+            "mesh" => fields(rest).map(Self::Mesh),
+            other => Err((".type".into(), format!("unknown shape type '{other}', expected quad, box, sphere or mesh"))),
+        }
+    }
+}
+
+impl LightSpec {
+    /// Parses one `[[lights]]` entry; errors are (path below `lights[i]`, message).
+    pub fn parse(value: &toml::Value) -> Result<Self, (String, String)> {
+        let (kind, rest) = tagged(value)?;
+        match kind.as_str() {
+            "point" => fields(rest).map(Self::Point),
+            "grid" => fields(rest).map(Self::Grid),
+            other => Err((".type".into(), format!("unknown light type '{other}', expected point or grid"))),
+        }
+    }
 }
 
 #[derive(Debug, Clone, Deserialize)]

@@ -16,7 +16,7 @@ use glam::{Vec2, Vec3};
 
 pub use camera::Camera;
 pub use error::SceneError;
-use file::{LightSpec, SceneFile, ShapeSpec};
+use file::{GridSpec, LightSpec, MeshSpec, PointSpec, QuadSpec, SceneFile, ShapeSpec, SphereSpec};
 pub use material::{Albedo, Material};
 pub use mesh::Mesh;
 use texture::Texture;
@@ -122,16 +122,17 @@ impl Scene {
         }
 
         let mut meshes = Vec::new();
-        for (i, shape) in spec.shapes.iter().enumerate() {
+        for (i, raw) in spec.shapes.iter().enumerate() {
             let field = |f: &str| format!("shapes[{i}].{f}");
+            let shape = ShapeSpec::parse(raw).map_err(|(path, m)| v.error(&format!("shapes[{i}]{path}"), &m))?;
             let material_of = |name: &String| {
                 material_index
                     .get(name)
                     .copied()
                     .ok_or_else(|| v.error(&field("material"), &format!("no material named '{name}' in [materials]")))
             };
-            let mesh = match shape {
-                ShapeSpec::Quad { corner, u, v: edge_v, material } => {
+            let mesh = match &shape {
+                ShapeSpec::Quad(QuadSpec { corner, u, v: edge_v, material }) => {
                     let m = material_of(material)?;
                     let (c, u, w) = (
                         v.point(*corner, &field("corner"))?,
@@ -143,7 +144,7 @@ impl Scene {
                     })?;
                     Mesh::quad(c, u, w, m)
                 }
-                ShapeSpec::Box { min, max, material } => {
+                ShapeSpec::Box(file::BoxSpec { min, max, material }) => {
                     let m = material_of(material)?;
                     let (lo, hi) = (v.point(*min, &field("min"))?, v.point(*max, &field("max"))?);
                     v.check(lo.cmplt(hi).all(), &field("max"), || {
@@ -151,7 +152,7 @@ impl Scene {
                     })?;
                     Mesh::cuboid(lo, hi, m)
                 }
-                ShapeSpec::Sphere { center, radius, material, segments } => {
+                ShapeSpec::Sphere(SphereSpec { center, radius, material, segments }) => {
                     let m = material_of(material)?;
                     let c = v.point(*center, &field("center"))?;
                     v.check(radius.is_finite() && *radius > 0.0, &field("radius"), || {
@@ -162,7 +163,7 @@ impl Scene {
                     })?;
                     Mesh::sphere(c, *radius, *segments, m)
                 }
-                ShapeSpec::Mesh { file, material, scale, translate } => {
+                ShapeSpec::Mesh(MeshSpec { file, material, scale, translate }) => {
                     let m = material_of(material)?;
                     v.check(scale.is_finite() && *scale > 0.0, &field("scale"), || {
                         format!("must be finite and > 0, got {scale}")
@@ -182,15 +183,16 @@ impl Scene {
         }
 
         let mut lights = Lights::default();
-        for (i, light) in spec.lights.iter().enumerate() {
+        for (i, raw) in spec.lights.iter().enumerate() {
             let field = |f: &str| format!("lights[{i}].{f}");
-            match light {
-                LightSpec::Point { position, intensity } => {
+            let light = LightSpec::parse(raw).map_err(|(path, m)| v.error(&format!("lights[{i}]{path}"), &m))?;
+            match &light {
+                LightSpec::Point(PointSpec { position, intensity }) => {
                     let position = v.point(*position, &field("position"))?;
                     let intensity = v.non_negative_rgb(*intensity, &field("intensity"))?;
                     lights.omni.push(OmniLight { position, intensity });
                 }
-                LightSpec::Grid { corner, u, v: edge_v, count, intensity } => {
+                LightSpec::Grid(GridSpec { corner, u, v: edge_v, count, intensity }) => {
                     let c = v.point(*corner, &field("corner"))?;
                     let (u, w) = (v.point(*u, &field("u"))?, v.point(*edge_v, &field("v"))?);
                     let intensity = v.non_negative_rgb(*intensity, &field("intensity"))?;
@@ -277,7 +279,7 @@ fn parse_toml(path: &Path, text: &str) -> Result<SceneFile, SceneError> {
             (f, Some((l, c))) => format!("{f} (line {l}, column {c})"),
             (f, None) => f.to_string(),
         };
-        SceneError::new(path, location, inner.message().to_string())
+        SceneError::new(path, location, inner.message())
     })
 }
 

@@ -1,0 +1,265 @@
+//! Hostile input: the real binary must exit 1 with one clear line naming the
+//! file and the field or line, never panic, and create no output file.
+
+mod common;
+use common::*;
+
+/// A scene that uses every kind of field: film, camera, materials (albedo
+/// and texture), every shape, every light.
+fn full_scene() -> String {
+    r#"
+[film]
+width = 16
+height = 12
+spp = 1
+
+[camera]
+eye = [0, 3, 6]
+look_at = [0, 0.5, 0]
+up = [0, 1, 0]
+fov_y = 45
+
+[materials.plain]
+albedo = [0.5, 0.5, 0.5]
+specular = [0.1, 0.1, 0.1]
+exponent = 10
+mirror = [0, 0, 0]
+
+[materials.wood]
+texture = "wood.png"
+texture_scale = [2, 2]
+
+[[shapes]]
+type = "quad"
+corner = [-3, 0, 3]
+u = [6, 0, 0]
+v = [0, 0, -6]
+material = "wood"
+
+[[shapes]]
+type = "box"
+min = [1, 0, -1]
+max = [2, 1, 0]
+material = "plain"
+
+[[shapes]]
+type = "sphere"
+center = [-1, 0.5, 0]
+radius = 0.5
+segments = 24
+material = "plain"
+
+[[shapes]]
+type = "mesh"
+file = "tri.obj"
+material = "plain"
+scale = 1
+translate = [0, 0, 0]
+
+[[lights]]
+type = "point"
+position = [0, 3, 0]
+intensity = [1, 1, 1]
+
+[[lights]]
+type = "grid"
+corner = [-1, 3, -1]
+u = [2, 0, 0]
+v = [0, 0, 2]
+count = [2, 2]
+intensity = [0.5, 0.5, 0.5]
+
+[render]
+max_mirror_depth = 2
+"#
+    .to_string()
+}
+
+fn setup(name: &str) -> TempDir {
+    let dir = TempDir::new(name);
+    std::fs::write(dir.path("tri.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").unwrap();
+    let file = std::fs::File::create(dir.path("wood.png")).unwrap();
+    let mut encoder = png::Encoder::new(file, 2, 2);
+    encoder.set_color(png::ColorType::Rgb);
+    encoder.set_depth(png::BitDepth::Eight);
+    encoder.write_header().unwrap().write_image_data(&[200, 150, 100, 90, 60, 30, 90, 60, 30, 200, 150, 100]).unwrap();
+    dir
+}
+
+/// Renders `text` (named `name`) and asserts a clean rejection mentioning
+/// every string of `expect`.
+fn rejects(dir: &TempDir, name: &str, text: &[u8], expect: &[&str]) {
+    let scene = dir.path(name);
+    std::fs::write(&scene, text).unwrap();
+    let out = dir.path("out.exr");
+    let stderr = lightcuts_fails(&["render", s(&scene), "-o", s(&out), "--quiet"]);
+    assert_eq!(stderr.trim_end().lines().count(), 1, "one line: {stderr}");
+    for e in expect {
+        assert!(stderr.contains(e), "'{e}' missing from: {stderr}");
+    }
+    assert!(!out.exists(), "output written for {name}");
+    assert!(dir.files().iter().all(|f| !f.contains("out.exr")), "temporary file left: {:?}", dir.files());
+}
+
+#[test]
+fn the_full_scene_itself_renders() {
+    let dir = setup("full-ok");
+    let scene = dir.write("full.toml", &full_scene());
+    lightcuts_ok(&["render", s(&scene), "-o", s(&dir.path("ok.exr")), "--quiet"]);
+}
+
+#[test]
+fn nan_inf_and_negative_values_in_every_numeric_field() {
+    let dir = setup("numbers");
+    let text = full_scene();
+    // (line as written, field path, values that must be rejected)
+    let cases: &[(&str, &str, &[&str])] = &[
+        ("width = 16", "film.width", &["-16", "nan", "inf", "0"]),
+        ("height = 12", "film.height", &["-1", "nan", "0"]),
+        ("spp = 1", "film.spp", &["-1", "inf", "0"]),
+        ("eye = [0, 3, 6]", "camera.eye", &["[nan, 3, 6]", "[0, inf, 6]", "[0, 3, -inf]"]),
+        ("look_at = [0, 0.5, 0]", "camera.look_at", &["[nan, 0, 0]", "[0, 0, inf]"]),
+        ("up = [0, 1, 0]", "camera.up", &["[nan, 1, 0]", "[0, 0, 0]"]),
+        ("fov_y = 45", "camera.fov_y", &["nan", "inf", "-45", "0", "180"]),
+        (
+            "albedo = [0.5, 0.5, 0.5]",
+            "materials.plain.albedo",
+            &["[nan, 0.5, 0.5]", "[-0.1, 0.5, 0.5]", "[0.5, inf, 0.5]"],
+        ),
+        ("specular = [0.1, 0.1, 0.1]", "materials.plain.specular", &["[nan, 0, 0]", "[-1, 0, 0]"]),
+        ("exponent = 10", "materials.plain.exponent", &["nan", "-1", "inf"]),
+        ("mirror = [0, 0, 0]", "materials.plain.mirror", &["[nan, 0, 0]", "[-0.5, 0, 0]", "[2, 0, 0]"]),
+        ("texture_scale = [2, 2]", "materials.wood.texture_scale", &["[nan, 2]", "[0, 2]", "[-1, 2]", "[inf, 2]"]),
+        ("corner = [-3, 0, 3]", "shapes[0].corner", &["[nan, 0, 3]", "[-inf, 0, 3]"]),
+        ("u = [6, 0, 0]", "shapes[0].u", &["[nan, 0, 0]", "[inf, 0, 0]"]),
+        ("v = [0, 0, -6]", "shapes[0].v", &["[0, 0, nan]", "[6, 0, 0]"]),
+        ("min = [1, 0, -1]", "shapes[1].min", &["[nan, 0, -1]", "[1, -inf, -1]"]),
+        ("max = [2, 1, 0]", "shapes[1].max", &["[2, nan, 0]", "[0, 1, 0]"]),
+        ("center = [-1, 0.5, 0]", "shapes[2].center", &["[nan, 0.5, 0]"]),
+        ("radius = 0.5", "shapes[2].radius", &["nan", "inf", "-0.5", "0"]),
+        ("segments = 24", "shapes[2].segments", &["-3", "1", "nan", "1000000"]),
+        ("scale = 1", "shapes[3].scale", &["nan", "-1", "0", "inf"]),
+        ("translate = [0, 0, 0]", "shapes[3].translate", &["[nan, 0, 0]", "[0, inf, 0]"]),
+        ("position = [0, 3, 0]", "lights[0].position", &["[nan, 3, 0]", "[0, inf, 0]"]),
+        ("intensity = [1, 1, 1]", "lights[0].intensity", &["[nan, 1, 1]", "[-1, 1, 1]", "[1, inf, 1]"]),
+        ("corner = [-1, 3, -1]", "lights[1].corner", &["[nan, 3, -1]"]),
+        ("count = [2, 2]", "lights[1].count", &["[-2, 2]", "[0, 2]", "[nan, 2]", "[100000, 100000]"]),
+        ("intensity = [0.5, 0.5, 0.5]", "lights[1].intensity", &["[nan, 0.5, 0.5]", "[-0.5, 0.5, 0.5]"]),
+        ("max_mirror_depth = 2", "render.max_mirror_depth", &["-1", "nan"]),
+    ];
+    for (line, field, values) in cases {
+        assert!(text.contains(line), "scene lacks '{line}'");
+        let key = line.split(" = ").next().unwrap();
+        for value in *values {
+            let bad = text.replacen(line, &format!("{key} = {value}"), 1);
+            rejects(&dir, "scene.toml", bad.as_bytes(), &["scene.toml", field]);
+        }
+    }
+}
+
+#[test]
+fn malformed_truncated_and_garbage_files() {
+    let dir = setup("garbage");
+    let text = full_scene();
+    rejects(&dir, "truncated.toml", &text.as_bytes()[..text.len() / 2], &["truncated.toml"]);
+    rejects(&dir, "syntax.toml", b"[film\nwidth = 3\n", &["syntax.toml", "line 1"]);
+    rejects(&dir, "garbage.toml", &[0xff, 0xfe, 0x00, 0x13, 0x37, 0x80, 0x81, 0x00, 0x9f], &["garbage.toml"]);
+    rejects(&dir, "empty.toml", b"", &["empty.toml", "film"]);
+    rejects(&dir, "bad.json", b"{\"film\": {\"width\": 16, \"height\": ", &["bad.json", "line 1"]);
+    rejects(&dir, "trailing.json", b"{\"film\": {\"width\": 1, \"height\": 1}, \"camera\": {\"eye\": [0,0,1], \"look_at\": [0,0,0], \"fov_y\": 30}} extra", &["trailing.json"]);
+    rejects(&dir, "nan.json", b"{\"film\": {\"width\": NaN, \"height\": 1}}", &["nan.json", "line 1"]);
+}
+
+#[test]
+fn wrong_types_and_unknown_fields() {
+    let dir = setup("types");
+    let text = full_scene();
+    for (from, to, field) in [
+        ("width = 16", "width = \"sixteen\"", "film.width"),
+        ("radius = 0.5", "radius = [0.5]", "radius"),
+        ("eye = [0, 3, 6]", "eye = [0, 3]", "camera.eye"),
+        ("type = \"sphere\"", "type = \"torus\"", "torus"),
+        ("material = \"wood\"", "material = 7", "shapes[0]"),
+        ("fov_y = 45", "fov_y = 45\nfocal_length = 35", "focal_length"),
+        ("[render]", "[rendr]", "rendr"),
+        ("type = \"grid\"", "type = \"grid\"\nspacing = 1", "spacing"),
+    ] {
+        assert!(text.contains(from), "{from}");
+        rejects(&dir, "types.toml", text.replacen(from, to, 1).as_bytes(), &["types.toml", field]);
+    }
+}
+
+#[test]
+fn missing_unreadable_and_malformed_meshes_and_textures() {
+    let dir = setup("files");
+    let text = full_scene();
+    rejects(&dir, "m1.toml", text.replace("tri.obj", "gone.obj").as_bytes(), &["shapes[3].file", "gone.obj"]);
+    rejects(&dir, "m2.toml", text.replace("wood.png", "gone.png").as_bytes(), &["materials.wood.texture", "gone.png"]);
+    // A directory where a file should be: unreadable even for root.
+    std::fs::create_dir_all(dir.path("folder.png")).unwrap();
+    rejects(
+        &dir,
+        "m3.toml",
+        text.replace("wood.png", "folder.png").as_bytes(),
+        &["materials.wood.texture", "folder.png"],
+    );
+    std::fs::create_dir_all(dir.path("folder.obj")).unwrap();
+    rejects(&dir, "m4.toml", text.replace("tri.obj", "folder.obj").as_bytes(), &["shapes[3].file", "folder.obj"]);
+    std::fs::write(dir.path("notpng.png"), "this is not a png").unwrap();
+    rejects(
+        &dir,
+        "m5.toml",
+        text.replace("wood.png", "notpng.png").as_bytes(),
+        &["notpng.png", "materials.wood.texture"],
+    );
+    for (name, obj, expect) in [
+        ("range.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 4\n", "line 4"),
+        ("text.obj", "v 0 0 0\nv 1 zero 0\nv 0 1 0\nf 1 2 3\n", "line 2"),
+        ("empty.obj", "", "no faces"),
+        ("points.obj", "v 0 0 0\nv 1 0 0\n", "no faces"),
+    ] {
+        std::fs::write(dir.path(name), obj).unwrap();
+        rejects(&dir, "o.toml", text.replace("tri.obj", name).as_bytes(), &[name, expect]);
+    }
+    std::fs::write(dir.path("binary.obj"), [0u8, 159, 146, 150, 255, 10, 102, 32, 49]).unwrap();
+    rejects(&dir, "o.toml", text.replace("tri.obj", "binary.obj").as_bytes(), &["binary.obj"]);
+}
+
+#[test]
+fn impossible_resolutions_and_output_paths() {
+    let dir = setup("resolution");
+    let text = full_scene().replace("width = 16", "width = 200000").replace("height = 12", "height = 200000");
+    rejects(&dir, "huge.toml", text.as_bytes(), &["huge.toml", "film", "memory"]);
+    let scene = dir.write("ok.toml", &full_scene());
+    let stderr = lightcuts_fails(&["render", s(&scene), "-o", s(&dir.path("no/such/dir/o.exr")), "--quiet"]);
+    assert!(stderr.contains("no/such/dir"), "{stderr}");
+    let stderr = lightcuts_fails(&["render", s(&scene), "-o", s(&dir.path("o.exr")), "--quiet", "--error", "nan"]);
+    assert!(stderr.contains("--error"), "{stderr}");
+    let stderr = lightcuts_fails(&["render", s(&scene), "-o", s(&dir.path("o.exr")), "--quiet", "--max-cut", "0"]);
+    assert!(stderr.contains("--max-cut"), "{stderr}");
+    assert!(!dir.path("o.exr").exists());
+}
+
+#[test]
+fn sigint_during_a_render_leaves_no_file() {
+    let dir = setup("sigint");
+    // Slow enough to still be rendering after half a second.
+    let text = full_scene()
+        .replace("count = [2, 2]", "count = [300, 300]")
+        .replace("width = 16", "width = 320")
+        .replace("height = 12", "height = 240");
+    let scene = dir.write("slow.toml", &text);
+    let out = dir.path("slow.exr");
+    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_lightcuts"))
+        .args(["render", s(&scene), "-o", s(&out), "--exact", "--quiet"])
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    std::thread::sleep(std::time::Duration::from_millis(500));
+    let killed = std::process::Command::new("kill").args(["-INT", &child.id().to_string()]).status().unwrap();
+    assert!(killed.success());
+    let output = child.wait_with_output().unwrap();
+    assert_eq!(output.status.code(), Some(130), "{}", String::from_utf8_lossy(&output.stderr));
+    assert!(!out.exists());
+    assert!(dir.files().iter().all(|f| !f.contains("slow.exr")), "{:?}", dir.files());
+}
