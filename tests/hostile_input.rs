@@ -250,7 +250,7 @@ fn sigint_during_a_render_leaves_no_file() {
         .replace("height = 12", "height = 240");
     let scene = dir.write("slow.toml", &text);
     let out = dir.path("slow.exr");
-    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_lightcuts"))
+    let child = std::process::Command::new(env!("CARGO_BIN_EXE_lightcuts"))
         .args(["render", s(&scene), "-o", s(&out), "--exact", "--quiet"])
         .stderr(std::process::Stdio::piped())
         .spawn()
