@@ -279,8 +279,26 @@ pub struct Ray {
     pub t_far: f32,
 }
 
+/// Embree's `FLT_LARGE`: a ray component beyond it is invalid, and an
+/// assertion-enabled Embree (Debian's) aborts on it.
+pub const MAX_RAY_COMPONENT: f32 = 1.844e18;
+
 impl Ray {
+    /// Whether Embree accepts this ray: finite components within
+    /// [`MAX_RAY_COMPONENT`] and a non-negative, ordered interval. The scene
+    /// loader's coordinate limit guarantees it for every ray the renderer casts.
+    #[must_use]
+    pub fn is_valid(&self) -> bool {
+        let within = |v: Vec3| v.is_finite() && v.abs().max_element() <= MAX_RAY_COMPONENT;
+        within(self.origin)
+            && within(self.direction)
+            && self.t_near >= 0.0
+            && !self.t_far.is_nan()
+            && self.t_near <= self.t_far
+    }
+
     fn to_sys(self) -> sys::LcRay {
+        debug_assert!(self.is_valid(), "invalid ray for Embree: {self:?}");
         sys::LcRay { org: self.origin.to_array(), tnear: self.t_near, dir: self.direction.to_array(), tfar: self.t_far }
     }
 }

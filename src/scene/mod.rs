@@ -26,6 +26,11 @@ use crate::light::{Lights, OmniLight};
 /// Largest film accepted: 2^27 pixels (about 11600 x 11600). The renderer
 /// keeps about 70 bytes per pixel, so this caps the image at about 9 GiB.
 pub const MAX_PIXELS: u64 = 1 << 27;
+/// Largest coordinate magnitude a scene may use, metres. Embree rejects a
+/// ray whose origin or direction has a component beyond 1.844e18
+/// (`FLT_LARGE`; Debian builds it with assertions, which abort), and a
+/// shadow ray's direction spans two points: 1e16 keeps a wide margin.
+pub const MAX_COORDINATE: f32 = 1e16;
 /// Largest number of lights a grid may generate (memory: ~28 bytes each).
 pub const MAX_GRID_LIGHTS: u64 = 1 << 26;
 
@@ -176,8 +181,14 @@ impl Scene {
                     Mesh::load_obj(&mesh_path, *scale, t, m)?
                 }
             };
-            if let Some(bad) = mesh.positions.iter().position(|p| !p.is_finite()) {
-                return Err(v.error(&format!("shapes[{i}]"), &format!("vertex {bad} is not finite after scaling")));
+            if let Some(bad) = mesh.positions.iter().position(|p| !within_limits(*p)) {
+                return Err(v.error(
+                    &format!("shapes[{i}]"),
+                    &format!(
+                        "vertex {bad} is {}: coordinates must be finite and within +/-{MAX_COORDINATE:e} m",
+                        mesh.positions[bad]
+                    ),
+                ));
             }
             meshes.push(mesh);
         }
@@ -210,6 +221,16 @@ impl Scene {
                     }
                 }
             }
+        }
+
+        if let Some(bad) = lights.omni.iter().position(|l| !within_limits(l.position)) {
+            return Err(v.error(
+                "lights",
+                &format!(
+                    "light {bad} is at {}: coordinates must be within +/-{MAX_COORDINATE:e} m",
+                    lights.omni[bad].position
+                ),
+            ));
         }
 
         Ok(Self {
@@ -253,6 +274,11 @@ impl Scene {
     pub fn triangle_count(&self) -> usize {
         self.meshes.iter().map(|m| m.triangles.len()).sum()
     }
+}
+
+/// Whether every coordinate is finite and within [`MAX_COORDINATE`].
+fn within_limits(p: Vec3) -> bool {
+    p.is_finite() && p.abs().max_element() <= MAX_COORDINATE
 }
 
 /// Checks a film size against [`MAX_PIXELS`]; `what` names the field or flag.
@@ -336,7 +362,7 @@ impl Validator<'_> {
 
     fn point(&self, p: [f32; 3], field: &str) -> Result<Vec3, SceneError> {
         let v = Vec3::from(p);
-        self.check(v.is_finite(), field, || format!("must be finite, got {p:?}"))?;
+        self.check(within_limits(v), field, || format!("must be finite and within +/-{MAX_COORDINATE:e}, got {p:?}"))?;
         Ok(v)
     }
 

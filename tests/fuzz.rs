@@ -1,0 +1,291 @@
+//! A seeded mutation fuzzer for the scene parser and the OBJ loader.
+//!
+//! Each iteration mutates a valid scene (or OBJ) with byte flips, deletions,
+//! duplications and splices of a dictionary of troublesome tokens, loads it
+//! in-process under `catch_unwind`, and for scenes that still load, renders a
+//! 4x3 image in both modes and checks every value is finite. A panic or a
+//! non-finite pixel fails the test and prints the input.
+//!
+//! The suite runs 300 iterations of each. For a long run:
+//!   LIGHTCUTS_FUZZ_ITERATIONS=200000 cargo test --release --test fuzz -- --ignored --nocapture
+
+use std::panic::{catch_unwind, AssertUnwindSafe};
+use std::path::Path;
+
+use lightcuts::embree::Device;
+use lightcuts::lightcut::cut::{CutSettings, LightTrees};
+use lightcuts::render::integrator::Integrator;
+use lightcuts::render::progress::Progress;
+use lightcuts::render::{self, DirectLighting, Geometry, PassSettings, PixelBounds};
+use lightcuts::sampling::Rng;
+use lightcuts::scene::mesh::Mesh;
+use lightcuts::scene::Scene;
+
+const SCENE: &str = r#"[film]
+width = 16
+height = 12
+spp = 1
+[camera]
+eye = [0, 3, 6]
+look_at = [0, 0.5, 0]
+fov_y = 45
+[materials.a]
+albedo = [0.5, 0.5, 0.5]
+specular = [0.2, 0.2, 0.2]
+exponent = 30
+mirror = [0.1, 0.1, 0.1]
+[[shapes]]
+type = "quad"
+corner = [-3, 0, 3]
+u = [6, 0, 0]
+v = [0, 0, -6]
+material = "a"
+[[shapes]]
+type = "sphere"
+center = [0, 0.5, 0]
+radius = 0.5
+segments = 12
+material = "a"
+[[shapes]]
+type = "box"
+min = [1, 0, 0]
+max = [2, 1, 1]
+material = "a"
+[[shapes]]
+type = "mesh"
+file = "m.obj"
+material = "a"
+[[lights]]
+type = "point"
+position = [0, 3, 0]
+intensity = [1, 1, 1]
+[[lights]]
+type = "grid"
+corner = [-1, 3, -1]
+u = [2, 0, 0]
+v = [0, 0, 2]
+count = [16, 16]
+intensity = [0.01, 0.01, 0.01]
+"#;
+
+const OBJ: &str = "# a quad\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\nvn 0 0 1\nf 1/1/1 2/2/1 3/3/1 4/4/1\nf -1 -2 -3\n";
+
+const TOKENS: &[&str] = &[
+    "nan",
+    "inf",
+    "-inf",
+    "-1",
+    "0",
+    "1e39",
+    "-1e39",
+    "1e-45",
+    "4294967296",
+    "18446744073709551616",
+    "[",
+    "]",
+    "{",
+    "}",
+    "=",
+    "\"",
+    "'",
+    ",",
+    "\n",
+    "[[shapes]]",
+    "[[lights]]",
+    "type = \"sphere\"",
+    "type = \"grid\"",
+    "count = [65536, 65536]",
+    "radius = 0",
+    "segments = 4096",
+    "f 1 2 99",
+    "f -999 1 2",
+    "v nan 0 0",
+    "v 1e38 1e38 1e38",
+    "vt",
+    "vn",
+    "/",
+    "//",
+    "\u{0}",
+    "\u{feff}",
+    "é",
+    "#",
+];
+
+/// Values a number in the input may be replaced with.
+const NUMBERS: &[&str] = &[
+    "nan",
+    "inf",
+    "-inf",
+    "-1",
+    "0",
+    "-0.0",
+    "1e30",
+    "1e-30",
+    "1e38",
+    "3.4e38",
+    "1e-45",
+    "65536",
+    "4096",
+    "4294967295",
+    "-2147483648",
+    "0.5",
+    "1",
+    "2",
+    "100000",
+    "1e6",
+    "-1e6",
+];
+
+/// Replaces one number of the text with a hostile value (keeps the syntax
+/// valid most of the time, so validation and rendering are reached).
+fn replace_number(rng: &mut Rng, data: &[u8]) -> Vec<u8> {
+    let text = String::from_utf8_lossy(data);
+    let numbers: Vec<(usize, usize)> = {
+        let bytes = text.as_bytes();
+        let mut spans = Vec::new();
+        let mut i = 0;
+        while i < bytes.len() {
+            if bytes[i].is_ascii_digit() || (bytes[i] == b'-' && bytes.get(i + 1).is_some_and(u8::is_ascii_digit)) {
+                let start = i;
+                i += 1;
+                while i < bytes.len() && (bytes[i].is_ascii_digit() || bytes[i] == b'.' || bytes[i] == b'e') {
+                    i += 1;
+                }
+                spans.push((start, i));
+            } else {
+                i += 1;
+            }
+        }
+        spans
+    };
+    if numbers.is_empty() {
+        return data.to_vec();
+    }
+    let (a, b) = numbers[rng.below(numbers.len() as u64) as usize];
+    let value = NUMBERS[rng.below(NUMBERS.len() as u64) as usize];
+    format!("{}{value}{}", &text[..a], &text[b..]).into_bytes()
+}
+
+fn mutate(rng: &mut Rng, input: &[u8]) -> Vec<u8> {
+    if rng.below(2) == 0 {
+        let mut data = input.to_vec();
+        for _ in 0..1 + rng.below(3) {
+            data = replace_number(rng, &data);
+        }
+        return data;
+    }
+    let mut data = input.to_vec();
+    for _ in 0..1 + rng.below(4) {
+        let at = if data.is_empty() { 0 } else { rng.below(data.len() as u64 + 1) as usize };
+        match rng.below(5) {
+            0 if !data.is_empty() => {
+                let i = at.min(data.len() - 1);
+                data[i] ^= 1 << rng.below(8);
+            }
+            1 => {
+                let end = (at + 1 + rng.below(16) as usize).min(data.len());
+                data.drain(at.min(end)..end);
+            }
+            2 => {
+                let end = (at + 1 + rng.below(64) as usize).min(data.len());
+                let copy = data[at.min(end)..end].to_vec();
+                let to = rng.below(data.len() as u64 + 1) as usize;
+                data.splice(to..to, copy);
+            }
+            _ => {
+                let token = TOKENS[rng.below(TOKENS.len() as u64) as usize].as_bytes();
+                data.splice(at..at, token.iter().copied());
+            }
+        }
+    }
+    data
+}
+
+/// Renders a loaded scene at 4x3 in both modes; panics on a non-finite value.
+fn render_small(scene: &Scene) {
+    if scene.lights.len() > 20_000 || scene.triangle_count() > 200_000 {
+        return; // Valid but too slow for a fuzz iteration.
+    }
+    let device = Device::try_new().unwrap();
+    let Ok(geometry) = Geometry::try_new(&device, scene) else { return };
+    let camera = scene.camera(4, 3);
+    let settings = PassSettings { width: 4, height: 3, spp: 1, seed: 1, bounds: PixelBounds::full(4, 3) };
+    let trees = LightTrees::build(&scene.lights, 1);
+    for direct in [DirectLighting::Exact, DirectLighting::Lightcuts { trees: &trees, settings: CutSettings::default() }]
+    {
+        let integrator =
+            Integrator { geometry: &geometry, lights: &scene.lights, direct, max_mirror_depth: scene.max_mirror_depth };
+        let (film, _) = render::render(&integrator, &camera, &settings, &Progress::Silent);
+        for p in &film.pixels {
+            let values = [
+                p.rgb.as_slice(),
+                p.albedo.as_slice(),
+                p.normal.as_slice(),
+                &[p.alpha, p.z, p.cut_size, p.shadow_rays],
+            ]
+            .concat();
+            assert!(values.iter().all(|v| v.is_finite()), "non-finite pixel {p:?}");
+        }
+    }
+}
+
+fn fuzz(iterations: u64, seed: u64) -> (u64, u64) {
+    let dir = std::env::temp_dir().join(format!("lightcuts-fuzz-{}-{seed}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(dir.join("m.obj"), OBJ).unwrap();
+    let scene_path = dir.join("scene.toml");
+    let mut rng = Rng::seeded(seed);
+    let (mut loaded, mut rejected) = (0, 0);
+    for i in 0..iterations {
+        // Scene mutants (the OBJ stays valid).
+        let input = mutate(&mut rng, SCENE.as_bytes());
+        std::fs::write(&scene_path, &input).unwrap();
+        let outcome = catch_unwind(AssertUnwindSafe(|| match Scene::load(&scene_path) {
+            Ok(scene) => {
+                render_small(&scene);
+                true
+            }
+            Err(e) => {
+                let m = e.to_string();
+                assert!(m.contains("scene.toml") || m.contains("m.obj"), "error names no file: {m}");
+                assert!(!m.contains('\n'), "multi-line error: {m}");
+                false
+            }
+        }));
+        match outcome {
+            Ok(true) => loaded += 1,
+            Ok(false) => rejected += 1,
+            Err(_) => panic!("iteration {i}: panic on scene input:\n{}", String::from_utf8_lossy(&input)),
+        }
+        // OBJ mutants.
+        let obj = mutate(&mut rng, OBJ.as_bytes());
+        let obj_path = dir.join("fuzz.obj");
+        std::fs::write(&obj_path, &obj).unwrap();
+        if catch_unwind(|| Mesh::load_obj(Path::new(&obj_path), 1.0, glam::Vec3::ZERO, 0)).is_err() {
+            panic!("iteration {i}: panic on OBJ input:\n{}", String::from_utf8_lossy(&obj));
+        }
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+    (loaded, rejected)
+}
+
+#[test]
+fn scene_and_obj_mutants_never_panic() {
+    let (loaded, rejected) = fuzz(300, 1);
+    // Both paths must be exercised.
+    assert!(loaded > 10 && rejected > 10, "loaded {loaded}, rejected {rejected}");
+}
+
+/// The long run; see the module documentation.
+#[test]
+#[ignore]
+fn long_fuzz_run() {
+    let iterations = std::env::var("LIGHTCUTS_FUZZ_ITERATIONS").ok().and_then(|v| v.parse().ok()).unwrap_or(100_000);
+    let seed = std::env::var("LIGHTCUTS_FUZZ_SEED").ok().and_then(|v| v.parse().ok()).unwrap_or(2);
+    let start = std::time::Instant::now();
+    let (loaded, rejected) = fuzz(iterations, seed);
+    println!(
+        "{iterations} iterations (seed {seed}) in {:.0} s: {loaded} loaded and rendered, {rejected} rejected, no panic",
+        start.elapsed().as_secs_f64()
+    );
+}
