@@ -4,14 +4,13 @@
 mod bench_cmd;
 mod compare_cmd;
 mod render_cmd;
-
-use std::path::PathBuf;
+mod sweep_cmd;
 
 use clap::{Parser, Subcommand};
 
 use crate::embree::EmbreeError;
 use crate::output::OutputError;
-use crate::render::geometry::GeometryError;
+use crate::render::session::SessionError;
 use crate::scene::SceneError;
 
 #[derive(Debug, Parser)]
@@ -27,6 +26,8 @@ pub enum Command {
     Render(render_cmd::RenderArgs),
     /// Compare a render against a reference on luminance (relative error).
     Compare(compare_cmd::CompareArgs),
+    /// Speed against accuracy over a list of error thresholds.
+    Sweep(sweep_cmd::SweepArgs),
     /// Benchmarks that print measured figures (--json for machines).
     Bench(bench_cmd::BenchArgs),
 }
@@ -43,9 +44,9 @@ pub enum CliError {
     /// Embree failed: out of memory or an unsupported CPU.
     #[error(transparent)]
     Embree(#[from] EmbreeError),
-    /// A shape could not be handed to Embree.
-    #[error("{file}: {source}")]
-    Geometry { file: PathBuf, source: GeometryError },
+    /// The scene could not be prepared for rendering (Embree, threads).
+    #[error(transparent)]
+    Session(#[from] SessionError),
     /// A command-line value is invalid: the user's input.
     #[error("{flag}: {message}")]
     Usage { flag: &'static str, message: String },
@@ -63,6 +64,7 @@ pub fn main() -> i32 {
         Command::Render(args) => render_cmd::run(&args),
         Command::Compare(args) => compare_cmd::run(&args),
         Command::Bench(args) => bench_cmd::run(&args),
+        Command::Sweep(args) => sweep_cmd::run(&args),
     };
     match result {
         Ok(()) => 0,

@@ -1,18 +1,16 @@
 //! `lightcuts render`: load, build, render, write EXR (and PNG), print statistics.
 
 use std::path::PathBuf;
-use std::time::Instant;
 
 use clap::Args;
 
 use super::{parse_pixel_bounds, parse_resolution, CliError};
-use crate::embree::Device;
-use crate::lightcut::cut::{CutSettings, LightTrees};
+use crate::lightcut::cut::CutSettings;
 use crate::output::exr::{write_exr, ExrChannels, ExrMetadata};
 use crate::output::preview::write_png;
-use crate::render::integrator::Integrator;
 use crate::render::progress::Progress;
-use crate::render::{self, DirectLighting, Geometry, PassSettings, PixelBounds};
+use crate::render::session::{PassResult, Session};
+use crate::render::{PassSettings, PixelBounds};
 use crate::scene::{check_resolution, Scene};
 
 #[derive(Debug, Args)]
@@ -90,6 +88,15 @@ pub fn pass_settings(
     Ok(PassSettings { width, height, spp, seed, bounds })
 }
 
+/// The render mode as the EXR header and reports name it.
+#[must_use]
+pub fn render_mode(cut: Option<CutSettings>) -> String {
+    match cut {
+        Some(c) => format!("lightcuts error={} max_cut={}", c.error, c.max_cut),
+        None => "exact".to_string(),
+    }
+}
+
 /// The cut settings of a lightcuts render, validated.
 pub fn cut_settings(error: f64, max_cut: usize) -> Result<CutSettings, CliError> {
     if !(error.is_finite() && error >= 0.0) {
@@ -108,27 +115,10 @@ pub fn run(args: &RenderArgs) -> Result<(), CliError> {
     if !args.exposure.is_finite() {
         return Err(CliError::Usage { flag: "--exposure", message: format!("must be finite, got {}", args.exposure) });
     }
-    let pool = render::thread_pool(args.threads)
-        .map_err(|e| CliError::Threads { threads: args.threads, message: e.to_string() })?;
-    let device = Device::try_new()?;
-    let geometry =
-        Geometry::try_new(&device, &scene).map_err(|source| CliError::Geometry { file: scene.path.clone(), source })?;
-    let camera = scene.camera(settings.width, settings.height);
-    let start = Instant::now();
-    let trees = cut.map(|_| pool.install(|| LightTrees::build(&scene.lights, settings.seed)));
-    let direct = match (&trees, cut) {
-        (Some(trees), Some(settings)) => DirectLighting::Lightcuts { trees, settings },
-        _ => DirectLighting::Exact,
-    };
-    let mode = match cut {
-        Some(c) => format!("lightcuts error={} max_cut={}", c.error, c.max_cut),
-        None => "exact".to_string(),
-    };
-    let integrator =
-        Integrator { geometry: &geometry, lights: &scene.lights, direct, max_mirror_depth: scene.max_mirror_depth };
+    let session = Session::try_new(&scene, args.threads)?;
     let progress = Progress::for_stderr("render", args.quiet);
-    let (film, stats) = pool.install(|| render::render(&integrator, &camera, &settings, &progress));
-    let seconds = start.elapsed().as_secs_f64();
+    let PassResult { film, stats, seconds, trees, .. } = session.render(&settings, cut, &progress);
+    let mode = render_mode(cut);
 
     let meta = ExrMetadata {
         scene_file: scene.path.clone(),
@@ -168,15 +158,8 @@ pub fn run(args: &RenderArgs) -> Result<(), CliError> {
         settings.spp
     );
     println!("  mode             {mode}");
-    if let Some(trees) = &trees {
-        for (tree, time) in trees.trees.iter().zip(&trees.build_times) {
-            println!(
-                "  tree build       {} {} lights in {:.3} s",
-                tree.kind.name(),
-                tree.light_count(),
-                time.as_secs_f64()
-            );
-        }
+    for (kind, lights, time) in &trees {
+        println!("  tree build       {} {lights} lights in {:.3} s", kind.name(), time.as_secs_f64());
     }
     println!("  render time      {seconds:.3} s (including tree build)");
     println!("  camera rays      {}", stats.camera_rays);

@@ -5,6 +5,7 @@
 
 pub mod compare;
 pub mod exr;
+pub mod plot;
 pub mod preview;
 pub mod read;
 

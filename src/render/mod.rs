@@ -11,6 +11,7 @@ pub mod film;
 pub mod geometry;
 pub mod integrator;
 pub mod progress;
+pub mod session;
 
 use std::time::{Duration, Instant};
 

@@ -1,0 +1,274 @@
+//! `lightcuts sweep`: the speed/accuracy trade over a list of error
+//! thresholds, each measured against the exact render of the same scene and
+//! settings (rendered once, and reused from DIR when it matches).
+
+use std::path::{Path, PathBuf};
+
+use clap::Args;
+use glam::DVec3;
+use serde::{Deserialize, Serialize};
+
+use super::render_cmd::{cut_settings, pass_settings, render_mode};
+use super::{parse_pixel_bounds, parse_resolution, CliError};
+use crate::output::compare::compare_rgb;
+use crate::output::exr::{write_exr, ExrChannels, ExrMetadata};
+use crate::output::plot::{Plot, Series};
+use crate::output::read::read_exr;
+use crate::output::{write_atomically, OutputError};
+use crate::render::progress::Progress;
+use crate::render::session::Session;
+use crate::render::{Film, PassSettings};
+use crate::scene::Scene;
+
+#[derive(Debug, Args)]
+pub struct SweepArgs {
+    pub scene: PathBuf,
+    /// Error thresholds, comma-separated.
+    #[arg(long, value_delimiter = ',', default_values_t = [0.001, 0.005, 0.01, 0.02, 0.05, 0.1, 0.2])]
+    pub errors: Vec<f64>,
+    /// Directory for the reference, the renders, sweep.csv, sweep.svg and sweep.png.
+    #[arg(long)]
+    pub out: PathBuf,
+    #[arg(long, default_value_t = 1000)]
+    pub max_cut: usize,
+    #[arg(long, value_name = "WxH", value_parser = parse_resolution)]
+    pub resolution: Option<(u32, u32)>,
+    #[arg(long, value_name = "N")]
+    pub spp: Option<u32>,
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    #[arg(long, default_value_t = 0)]
+    pub threads: usize,
+    #[arg(long, value_name = "x0,x1,y0,y1", value_parser = parse_pixel_bounds)]
+    pub pixel_bounds: Option<[u32; 4]>,
+    /// Print the rows as JSON instead of a table.
+    #[arg(long)]
+    pub json: bool,
+    #[arg(long, short)]
+    pub quiet: bool,
+}
+
+/// What identifies a reference render: reused only when all of it matches.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+struct ReferenceKey {
+    scene: String,
+    /// SplitMix hash of the scene file's bytes.
+    scene_hash: u64,
+    width: u32,
+    height: u32,
+    spp: u32,
+    seed: u64,
+    bounds: [u32; 4],
+}
+
+#[derive(Debug, Clone, Serialize, Deserialize)]
+struct ReferenceRecord {
+    key: ReferenceKey,
+    seconds: f64,
+    shadow_rays: u64,
+}
+
+#[derive(Debug, Clone, Serialize)]
+pub struct SweepRow {
+    pub threshold: f64,
+    pub seconds: f64,
+    pub speedup: f64,
+    pub average_cut: f64,
+    pub max_cut: u64,
+    pub shadow_rays_per_pixel: f64,
+    pub mean_relative_error: f64,
+    pub p99_relative_error: f64,
+    pub max_relative_error: f64,
+    pub fraction_above_2_percent: f64,
+}
+
+fn hash_bytes(bytes: &[u8]) -> u64 {
+    bytes.chunks(8).fold(0x243f_6a88_85a3_08d3, |h, c| {
+        let mut word = [0u8; 8];
+        word[..c.len()].copy_from_slice(c);
+        crate::sampling::mix64(h ^ u64::from_le_bytes(word))
+    })
+}
+
+fn rgb(film: &Film) -> Vec<DVec3> {
+    film.pixels.iter().map(|p| DVec3::new(f64::from(p.rgb[0]), f64::from(p.rgb[1]), f64::from(p.rgb[2]))).collect()
+}
+
+fn metadata(scene: &Scene, settings: &PassSettings, mode: String, seconds: f64) -> ExrMetadata {
+    ExrMetadata {
+        scene_file: scene.path.clone(),
+        render_mode: mode,
+        render_seconds: seconds,
+        lights: scene.lights.len() as u64,
+        spp: settings.spp,
+        seed: settings.seed,
+    }
+}
+
+/// The exact reference: reused from `dir` when its record matches `key`.
+fn reference(
+    session: &Session<'_>,
+    settings: &PassSettings,
+    key: &ReferenceKey,
+    dir: &Path,
+    quiet: bool,
+) -> Result<(Vec<DVec3>, ReferenceRecord), CliError> {
+    let (exr_path, record_path) = (dir.join("reference.exr"), dir.join("reference.json"));
+    if let Ok(text) = std::fs::read_to_string(&record_path) {
+        if let Ok(record) = serde_json::from_str::<ReferenceRecord>(&text) {
+            if record.key == *key {
+                if let Ok(image) = read_exr(&exr_path) {
+                    let (r, g, b) = (
+                        image.channel(&exr_path, "R")?,
+                        image.channel(&exr_path, "G")?,
+                        image.channel(&exr_path, "B")?,
+                    );
+                    let pixels =
+                        (0..r.len()).map(|i| DVec3::new(f64::from(r[i]), f64::from(g[i]), f64::from(b[i]))).collect();
+                    if !quiet {
+                        eprintln!("sweep: reusing {}", exr_path.display());
+                    }
+                    return Ok((pixels, record));
+                }
+            }
+        }
+    }
+    let result = session.render(settings, None, &Progress::for_stderr("exact", quiet));
+    let meta = metadata(session.scene, settings, "exact".into(), result.seconds);
+    write_exr(&exr_path, &result.film, ExrChannels { half_beauty: false, lightcut_aovs: false }, &meta)?;
+    let record =
+        ReferenceRecord { key: key.clone(), seconds: result.seconds, shadow_rays: result.stats.shading.shadow_rays };
+    let text = serde_json::to_string_pretty(&record).expect("plain data serialises");
+    write_atomically(&record_path, |t| std::fs::write(t, text.as_bytes()).map_err(|e| e.to_string()))?;
+    Ok((rgb(&result.film), record))
+}
+
+pub fn run(args: &SweepArgs) -> Result<(), CliError> {
+    let scene = Scene::load(&args.scene)?;
+    let settings = pass_settings(&scene, args.resolution, args.spp, args.seed, args.pixel_bounds)?;
+    let cuts = args.errors.iter().map(|&e| cut_settings(e, args.max_cut)).collect::<Result<Vec<_>, _>>()?;
+    if cuts.is_empty() {
+        return Err(CliError::Usage { flag: "--errors", message: "give at least one threshold".into() });
+    }
+    std::fs::create_dir_all(&args.out)
+        .map_err(|e| OutputError::new(&args.out, format!("cannot create the directory: {e}")))?;
+    let bytes = std::fs::read(&scene.path).map_err(|e| OutputError::new(&scene.path, e.to_string()))?;
+    let b = settings.bounds;
+    let key = ReferenceKey {
+        scene: std::fs::canonicalize(&scene.path).unwrap_or_else(|_| scene.path.clone()).display().to_string(),
+        scene_hash: hash_bytes(&bytes),
+        width: settings.width,
+        height: settings.height,
+        spp: settings.spp,
+        seed: settings.seed,
+        bounds: [b.x0, b.x1, b.y0, b.y1],
+    };
+    let session = Session::try_new(&scene, args.threads)?;
+    let (reference_rgb, record) = reference(&session, &settings, &key, &args.out, args.quiet)?;
+    let pixels = b.area().max(1) as f64;
+    let mut rows = Vec::new();
+    for cut in cuts {
+        let result =
+            session.render(&settings, Some(cut), &Progress::for_stderr(&format!("error {}", cut.error), args.quiet));
+        let comparison =
+            compare_rgb(&rgb(&result.film), &reference_rgb, b.width() as usize, b.height() as usize).summary;
+        let path = args.out.join(format!("error-{}.exr", cut.error));
+        let meta = metadata(&scene, &settings, render_mode(Some(cut)), result.seconds);
+        write_exr(&path, &result.film, ExrChannels { half_beauty: false, lightcut_aovs: true }, &meta)?;
+        let shading = &result.stats.shading;
+        rows.push(SweepRow {
+            threshold: cut.error,
+            seconds: result.seconds,
+            speedup: record.seconds / result.seconds.max(1e-9),
+            average_cut: shading.cut_nodes as f64 / shading.shading_points.max(1) as f64,
+            max_cut: shading.max_cut,
+            shadow_rays_per_pixel: shading.shadow_rays as f64 / pixels,
+            mean_relative_error: comparison.mean_relative_error,
+            p99_relative_error: comparison.p99_relative_error,
+            max_relative_error: comparison.max_relative_error,
+            fraction_above_2_percent: comparison.fraction_above_2_percent,
+        });
+    }
+    write_csv(&args.out.join("sweep.csv"), &rows)?;
+    let plot = plot(&scene, &rows, record.seconds);
+    plot.write_svg(&args.out.join("sweep.svg"))?;
+    plot.write_png(&args.out.join("sweep.png"))?;
+    if args.json {
+        println!("{}", serde_json::to_string_pretty(&rows).expect("plain data serialises"));
+    } else {
+        println!(
+            "exact reference: {:.3} s, {:.1} shadow rays per pixel",
+            record.seconds,
+            record.shadow_rays as f64 / pixels
+        );
+        println!(
+            "{:>9} {:>9} {:>8} {:>8} {:>7} {:>9} {:>9} {:>9} {:>9} {:>8}",
+            "threshold",
+            "time (s)",
+            "speedup",
+            "avg cut",
+            "max cut",
+            "rays/px",
+            "mean err",
+            "p99 err",
+            "max err",
+            "> 2%"
+        );
+        for r in &rows {
+            println!(
+                "{:>9} {:>9.3} {:>7.1}x {:>8.1} {:>7} {:>9.1} {:>8.3}% {:>8.2}% {:>8.2}% {:>7.2}%",
+                r.threshold,
+                r.seconds,
+                r.speedup,
+                r.average_cut,
+                r.max_cut,
+                r.shadow_rays_per_pixel,
+                100.0 * r.mean_relative_error,
+                100.0 * r.p99_relative_error,
+                100.0 * r.max_relative_error,
+                100.0 * r.fraction_above_2_percent
+            );
+        }
+        println!("wrote {}/sweep.csv, sweep.svg, sweep.png", args.out.display());
+    }
+    Ok(())
+}
+
+fn write_csv(path: &Path, rows: &[SweepRow]) -> Result<(), OutputError> {
+    let mut text = String::from("threshold,time_s,speedup,average_cut,max_cut,shadow_rays_per_pixel,mean_relative_error,p99_relative_error,max_relative_error,fraction_above_2_percent\n");
+    for r in rows {
+        text.push_str(&format!(
+            "{},{:.6},{:.4},{:.3},{},{:.3},{:.6e},{:.6e},{:.6e},{:.6e}\n",
+            r.threshold,
+            r.seconds,
+            r.speedup,
+            r.average_cut,
+            r.max_cut,
+            r.shadow_rays_per_pixel,
+            r.mean_relative_error,
+            r.p99_relative_error,
+            r.max_relative_error,
+            r.fraction_above_2_percent
+        ));
+    }
+    write_atomically(path, |t| std::fs::write(t, text.as_bytes()).map_err(|e| e.to_string()))
+}
+
+fn plot(scene: &Scene, rows: &[SweepRow], exact_seconds: f64) -> Plot {
+    let label = |t: f64| format!("{}%", 100.0 * t);
+    let series = |name: &str, colour, f: &dyn Fn(&SweepRow) -> f64| Series {
+        name: name.into(),
+        colour,
+        points: rows.iter().map(|r| (r.seconds, 100.0 * f(r), label(r.threshold))).collect(),
+    };
+    let name = scene.path.file_stem().map_or_else(|| "scene".into(), |s| s.to_string_lossy().into_owned());
+    Plot {
+        title: format!("{name}: lightcuts error against time (exact: {exact_seconds:.2} s)"),
+        x_label: "render time (s)".into(),
+        y_label: "relative error (%)".into(),
+        series: vec![
+            series("mean", [200, 40, 40], &|r| r.mean_relative_error),
+            series("99th percentile", [40, 80, 200], &|r| r.p99_relative_error),
+        ],
+    }
+}
