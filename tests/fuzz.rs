@@ -6,8 +6,9 @@
 //! 4x3 image in both modes and checks every value is finite. A panic or a
 //! non-finite pixel fails the test and prints the input.
 //!
-//! The suite runs 300 iterations of each. For a long run:
-//!   LIGHTCUTS_FUZZ_ITERATIONS=200000 cargo test --release --test fuzz -- --ignored --nocapture
+//! The suite runs 300 iterations of each. For a long run (10 minutes by
+//! default; LIGHTCUTS_FUZZ_ITERATIONS and LIGHTCUTS_FUZZ_SEED also apply):
+//!   LIGHTCUTS_FUZZ_SECONDS=600 cargo test --release --test fuzz -- --ignored --nocapture
 
 use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::path::Path;
@@ -229,7 +230,7 @@ fn render_small(scene: &Scene) {
     }
 }
 
-fn fuzz(iterations: u64, seed: u64) -> (u64, u64) {
+fn fuzz(iterations: u64, seed: u64, deadline: Option<std::time::Instant>) -> (u64, u64) {
     let dir = std::env::temp_dir().join(format!("lightcuts-fuzz-{}-{seed}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     std::fs::write(dir.join("m.obj"), OBJ).unwrap();
@@ -237,6 +238,9 @@ fn fuzz(iterations: u64, seed: u64) -> (u64, u64) {
     let mut rng = Rng::seeded(seed);
     let (mut loaded, mut rejected) = (0, 0);
     for i in 0..iterations {
+        if deadline.is_some_and(|d| std::time::Instant::now() >= d) {
+            break;
+        }
         // Scene mutants (the OBJ stays valid).
         let input = mutate(&mut rng, SCENE.as_bytes());
         std::fs::write(&scene_path, &input).unwrap();
@@ -271,21 +275,28 @@ fn fuzz(iterations: u64, seed: u64) -> (u64, u64) {
 
 #[test]
 fn scene_and_obj_mutants_never_panic() {
-    let (loaded, rejected) = fuzz(300, 1);
+    let (loaded, rejected) = fuzz(300, 1, None);
     // Both paths must be exercised.
     assert!(loaded > 10 && rejected > 10, "loaded {loaded}, rejected {rejected}");
 }
 
-/// The long run; see the module documentation.
+/// The long run; see the module documentation. Stops after
+/// LIGHTCUTS_FUZZ_ITERATIONS iterations or LIGHTCUTS_FUZZ_SECONDS seconds.
 #[test]
 #[ignore]
 fn long_fuzz_run() {
-    let iterations = std::env::var("LIGHTCUTS_FUZZ_ITERATIONS").ok().and_then(|v| v.parse().ok()).unwrap_or(100_000);
-    let seed = std::env::var("LIGHTCUTS_FUZZ_SEED").ok().and_then(|v| v.parse().ok()).unwrap_or(2);
+    let env = |name: &str, default: u64| std::env::var(name).ok().and_then(|v| v.parse().ok()).unwrap_or(default);
+    let (iterations, seconds, seed) = (
+        env("LIGHTCUTS_FUZZ_ITERATIONS", 1_000_000),
+        env("LIGHTCUTS_FUZZ_SECONDS", 600),
+        env("LIGHTCUTS_FUZZ_SEED", 2),
+    );
     let start = std::time::Instant::now();
-    let (loaded, rejected) = fuzz(iterations, seed);
+    let (loaded, rejected) = fuzz(iterations, seed, Some(start + std::time::Duration::from_secs(seconds)));
     println!(
-        "{iterations} iterations (seed {seed}) in {:.0} s: {loaded} loaded and rendered, {rejected} rejected, no panic",
+        "{} scene and as many OBJ mutants (seed {seed}) in {:.0} s: {loaded} scenes loaded and rendered in both modes, \
+         {rejected} rejected with a message, no panic",
+        loaded + rejected,
         start.elapsed().as_secs_f64()
     );
 }

@@ -19,6 +19,31 @@ pub struct BenchArgs {
 pub enum Bench {
     /// Light-tree build time, memory and quality.
     Tree(TreeArgs),
+    /// Shadow-ray throughput: Embree alone, the lightcuts pass, the exact pass.
+    Rays(RaysArgs),
+}
+
+#[derive(Debug, Args)]
+pub struct RaysArgs {
+    pub scene: std::path::PathBuf,
+    #[arg(long, default_value_t = 0.02)]
+    pub error: f64,
+    #[arg(long, default_value_t = 1000)]
+    pub max_cut: usize,
+    #[arg(long, value_name = "WxH", value_parser = super::parse_resolution)]
+    pub resolution: Option<(u32, u32)>,
+    #[arg(long, value_name = "N")]
+    pub spp: Option<u32>,
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    #[arg(long, default_value_t = 0)]
+    pub threads: usize,
+    #[arg(long, value_name = "x0,x1,y0,y1", value_parser = super::parse_pixel_bounds)]
+    pub pixel_bounds: Option<[u32; 4]>,
+    #[arg(long)]
+    pub json: bool,
+    #[arg(long, short)]
+    pub quiet: bool,
 }
 
 #[derive(Debug, Clone, Copy, ValueEnum)]
@@ -73,7 +98,35 @@ struct TreeReport {
 pub fn run(args: &BenchArgs) -> Result<(), CliError> {
     match &args.bench {
         Bench::Tree(t) => tree(t),
+        Bench::Rays(r) => rays(r),
     }
+}
+
+fn rays(args: &RaysArgs) -> Result<(), CliError> {
+    let scene = crate::scene::Scene::load(&args.scene)?;
+    let settings = super::render_cmd::pass_settings(&scene, args.resolution, args.spp, args.seed, args.pixel_bounds)?;
+    let cut = super::render_cmd::cut_settings(args.error, args.max_cut)?;
+    let session = crate::render::session::Session::try_new(&scene, args.threads)?;
+    let f = crate::bench::rays::measure(&session, &settings, cut, args.quiet);
+    if args.json {
+        println!("{}", serde_json::to_string_pretty(&f).expect("plain data serialises"));
+        return Ok(());
+    }
+    println!("shadow-ray throughput on {} ({} threads)", scene.path.display(), f.threads);
+    println!("  (a) Embree alone, {} recorded exact shadow rays", f.recorded_rays);
+    println!("      single-ray calls       {:>8.2} Mrays/s", f.embree_single_mrays_per_s);
+    println!("      batch calls (256)      {:>8.2} Mrays/s", f.embree_batch_mrays_per_s);
+    println!(
+        "  (b) lightcuts pass         {:>8.2} Mrays/s ({} rays in {:.3} s)",
+        f.lightcuts_mrays_per_s, f.lightcuts_shadow_rays, f.lightcuts_seconds
+    );
+    println!(
+        "  (c) exact pass             {:>8.2} Mrays/s ({} rays in {:.3} s)",
+        f.exact_mrays_per_s, f.exact_shadow_rays, f.exact_seconds
+    );
+    println!("  (b) / (a, batch)           {:>8.2}", f.lightcuts_over_embree);
+    println!("  (c) / (a, batch)           {:>8.2}", f.exact_over_embree);
+    Ok(())
 }
 
 fn tree(args: &TreeArgs) -> Result<(), CliError> {

@@ -57,6 +57,10 @@ pub struct RenderArgs {
     /// No progress output.
     #[arg(long, short)]
     pub quiet: bool,
+    /// The full statistics block: cut-size histogram, share of time in
+    /// Embree (times every ray query), peak memory.
+    #[arg(long)]
+    pub stats: bool,
 }
 
 /// Film size, samples and window after applying the command-line overrides.
@@ -117,7 +121,10 @@ pub fn run(args: &RenderArgs) -> Result<(), CliError> {
     }
     let session = Session::try_new(&scene, args.threads)?;
     let progress = Progress::for_stderr("render", args.quiet);
-    let PassResult { film, stats, seconds, trees, .. } = session.render(&settings, cut, &progress);
+    crate::embree::set_timing(args.stats);
+    let cpu_before = process_cpu_seconds();
+    let PassResult { film, stats, seconds, trees, tree_bytes } = session.render(&settings, cut, &progress);
+    let cpu_seconds = process_cpu_seconds().zip(cpu_before).map(|(after, before)| after - before);
     let mode = render_mode(cut);
 
     let meta = ExrMetadata {
@@ -173,6 +180,54 @@ pub fn run(args: &RenderArgs) -> Result<(), CliError> {
             stats.shading.max_cut
         );
     }
+    if args.stats {
+        print_full_stats(&stats, cpu_seconds, tree_bytes, session.pool.current_num_threads());
+    }
     println!("  output           {}", args.output.display());
     Ok(())
+}
+
+/// User plus system CPU time of this process, from /proc (Linux), seconds.
+fn process_cpu_seconds() -> Option<f64> {
+    let stat = std::fs::read_to_string("/proc/self/stat").ok()?;
+    // Fields after the parenthesised command name; utime and stime are the
+    // 12th and 13th of them, in clock ticks (100 per second on Linux).
+    let rest = stat.rsplit_once(')')?.1;
+    let fields: Vec<&str> = rest.split_whitespace().collect();
+    let ticks: f64 = fields.get(11)?.parse::<f64>().ok()? + fields.get(12)?.parse::<f64>().ok()?;
+    Some(ticks / 100.0)
+}
+
+fn peak_memory_mib() -> Option<f64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let kib: f64 = status.lines().find(|l| l.starts_with("VmHWM:"))?.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kib / 1024.0)
+}
+
+fn print_full_stats(stats: &crate::render::PassStats, cpu_seconds: Option<f64>, tree_bytes: usize, threads: usize) {
+    let embree = crate::embree::timed_nanos() as f64 * 1e-9;
+    println!("  statistics (--stats)");
+    println!("    render pass    {:.3} s wall on {threads} threads", stats.time.as_secs_f64());
+    // Both sides in wall-clock thread-time: with more threads than cores a
+    // descheduled thread's clock runs on in and out of Embree alike.
+    let thread_seconds = stats.time.as_secs_f64() * threads as f64;
+    println!(
+        "    Embree         {embree:.3} s in ray queries: {:.1}% of the pass's {thread_seconds:.2} thread-seconds",
+        100.0 * embree / thread_seconds.max(1e-9)
+    );
+    if let Some(cpu) = cpu_seconds {
+        println!("    CPU time       {cpu:.2} s (user + system, whole process during the pass)");
+    }
+    println!("    tree memory    {:.1} MiB", tree_bytes as f64 / (1024.0 * 1024.0));
+    if let Some(peak) = peak_memory_mib() {
+        println!("    peak memory    {peak:.1} MiB resident");
+    }
+    println!("    cut size       shading points");
+    let total = stats.shading.shading_points.max(1) as f64;
+    for (k, &count) in stats.shading.cut_histogram.iter().enumerate() {
+        if count > 0 {
+            let (lo, hi) = if k == 0 { (0u64, 1u64) } else { (1u64 << k, (1u64 << (k + 1)) - 1) };
+            println!("    {lo:>6} - {hi:<7} {count:>10} ({:5.1}%)", 100.0 * count as f64 / total);
+        }
+    }
 }

@@ -11,7 +11,9 @@ mod sys;
 
 use std::ffi::{CStr, CString};
 use std::ptr::NonNull;
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::Arc;
+use std::time::Instant;
 
 use glam::Vec3;
 
@@ -78,6 +80,34 @@ pub fn set_flush_denormals() {
 pub fn flush_denormals_enabled() -> bool {
     // SAFETY: only reads the calling thread's MXCSR.
     unsafe { sys::lc_flush_denormals_enabled() != 0 }
+}
+
+static TIMING: AtomicBool = AtomicBool::new(false);
+static TIMED_NANOS: AtomicU64 = AtomicU64::new(0);
+
+/// Turns on (or off) timing of every ray query, summed over threads, for
+/// `render --stats`. Off by default: two clock reads per call are not free.
+pub fn set_timing(enabled: bool) {
+    TIMING.store(enabled, Ordering::Relaxed);
+}
+
+/// Nanoseconds spent inside Embree queries since timing was turned on,
+/// summed over all threads.
+#[must_use]
+pub fn timed_nanos() -> u64 {
+    TIMED_NANOS.load(Ordering::Relaxed)
+}
+
+#[inline]
+fn timed<R>(query: impl FnOnce() -> R) -> R {
+    if TIMING.load(Ordering::Relaxed) {
+        let start = Instant::now();
+        let result = query();
+        TIMED_NANOS.fetch_add(start.elapsed().as_nanos() as u64, Ordering::Relaxed);
+        result
+    } else {
+        query()
+    }
 }
 
 struct DeviceHandle(NonNull<sys::LcDevice>);
@@ -330,7 +360,7 @@ impl Scene {
         let ray = ray.to_sys();
         let mut hit = sys::LcHit::default();
         // SAFETY: the scene is committed and live; ray and hit are valid for the call.
-        let found = unsafe { sys::lc_intersect1(self.raw.ptr.as_ptr(), &ray, &mut hit) };
+        let found = timed(|| unsafe { sys::lc_intersect1(self.raw.ptr.as_ptr(), &ray, &mut hit) });
         (found != 0).then(|| from_sys_hit(&hit))
     }
 
@@ -349,7 +379,7 @@ impl Scene {
     pub fn occluded(&self, ray: &Ray) -> bool {
         let ray = ray.to_sys();
         // SAFETY: the scene is committed and live; ray is valid for the call.
-        unsafe { sys::lc_occluded1(self.raw.ptr.as_ptr(), &ray) != 0 }
+        timed(|| unsafe { sys::lc_occluded1(self.raw.ptr.as_ptr(), &ray) != 0 })
     }
 
     /// Occlusion of many rays in one call into Embree (what the renderer
@@ -364,14 +394,14 @@ impl Scene {
         // is a valid array of rays.len() LcRay. `occluded` holds rays.len()
         // bools; bool is one byte and the shim writes only 0 or 1 into each,
         // both valid bool values, so writing through a u8 pointer is sound.
-        unsafe {
+        timed(|| unsafe {
             sys::lc_occluded_batch(
                 self.raw.ptr.as_ptr(),
                 rays.as_ptr().cast::<sys::LcRay>(),
                 occluded.as_mut_ptr().cast::<u8>(),
                 rays.len(),
             )
-        };
+        });
     }
 }
 
@@ -389,6 +419,17 @@ impl ShadowRay {
     #[must_use]
     pub fn new(ray: Ray) -> Self {
         Self(ray.to_sys())
+    }
+
+    /// The ray back in our own type.
+    #[must_use]
+    pub fn to_ray(&self) -> Ray {
+        Ray {
+            origin: Vec3::from_array(self.0.org),
+            direction: Vec3::from_array(self.0.dir),
+            t_near: self.0.tnear,
+            t_far: self.0.tfar,
+        }
     }
 }
 

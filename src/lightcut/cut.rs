@@ -21,11 +21,11 @@ use std::time::{Duration, Instant};
 
 use glam::DVec3;
 
-use super::bounds::{error_bound, light_term, PointBounds};
+use super::bounds::{error_bound, PointBounds};
 use crate::embree::{Scene as EmbreeScene, ShadowRay};
 use crate::light::{luminance64, Lights};
 use crate::light_tree::{ploc, Cone, LightKind, LightTree, NodeRef};
-use crate::render::direct::{BatchBuffers, LightBatch};
+use crate::render::direct::{light_sample, BatchBuffers, LightBatch};
 use crate::render::geometry::SurfacePoint;
 use crate::render::integrator::ShadingStats;
 
@@ -157,19 +157,13 @@ impl Cut<'_, '_> {
         let rep = t.node_representative(node) as usize;
         let normal = t.light_normal(rep);
         let position = t.leaves[rep].position;
-        let unoccluded = light_term(t.kind, self.sp, position, normal);
-        let ray = if unoccluded == DVec3::ZERO {
-            None
-        } else {
-            let ray = match t.kind {
-                LightKind::Directional => Some(self.sp.shadow_ray_towards(position)),
-                _ => self.sp.shadow_ray_to(position),
-            };
-            ray.map(|r| {
-                self.scratch.rays.push(r);
-                (self.scratch.rays.len() - 1) as u32
-            })
-        };
+        // M * G per unit intensity of the representative, and its shadow ray.
+        let (unoccluded, ray) =
+            light_sample(t.kind, self.sp, position, normal, glam::Vec3::ONE).unwrap_or((DVec3::ZERO, None));
+        let ray = ray.map(|r| {
+            self.scratch.rays.push(r);
+            (self.scratch.rays.len() - 1) as u32
+        });
         self.scratch.pending.push(Pending { tree, node, unoccluded, ray });
     }
 

@@ -14,6 +14,29 @@ use crate::lightcut::bounds::light_term;
 /// crossing, small enough to stay in L1/L2 (256 rays x 32 bytes = 8 KiB).
 pub const SHADOW_BATCH: usize = 256;
 
+/// One light's unoccluded contribution M * G * I at `sp` and the shadow ray
+/// that decides its visibility: None when the contribution is zero (no ray
+/// is cast), and no ray when the light is within the ray offset (nothing can
+/// lie between). The exact renderer casts exactly these rays.
+#[must_use]
+pub fn light_sample(
+    kind: LightKind,
+    sp: &SurfacePoint<'_>,
+    position: Vec3,
+    normal: Vec3,
+    intensity: Vec3,
+) -> Option<(DVec3, Option<ShadowRay>)> {
+    let value = light_term(kind, sp, position, normal) * intensity.as_dvec3();
+    if value == DVec3::ZERO {
+        return None;
+    }
+    let ray = match kind {
+        LightKind::Directional => Some(sp.shadow_ray_towards(position)),
+        _ => sp.shadow_ray_to(position),
+    };
+    Some((value, ray))
+}
+
 /// Reusable buffers for [`LightBatch`].
 #[derive(Default)]
 pub struct BatchBuffers {
@@ -44,14 +67,7 @@ impl<'a, 'p> LightBatch<'a, 'p> {
     /// light; `normal` is used by oriented lights only.
     pub fn add(&mut self, kind: LightKind, position: Vec3, normal: Vec3, intensity: Vec3) {
         self.lights += 1;
-        let value = light_term(kind, self.sp, position, normal) * intensity.as_dvec3();
-        if value == DVec3::ZERO {
-            return;
-        }
-        let ray = match kind {
-            LightKind::Directional => Some(self.sp.shadow_ray_towards(position)),
-            _ => self.sp.shadow_ray_to(position),
-        };
+        let Some((value, ray)) = light_sample(kind, self.sp, position, normal, intensity) else { return };
         match ray {
             Some(ray) => {
                 self.buffers.rays.push(ray);

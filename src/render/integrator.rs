@@ -29,6 +29,10 @@ pub struct Scratch {
     cut: CutScratch,
 }
 
+/// Buckets of the cut-size histogram: bucket k counts cuts of 2^k to
+/// 2^(k+1) - 1 nodes (bucket 0: cuts of 0 or 1 node).
+pub const CUT_HISTOGRAM_BUCKETS: usize = 24;
+
 /// Counters for one shading point or summed over many.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct ShadingStats {
@@ -37,6 +41,8 @@ pub struct ShadingStats {
     /// Sum of cut sizes over shading points (the exact mode's cut is every light).
     pub cut_nodes: u64,
     pub max_cut: u64,
+    /// Shading points by cut size (see [`CUT_HISTOGRAM_BUCKETS`]).
+    pub cut_histogram: [u64; CUT_HISTOGRAM_BUCKETS],
 }
 
 impl ShadingStats {
@@ -45,6 +51,15 @@ impl ShadingStats {
         self.shading_points += other.shading_points;
         self.cut_nodes += other.cut_nodes;
         self.max_cut = self.max_cut.max(other.max_cut);
+        for (a, b) in self.cut_histogram.iter_mut().zip(&other.cut_histogram) {
+            *a += b;
+        }
+    }
+
+    /// Records one shading point's cut of `size` nodes in the histogram.
+    pub fn record_cut(&mut self, size: u64) {
+        let bucket = (63 - size.max(1).leading_zeros()) as usize;
+        self.cut_histogram[bucket.min(CUT_HISTOGRAM_BUCKETS - 1)] += 1;
     }
 }
 
@@ -96,7 +111,8 @@ impl Integrator<'_> {
 
     fn direct_light(&self, sp: &SurfacePoint<'_>, scratch: &mut Scratch, stats: &mut ShadingStats) -> DVec3 {
         stats.shading_points += 1;
-        match self.direct {
+        let before = stats.cut_nodes;
+        let radiance = match self.direct {
             DirectLighting::Exact => {
                 let n = self.lights.len() as u64;
                 stats.cut_nodes += n;
@@ -112,7 +128,9 @@ impl Integrator<'_> {
                 &mut scratch.batch,
                 stats,
             ),
-        }
+        };
+        stats.record_cut(stats.cut_nodes - before);
+        radiance
     }
 }
 

@@ -1,0 +1,54 @@
+//! Criterion benchmark of the lightcut evaluation at a fixed set of shading
+//! points (the first hits of a 64x48 image of grid10k), at 2% and 0.5%.
+//! Run with `cargo bench --bench cut`.
+
+use criterion::{criterion_group, criterion_main, Criterion};
+use lightcuts::embree::Device;
+use lightcuts::lightcut::cut::{evaluate, CutScratch, CutSettings, LightTrees};
+use lightcuts::render::direct::BatchBuffers;
+use lightcuts::render::geometry::Geometry;
+use lightcuts::render::integrator::ShadingStats;
+use lightcuts::scene::Scene;
+
+fn cut(c: &mut Criterion) {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/grid10k.toml");
+    let scene = Scene::load(&path).expect("scenes/grid10k.toml loads");
+    let device = Device::try_new().expect("Embree device");
+    let geometry = Geometry::try_new(&device, &scene).expect("geometry");
+    let trees = LightTrees::build(&scene.lights, 0);
+    let camera = scene.camera(64, 48);
+    let points: Vec<_> = (0..48)
+        .flat_map(|y| (0..64).map(move |x| (x, y)))
+        .filter_map(|(x, y)| {
+            let ray = camera.ray(x as f32 + 0.5, y as f32 + 0.5);
+            geometry.embree.intersect(&ray).map(|hit| geometry.surface(&ray, &hit))
+        })
+        .collect();
+    let mut group = c.benchmark_group("lightcut");
+    group.sample_size(10);
+    for error in [0.02, 0.005] {
+        let settings = CutSettings { error, max_cut: 1000 };
+        group.bench_function(format!("grid10k_{}_points_error_{error}", points.len()), |b| {
+            let (mut scratch, mut batch) = (CutScratch::default(), BatchBuffers::default());
+            b.iter(|| {
+                let mut stats = ShadingStats::default();
+                for sp in &points {
+                    std::hint::black_box(evaluate(
+                        &trees.trees,
+                        sp,
+                        &geometry.embree,
+                        &settings,
+                        &mut scratch,
+                        &mut batch,
+                        &mut stats,
+                    ));
+                }
+                stats.cut_nodes
+            });
+        });
+    }
+    group.finish();
+}
+
+criterion_group!(benches, cut);
+criterion_main!(benches);

@@ -1,0 +1,129 @@
+//! `lightcuts bench rays`: shadow-ray throughput three ways on one scene and
+//! machine: (a) Embree alone on a recorded sample of the exact renderer's
+//! shadow rays, by single-ray calls and by batch calls; (b) the lightcuts
+//! pass, its shadow rays over its time; (c) the exact pass likewise.
+
+use std::time::Instant;
+
+use rayon::prelude::*;
+use serde::Serialize;
+
+use crate::embree::ShadowRay;
+use crate::light_tree::LightKind;
+use crate::lightcut::cut::CutSettings;
+use crate::render::direct::{light_sample, SHADOW_BATCH};
+use crate::render::progress::Progress;
+use crate::render::session::Session;
+use crate::render::PassSettings;
+use crate::sampling::Rng;
+
+/// Largest number of rays recorded for (a): enough for a stable figure,
+/// small enough to keep in memory (32 bytes each).
+pub const MAX_RECORDED: usize = 4_000_000;
+
+#[derive(Debug, Clone, Serialize)]
+pub struct RayFigures {
+    pub recorded_rays: usize,
+    pub embree_single_mrays_per_s: f64,
+    pub embree_batch_mrays_per_s: f64,
+    pub lightcuts_shadow_rays: u64,
+    pub lightcuts_seconds: f64,
+    pub lightcuts_mrays_per_s: f64,
+    pub exact_shadow_rays: u64,
+    pub exact_seconds: f64,
+    pub exact_mrays_per_s: f64,
+    /// (b) / (a, batch): the share of Embree's raw rate the lightcuts pass keeps.
+    pub lightcuts_over_embree: f64,
+    /// (c) / (a, batch).
+    pub exact_over_embree: f64,
+    pub threads: usize,
+}
+
+/// The shadow rays the exact renderer casts from the first hits of the
+/// pass's camera samples (sample 0 of each pixel), for every `stride`-th pixel.
+fn record(session: &Session<'_>, settings: &PassSettings, stride: usize) -> Vec<ShadowRay> {
+    let scene = session.scene;
+    let camera = scene.camera(settings.width, settings.height);
+    let b = settings.bounds;
+    let pixels: Vec<(u32, u32)> =
+        (b.y0..b.y1).flat_map(|y| (b.x0..b.x1).map(move |x| (x, y))).step_by(stride.max(1)).collect();
+    session.pool.install(|| {
+        pixels
+            .par_iter()
+            .flat_map_iter(|&(x, y)| {
+                let mut rng = Rng::from_key(&[settings.seed, u64::from(x), u64::from(y), 0]);
+                let ray = camera.ray(x as f32 + rng.next_f32(), y as f32 + rng.next_f32());
+                let mut rays = Vec::new();
+                if let Some(hit) = session.geometry.embree.intersect(&ray) {
+                    let sp = session.geometry.surface(&ray, &hit);
+                    let lights = &scene.lights;
+                    let all = lights
+                        .omni
+                        .iter()
+                        .map(|l| (LightKind::Omni, l.position, glam::Vec3::ZERO, l.intensity))
+                        .chain(lights.oriented.iter().map(|l| (LightKind::Oriented, l.position, l.normal, l.intensity)))
+                        .chain(
+                            lights
+                                .directional
+                                .iter()
+                                .map(|l| (LightKind::Directional, l.direction, glam::Vec3::ZERO, l.irradiance)),
+                        );
+                    for (kind, position, normal, intensity) in all {
+                        if let Some((_, Some(r))) = light_sample(kind, &sp, position, normal, intensity) {
+                            rays.push(r);
+                        }
+                    }
+                }
+                rays
+            })
+            .collect()
+    })
+}
+
+pub fn measure(session: &Session<'_>, settings: &PassSettings, cut: CutSettings, quiet: bool) -> RayFigures {
+    let scene = session.scene;
+    let threads = session.pool.current_num_threads();
+    // Pixels to record so that about MAX_RECORDED rays are kept.
+    let expected = settings.bounds.area() as f64 * scene.lights.len().max(1) as f64;
+    let stride = (expected / MAX_RECORDED as f64).ceil().max(1.0) as usize;
+    let rays = record(session, settings, stride);
+    let embree = &session.geometry.embree;
+    let rate = |count: usize, seconds: f64| count as f64 / seconds.max(1e-9) / 1e6;
+
+    let start = Instant::now();
+    let single: usize = session.pool.install(|| {
+        rays.par_chunks(SHADOW_BATCH).map(|chunk| chunk.iter().filter(|r| embree.occluded(&r.to_ray())).count()).sum()
+    });
+    let single_seconds = start.elapsed().as_secs_f64();
+    let start = Instant::now();
+    let batch: usize = session.pool.install(|| {
+        rays.par_chunks(SHADOW_BATCH)
+            .map_init(Vec::new, |occluded, chunk| {
+                embree.occluded_batch(chunk, occluded);
+                occluded.iter().filter(|&&o| o).count()
+            })
+            .sum()
+    });
+    let batch_seconds = start.elapsed().as_secs_f64();
+    assert_eq!(single, batch, "single and batch calls disagree on occlusion");
+
+    let lightcuts = session.render(settings, Some(cut), &Progress::for_stderr("lightcuts", quiet));
+    let exact = session.render(settings, None, &Progress::for_stderr("exact", quiet));
+    let embree_batch = rate(rays.len(), batch_seconds);
+    let (lc_rays, ex_rays) = (lightcuts.stats.shading.shadow_rays, exact.stats.shading.shadow_rays);
+    let (lc_s, ex_s) = (lightcuts.stats.time.as_secs_f64(), exact.stats.time.as_secs_f64());
+    RayFigures {
+        recorded_rays: rays.len(),
+        embree_single_mrays_per_s: rate(rays.len(), single_seconds),
+        embree_batch_mrays_per_s: embree_batch,
+        lightcuts_shadow_rays: lc_rays,
+        lightcuts_seconds: lc_s,
+        lightcuts_mrays_per_s: rate(lc_rays as usize, lc_s),
+        exact_shadow_rays: ex_rays,
+        exact_seconds: ex_s,
+        exact_mrays_per_s: rate(ex_rays as usize, ex_s),
+        lightcuts_over_embree: rate(lc_rays as usize, lc_s) / embree_batch,
+        exact_over_embree: rate(ex_rays as usize, ex_s) / embree_batch,
+        threads,
+    }
+}
