@@ -152,7 +152,9 @@ fn shading_points(material: &Material, count: usize) -> Vec<SurfacePoint<'_>> {
                 kd: Vec3::splat(0.5),
                 material,
                 distance: 1.0,
+                emitted: Vec3::ZERO,
                 epsilon: 1e-4,
+                min_distance: 1e-4,
             }
         })
         .collect()
@@ -187,6 +189,7 @@ pub fn measure_quality(
         specular: Vec3::ZERO,
         exponent: 0.0,
         mirror: Vec3::ZERO,
+        emission: Vec3::ZERO,
     };
     let points = shading_points(&material, 1000);
     let device = Device::try_new()?;

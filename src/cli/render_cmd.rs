@@ -123,7 +123,8 @@ pub fn run(args: &RenderArgs) -> Result<(), CliError> {
     let progress = Progress::for_stderr("render", args.quiet);
     crate::embree::set_timing(args.stats);
     let cpu_before = process_cpu_seconds();
-    let PassResult { film, stats, seconds, trees, tree_bytes } = session.render(&settings, cut, &progress);
+    let PassResult { film, stats, seconds, trees, tree_bytes, vpls, vpl_time, lights } =
+        session.render(&settings, cut, &progress);
     let cpu_seconds = process_cpu_seconds().zip(cpu_before).map(|(after, before)| after - before);
     let mode = render_mode(cut);
 
@@ -131,7 +132,7 @@ pub fn run(args: &RenderArgs) -> Result<(), CliError> {
         scene_file: scene.path.clone(),
         render_mode: mode.clone(),
         render_seconds: seconds,
-        lights: scene.lights.len() as u64,
+        lights: lights.iter().sum::<usize>() as u64,
         spp: settings.spp,
         seed: settings.seed,
     };
@@ -148,11 +149,14 @@ pub fn run(args: &RenderArgs) -> Result<(), CliError> {
     println!("  scene            {}", scene.path.display());
     println!(
         "  lights           {} (omni {}, oriented {}, directional {})",
-        scene.lights.len(),
-        scene.lights.omni.len(),
-        scene.lights.oriented.len(),
-        scene.lights.directional.len()
+        lights.iter().sum::<usize>(),
+        lights[0],
+        lights[1],
+        lights[2]
     );
+    if vpls > 0 {
+        println!("  indirect         {vpls} virtual point lights traced in {:.3} s", vpl_time.as_secs_f64());
+    }
     println!("  triangles        {}", scene.triangle_count());
     println!(
         "  image            {}x{}, window {}x{} at ({}, {}), {} spp",

@@ -4,6 +4,8 @@
 
 use glam::Vec3;
 
+pub mod emitters;
+
 use crate::light_tree::{LightKind, TreeLight};
 
 /// An omni-directional point light.

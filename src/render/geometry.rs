@@ -17,6 +17,8 @@ pub struct Geometry<'s> {
     /// i.e. about 500 f32 ulps of the coordinates, far above the few ulps of
     /// error in a barycentric hit point, far below any feature size.
     pub ray_epsilon: f32,
+    /// The scene's distance clamp for 1/d^2 (metres).
+    pub distance_clamp: f32,
 }
 
 impl<'s> Geometry<'s> {
@@ -35,7 +37,7 @@ impl<'s> Geometry<'s> {
         let magnitude = if lo.is_finite() && hi.is_finite() { lo.abs().max(hi.abs()).max_element() } else { 0.0 };
         // The floor keeps the offset positive for a scene of a single point at the origin.
         let ray_epsilon = (magnitude * (1.0 / 65536.0)).max(1e-30);
-        Ok(Self { scene, embree, mesh_of_geometry, ray_epsilon })
+        Ok(Self { scene, embree, mesh_of_geometry, ray_epsilon, distance_clamp: scene.distance_clamp })
     }
 
     /// The surface point of a hit along `ray`, with normals facing the ray's origin.
@@ -50,6 +52,8 @@ impl<'s> Geometry<'s> {
         let p = w * p0 + u * p1 + v * p2;
         let wo = (-ray.direction).normalize();
         let mut ng = (p1 - p0).cross(p2 - p0).normalize_or_zero();
+        // Emitters emit from the side their winding faces.
+        let front = ng.dot(wo) > 0.0;
         if ng == Vec3::ZERO {
             // A degenerate triangle Embree still reported: face the viewer.
             ng = wo;
@@ -88,7 +92,9 @@ impl<'s> Geometry<'s> {
             kd,
             material,
             distance: hit.t * ray.direction.length(),
+            emitted: if front { material.emission } else { Vec3::ZERO },
             epsilon: self.ray_epsilon,
+            min_distance: self.ray_epsilon.max(self.distance_clamp),
         }
     }
 }
@@ -110,7 +116,12 @@ pub struct SurfacePoint<'s> {
     pub material: &'s Material,
     /// Distance from the ray origin, metres.
     pub distance: f32,
+    /// Radiance the surface emits towards the viewer (area-light emitters).
+    pub emitted: Vec3,
     pub(crate) epsilon: f32,
+    /// The distance below which 1/d^2 is clamped: the ray offset, or the
+    /// scene's `render.distance_clamp` when larger.
+    pub(crate) min_distance: f32,
 }
 
 impl SurfacePoint<'_> {
@@ -159,12 +170,14 @@ impl SurfacePoint<'_> {
     }
 
     /// The distance clamp for point-light singularities: squared distances
-    /// below epsilon^2 count as epsilon^2, so a light on a surface gives a
-    /// large but finite value. Applied identically by every render mode.
+    /// below min_distance^2 count as min_distance^2 (the ray offset, or the
+    /// scene's larger `render.distance_clamp`), so a light on a surface gives
+    /// a large but finite value. Applied identically by every render mode and
+    /// by the bounds.
     #[must_use]
     pub fn min_distance_squared(&self) -> f64 {
-        // f64: epsilon may be as small as 1e-30, whose square underflows f32.
-        f64::from(self.epsilon) * f64::from(self.epsilon)
+        // f64: the offset may be as small as 1e-30, whose square underflows f32.
+        f64::from(self.min_distance) * f64::from(self.min_distance)
     }
 }
 

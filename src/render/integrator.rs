@@ -92,12 +92,18 @@ impl Integrator<'_> {
         let mut throughput = DVec3::ONE;
         for depth in 0..=self.max_mirror_depth {
             let Some(hit) = self.geometry.embree.intersect(&ray) else {
+                // The environment, seen directly or in a mirror.
+                if let Some(environment) = &self.geometry.scene.environment {
+                    result.radiance += throughput * environment.radiance(ray.direction.normalize()).as_dvec3();
+                }
                 break;
             };
             let sp = self.geometry.surface(&ray, &hit);
             if depth == 0 {
                 result.first_hit = Some(FirstHit { albedo: sp.kd, normal: sp.n, distance: sp.distance });
             }
+            // Emitters are seen with their radiance (they reflect nothing).
+            result.radiance += throughput * sp.emitted.as_dvec3();
             let direct = self.direct_light(&sp, scratch, &mut result.stats);
             result.radiance += throughput * direct;
             if !sp.material.has_mirror() || depth == self.max_mirror_depth {

@@ -12,6 +12,7 @@ pub mod geometry;
 pub mod integrator;
 pub mod progress;
 pub mod session;
+pub mod vpl;
 
 use std::time::{Duration, Instant};
 

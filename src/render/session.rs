@@ -6,7 +6,7 @@ use std::time::{Duration, Instant};
 use super::geometry::{Geometry, GeometryError};
 use super::integrator::{DirectLighting, Integrator};
 use super::progress::Progress;
-use super::{render, thread_pool, Film, PassSettings, PassStats};
+use super::{render, thread_pool, vpl, Film, PassSettings, PassStats};
 use crate::embree::{Device, EmbreeError};
 use crate::light_tree::LightKind;
 use crate::lightcut::cut::{CutSettings, LightTrees};
@@ -41,6 +41,11 @@ pub struct PassResult {
     /// Per tree built: kind, lights, build time.
     pub trees: Vec<(LightKind, usize, Duration)>,
     pub tree_bytes: usize,
+    /// Virtual point lights traced for indirect light, and the time it took.
+    pub vpls: usize,
+    pub vpl_time: Duration,
+    /// Lights of the pass, by kind (the scene's plus the VPLs): omni, oriented, directional.
+    pub lights: [usize; 3],
 }
 
 impl<'s> Session<'s> {
@@ -57,14 +62,27 @@ impl<'s> Session<'s> {
     /// the light trees first, timed as part of the pass).
     pub fn render(&self, settings: &PassSettings, cut: Option<CutSettings>, progress: &Progress) -> PassResult {
         let start = Instant::now();
-        let trees = cut.map(|_| self.pool.install(|| LightTrees::build(&self.scene.lights, settings.seed)));
+        // Indirect light: VPLs for this seed, added to the scene's oriented lights.
+        let (lights, vpls) = match self.scene.indirect {
+            Some(indirect) => {
+                let vpls =
+                    self.pool.install(|| vpl::trace(&self.geometry, &self.scene.lights, indirect, settings.seed));
+                let count = vpls.len();
+                let mut lights = self.scene.lights.clone();
+                lights.oriented.extend(vpls);
+                (std::borrow::Cow::Owned(lights), count)
+            }
+            None => (std::borrow::Cow::Borrowed(&self.scene.lights), 0),
+        };
+        let vpl_time = start.elapsed();
+        let trees = cut.map(|_| self.pool.install(|| LightTrees::build(&lights, settings.seed)));
         let direct = match (&trees, cut) {
             (Some(trees), Some(settings)) => DirectLighting::Lightcuts { trees, settings },
             _ => DirectLighting::Exact,
         };
         let integrator = Integrator {
             geometry: &self.geometry,
-            lights: &self.scene.lights,
+            lights: &lights,
             direct,
             max_mirror_depth: self.scene.max_mirror_depth,
         };
@@ -78,6 +96,7 @@ impl<'s> Session<'s> {
             ),
             None => (Vec::new(), 0),
         };
-        PassResult { film, stats, seconds, trees: tree_list, tree_bytes }
+        let counts = [lights.omni.len(), lights.oriented.len(), lights.directional.len()];
+        PassResult { film, stats, seconds, trees: tree_list, tree_bytes, vpls, vpl_time, lights: counts }
     }
 }

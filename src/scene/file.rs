@@ -23,6 +23,39 @@ pub struct SceneFile {
     pub lights: Vec<toml::Value>,
     #[serde(default)]
     pub render: RenderSpec,
+    /// Light arriving from infinitely far away, visible in the background.
+    pub environment: Option<EnvironmentSpec>,
+    /// Indirect light by instant radiosity.
+    pub indirect: Option<IndirectSpec>,
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct EnvironmentSpec {
+    /// Constant radiance, W/(m^2 sr); give this or `file`.
+    pub radiance: Option<[f32; 3]>,
+    /// A latitude-longitude OpenEXR (R, G, B in W/(m^2 sr)), +y up.
+    pub file: Option<String>,
+    /// Multiplies the file's radiance.
+    #[serde(default = "unit_f32")]
+    pub scale: f32,
+    /// Directional lights the environment becomes.
+    #[serde(default = "environment_samples")]
+    pub samples: u32,
+}
+
+fn environment_samples() -> u32 {
+    4096
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct IndirectSpec {
+    /// Light paths traced from the emitters (each leaves up to `bounces` VPLs).
+    pub paths: u32,
+    /// Diffuse bounces per path (1 = one-bounce indirect light).
+    #[serde(default = "one")]
+    pub bounces: u32,
 }
 
 #[derive(Debug, Clone, Deserialize)]
@@ -160,10 +193,61 @@ pub struct GridSpec {
     pub intensity: [f32; 3],
 }
 
+/// A parallelogram emitter of radiance `radiance` (W/(m^2 sr)) from the side
+/// u x v points to, visible to the camera, as `samples` oriented lights.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct AreaSpec {
+    pub corner: [f32; 3],
+    pub u: [f32; 3],
+    pub v: [f32; 3],
+    pub radiance: [f32; 3],
+    #[serde(default = "area_samples")]
+    pub samples: u32,
+}
+
+/// A triangle-mesh emitter (OBJ; emits from the side its winding faces).
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct AreaMeshSpec {
+    pub file: String,
+    #[serde(default = "unit_f32")]
+    pub scale: f32,
+    #[serde(default)]
+    pub translate: [f32; 3],
+    pub radiance: [f32; 3],
+    #[serde(default = "area_samples")]
+    pub samples: u32,
+}
+
+fn area_samples() -> u32 {
+    1024
+}
+
+/// The sun: irradiance (W/m^2 on a surface facing it) from `direction`
+/// (towards the sun), optionally a disc of `angular_radius` degrees.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SunSpec {
+    pub direction: [f32; 3],
+    pub irradiance: [f32; 3],
+    #[serde(default)]
+    pub angular_radius: f32,
+    #[serde(default = "sun_samples")]
+    pub samples: u32,
+}
+
+fn sun_samples() -> u32 {
+    16
+}
+
 #[derive(Debug, Clone)]
 pub enum LightSpec {
     Point(PointSpec),
     Grid(GridSpec),
+    Area(AreaSpec),
+    AreaMesh(AreaMeshSpec),
+    Sun(SunSpec),
 }
 
 /// Splits a `{ type = "...", ... }` table into its type and the rest;
@@ -210,7 +294,13 @@ impl LightSpec {
         match kind.as_str() {
             "point" => fields(rest).map(Self::Point),
             "grid" => fields(rest).map(Self::Grid),
-            other => Err((".type".into(), format!("unknown light type '{other}', expected point or grid"))),
+            "area" => fields(rest).map(Self::Area),
+            "area_mesh" => fields(rest).map(Self::AreaMesh),
+            "sun" => fields(rest).map(Self::Sun),
+            other => Err((
+                ".type".into(),
+                format!("unknown light type '{other}', expected point, grid, area, area_mesh or sun"),
+            )),
         }
     }
 }
@@ -221,11 +311,16 @@ pub struct RenderSpec {
     /// Mirror bounces followed before a path stops.
     #[serde(default = "mirror_depth")]
     pub max_mirror_depth: u32,
+    /// Metres: every light's 1/d^2 is evaluated at no less than this distance
+    /// (the instant-radiosity clamp against spikes near virtual lights),
+    /// identically in every render mode.
+    #[serde(default)]
+    pub distance_clamp: f32,
 }
 
 impl Default for RenderSpec {
     fn default() -> Self {
-        Self { max_mirror_depth: mirror_depth() }
+        Self { max_mirror_depth: mirror_depth(), distance_clamp: 0.0 }
     }
 }
 

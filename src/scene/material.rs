@@ -28,6 +28,8 @@ pub struct Material {
     pub exponent: f32,
     /// Perfect mirror reflectance.
     pub mirror: Vec3,
+    /// Emitted radiance from the front side, W/(m^2 sr) (area-light emitters).
+    pub emission: Vec3,
 }
 
 impl Material {

@@ -16,11 +16,15 @@ use glam::{Vec2, Vec3};
 
 pub use camera::Camera;
 pub use error::SceneError;
-use file::{GridSpec, LightSpec, MeshSpec, PointSpec, QuadSpec, SceneFile, ShapeSpec, SphereSpec};
+use file::{
+    AreaMeshSpec, AreaSpec, GridSpec, LightSpec, MeshSpec, PointSpec, QuadSpec, SceneFile, ShapeSpec, SphereSpec,
+    SunSpec,
+};
 pub use material::{Albedo, Material};
 pub use mesh::Mesh;
 use texture::Texture;
 
+use crate::light::emitters::{sample_area_light, sample_sun, EmitterTriangle, Environment};
 use crate::light::{Lights, OmniLight};
 
 /// Largest film accepted: 2^27 pixels (about 11600 x 11600). The renderer
@@ -52,6 +56,51 @@ pub struct Scene {
     pub meshes: Vec<Mesh>,
     pub lights: Lights,
     pub max_mirror_depth: u32,
+    /// Radiance from infinitely far away (visible in the background); its
+    /// directional lights are already in `lights`.
+    pub environment: Option<Environment>,
+    /// Instant radiosity: VPLs are traced per render (they need Embree and the seed).
+    pub indirect: Option<IndirectSettings>,
+    /// Metres: 1/d^2 is evaluated at no less than this distance.
+    pub distance_clamp: f32,
+}
+
+/// Instant-radiosity settings of a scene.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct IndirectSettings {
+    pub paths: usize,
+    pub bounces: u32,
+}
+
+/// Most light paths a scene may ask for (each leaves up to `bounces` VPLs).
+pub const MAX_VPL_PATHS: u32 = 1 << 24;
+/// Most samples one emitter may become.
+pub const MAX_EMITTER_SAMPLES: u32 = 1 << 24;
+
+/// Adds an area emitter: its visible, black, emissive geometry and its samples.
+fn add_emitter(
+    lights: &mut Lights,
+    meshes: &mut Vec<Mesh>,
+    materials: &mut Vec<Material>,
+    mut mesh: Mesh,
+    radiance: Vec3,
+    samples: u32,
+    seed: u64,
+) {
+    let triangles: Vec<EmitterTriangle> =
+        mesh.triangles.iter().map(|t| EmitterTriangle { p: t.map(|i| mesh.positions[i as usize]) }).collect();
+    lights.oriented.extend(sample_area_light(&triangles, radiance, samples as usize, 0.0, seed));
+    mesh.material = materials.len();
+    mesh.normals = None; // emission is one-sided by the triangles' winding
+    materials.push(Material {
+        name: format!("emitter {seed}"),
+        albedo: Albedo::Constant(Vec3::ZERO),
+        specular: Vec3::ZERO,
+        exponent: 0.0,
+        mirror: Vec3::ZERO,
+        emission: radiance,
+    });
+    meshes.push(mesh);
 }
 
 impl Scene {
@@ -123,7 +172,14 @@ impl Scene {
             })?;
             let mirror = v.unit_rgb(m.mirror, &field("mirror"))?;
             material_index.insert(name.clone(), materials.len());
-            materials.push(Material { name: name.clone(), albedo, specular, exponent: m.exponent, mirror });
+            materials.push(Material {
+                name: name.clone(),
+                albedo,
+                specular,
+                exponent: m.exponent,
+                mirror,
+                emission: Vec3::ZERO,
+            });
         }
 
         let mut meshes = Vec::new();
@@ -220,8 +276,92 @@ impl Scene {
                         }
                     }
                 }
+                LightSpec::Area(AreaSpec { corner, u, v: edge_v, radiance, samples }) => {
+                    let c = v.point(*corner, &field("corner"))?;
+                    let (u, w) = (v.point(*u, &field("u"))?, v.point(*edge_v, &field("v"))?);
+                    v.check(u.cross(w).length() > 0.0, &field("v"), || {
+                        "the emitter has zero area (u and v are parallel)".into()
+                    })?;
+                    let radiance = v.non_negative_rgb(*radiance, &field("radiance"))?;
+                    v.sample_count(*samples, &field("samples"))?;
+                    let mesh = Mesh::quad(c, u, w, materials.len());
+                    add_emitter(&mut lights, &mut meshes, &mut materials, mesh, radiance, *samples, i as u64);
+                }
+                LightSpec::AreaMesh(AreaMeshSpec { file, scale, translate, radiance, samples }) => {
+                    v.check(scale.is_finite() && *scale > 0.0, &field("scale"), || {
+                        format!("must be finite and > 0, got {scale}")
+                    })?;
+                    let t = v.point(*translate, &field("translate"))?;
+                    let radiance = v.non_negative_rgb(*radiance, &field("radiance"))?;
+                    v.sample_count(*samples, &field("samples"))?;
+                    let mesh_path = base.join(file);
+                    if !mesh_path.is_file() {
+                        return Err(v.error(&field("file"), &format!("mesh file '{}' not found", mesh_path.display())));
+                    }
+                    let mesh = Mesh::load_obj(&mesh_path, *scale, t, materials.len())?;
+                    if let Some(bad) = mesh.positions.iter().position(|p| !within_limits(*p)) {
+                        return Err(v.error(
+                            &field("file"),
+                            &format!("vertex {bad} is outside +/-{MAX_COORDINATE:e} m after scaling"),
+                        ));
+                    }
+                    add_emitter(&mut lights, &mut meshes, &mut materials, mesh, radiance, *samples, i as u64);
+                }
+                LightSpec::Sun(SunSpec { direction, irradiance, angular_radius, samples }) => {
+                    let d = v.point(*direction, &field("direction"))?;
+                    v.check(d.length() > 0.0, &field("direction"), || "must not be zero".into())?;
+                    let irradiance = v.non_negative_rgb(*irradiance, &field("irradiance"))?;
+                    v.check(
+                        angular_radius.is_finite() && (0.0..=45.0).contains(angular_radius),
+                        &field("angular_radius"),
+                        || format!("must be between 0 and 45 degrees, got {angular_radius}"),
+                    )?;
+                    v.sample_count(*samples, &field("samples"))?;
+                    lights.directional.extend(sample_sun(d, irradiance, *angular_radius, *samples as usize, i as u64));
+                }
             }
         }
+
+        let environment = match &spec.environment {
+            None => None,
+            Some(env) => {
+                let field = |f: &str| format!("environment.{f}");
+                v.sample_count(env.samples, &field("samples"))?;
+                v.check(env.scale.is_finite() && env.scale >= 0.0, &field("scale"), || {
+                    format!("must be finite and >= 0, got {}", env.scale)
+                })?;
+                let environment = match (&env.radiance, &env.file) {
+                    (Some(_), Some(_)) => return Err(v.error(&field("file"), "give either radiance or file, not both")),
+                    (None, None) => return Err(v.error(&field("radiance"), "missing: give radiance or file")),
+                    (Some(r), None) => Environment::Constant(v.non_negative_rgb(*r, &field("radiance"))?),
+                    (None, Some(f)) => {
+                        let exr = base.join(f);
+                        Environment::load_exr(&exr, env.scale).map_err(|m| {
+                            SceneError::new(&exr, field("file"), format!("cannot use as an environment: {m}"))
+                        })?
+                    }
+                };
+                lights.directional.extend(environment.sample(env.samples as usize, 0xe4f));
+                Some(environment)
+            }
+        };
+
+        let indirect = match &spec.indirect {
+            None => None,
+            Some(ind) => {
+                v.check(ind.paths <= MAX_VPL_PATHS, "indirect.paths", || {
+                    format!("must be at most {MAX_VPL_PATHS}, got {}", ind.paths)
+                })?;
+                v.check((1..=16).contains(&ind.bounces), "indirect.bounces", || {
+                    format!("must be between 1 and 16, got {}", ind.bounces)
+                })?;
+                Some(IndirectSettings { paths: ind.paths as usize, bounces: ind.bounces })
+            }
+        };
+        let clamp = spec.render.distance_clamp;
+        v.check((0.0..=MAX_COORDINATE).contains(&clamp), "render.distance_clamp", || {
+            format!("must be finite and >= 0, got {clamp}")
+        })?;
 
         if let Some(bad) = lights.omni.iter().position(|l| !within_limits(l.position)) {
             return Err(v.error(
@@ -242,6 +382,9 @@ impl Scene {
             meshes,
             lights,
             max_mirror_depth: spec.render.max_mirror_depth.min(64),
+            environment,
+            indirect,
+            distance_clamp: clamp,
         })
     }
 
@@ -370,6 +513,12 @@ impl Validator<'_> {
         let v = Vec3::from(c);
         self.check(v.is_finite() && v.min_element() >= 0.0, field, || format!("must be finite and >= 0, got {c:?}"))?;
         Ok(v)
+    }
+
+    fn sample_count(&self, samples: u32, field: &str) -> Result<(), SceneError> {
+        self.check((1..=MAX_EMITTER_SAMPLES).contains(&samples), field, || {
+            format!("must be between 1 and {MAX_EMITTER_SAMPLES}, got {samples}")
+        })
     }
 
     fn unit_rgb(&self, c: [f32; 3], field: &str) -> Result<Vec3, SceneError> {

@@ -26,6 +26,7 @@ fn material(rng: &mut Rng) -> Material {
         },
         exponent: exponents[rng.below(exponents.len() as u64) as usize],
         mirror: Vec3::ZERO,
+        emission: Vec3::ZERO,
     }
 }
 
@@ -51,7 +52,9 @@ fn surface<'m>(rng: &mut Rng, material: &'m Material) -> SurfacePoint<'m> {
         },
         material,
         distance: 1.0,
+        emitted: Vec3::ZERO,
         epsilon: 1e-4,
+        min_distance: 1e-4,
     }
 }
 
@@ -167,6 +170,7 @@ fn a_point_inside_the_box_gets_a_finite_bound_above_every_light() {
         specular: Vec3::ZERO,
         exponent: 0.0,
         mirror: Vec3::ZERO,
+        emission: Vec3::ZERO,
     };
     let mut rng = Rng::seeded(3);
     let sp = surface(&mut rng, &m);

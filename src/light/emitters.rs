@@ -1,0 +1,318 @@
+//! Emitters turned into point lights ([LC05] sec. 5; ../shared/LIGHTCUTS.md
+//! section 7): area lights into oriented lights, environments and the sun
+//! into directional lights. Stratified and deterministic for a seed.
+
+use std::f32::consts::PI;
+use std::path::Path;
+
+use glam::{Vec2, Vec3};
+
+use super::{luminance, DirectionalLight, OrientedLight};
+use crate::sampling::Rng;
+
+/// Stratified points on the unit square: an n_u x n_v grid (n_u * n_v >= n,
+/// as square as possible) with one jittered point per cell, the first n.
+fn stratified_square(n: usize, rng: &mut Rng) -> Vec<Vec2> {
+    let nu = (n as f64).sqrt().ceil().max(1.0) as usize;
+    let nv = n.div_ceil(nu);
+    let mut points = Vec::with_capacity(n);
+    'outer: for j in 0..nv {
+        for i in 0..nu {
+            if points.len() == n {
+                break 'outer;
+            }
+            points.push(Vec2::new((i as f32 + rng.next_f32()) / nu as f32, (j as f32 + rng.next_f32()) / nv as f32));
+        }
+    }
+    points
+}
+
+/// One emitting triangle of an area light.
+#[derive(Debug, Clone, Copy)]
+pub struct EmitterTriangle {
+    pub p: [Vec3; 3],
+}
+
+impl EmitterTriangle {
+    #[must_use]
+    pub fn area(&self) -> f32 {
+        0.5 * (self.p[1] - self.p[0]).cross(self.p[2] - self.p[0]).length()
+    }
+
+    /// Unit normal by the winding (p1 - p0) x (p2 - p0): the emitting side.
+    #[must_use]
+    pub fn normal(&self) -> Vec3 {
+        (self.p[1] - self.p[0]).cross(self.p[2] - self.p[0]).normalize_or_zero()
+    }
+}
+
+/// An area light of radiance `radiance` (W/(m^2 sr)) emitting from the front
+/// of its triangles, as `samples` oriented lights: each sample stands for
+/// area / samples of the surface and has intensity Le * area / samples along
+/// its normal (a Lambertian emitter's I(theta) = Le A cos(theta)). Samples are
+/// spread over the triangles in proportion to area, stratified in each.
+/// `offset` lifts samples off the surface so shadow rays do not start inside it.
+#[must_use]
+pub fn sample_area_light(
+    triangles: &[EmitterTriangle],
+    radiance: Vec3,
+    samples: usize,
+    offset: f32,
+    seed: u64,
+) -> Vec<OrientedLight> {
+    let total: f64 = triangles.iter().map(|t| f64::from(t.area())).sum();
+    if total <= 0.0 || samples == 0 {
+        return Vec::new();
+    }
+    let mut lights = Vec::with_capacity(samples);
+    let mut rng = Rng::from_key(&[seed, 0xa4ea]);
+    // Largest-remainder apportionment: every triangle gets its share, in order.
+    let mut assigned = 0usize;
+    let mut cumulative = 0.0f64;
+    for (k, t) in triangles.iter().enumerate() {
+        cumulative += f64::from(t.area());
+        let until =
+            if k + 1 == triangles.len() { samples } else { ((cumulative / total) * samples as f64).round() as usize };
+        let count = until.saturating_sub(assigned);
+        assigned += count;
+        let normal = t.normal();
+        for uv in stratified_square(count, &mut rng) {
+            // Fold the square onto the triangle (uniform in area).
+            let (mut a, mut b) = (uv.x, uv.y);
+            if a + b > 1.0 {
+                a = 1.0 - a;
+                b = 1.0 - b;
+            }
+            let p = t.p[0] + a * (t.p[1] - t.p[0]) + b * (t.p[2] - t.p[0]);
+            lights.push(OrientedLight { position: p + normal * offset, normal, intensity: Vec3::ZERO });
+        }
+    }
+    // Every sample carries the same share of the emitter's power.
+    let intensity = radiance * (total / lights.len().max(1) as f64) as f32;
+    for l in &mut lights {
+        l.intensity = intensity;
+    }
+    lights
+}
+
+/// The sun: `irradiance` (W/m^2 on a surface facing it) from unit
+/// `direction` (towards the sun); with an angular radius, `samples`
+/// directions spread uniformly over the disc's solid angle share it.
+#[must_use]
+pub fn sample_sun(
+    direction: Vec3,
+    irradiance: Vec3,
+    angular_radius_degrees: f32,
+    samples: usize,
+    seed: u64,
+) -> Vec<DirectionalLight> {
+    let d = direction.normalize();
+    if angular_radius_degrees <= 0.0 || samples <= 1 {
+        return vec![DirectionalLight { direction: d, irradiance }];
+    }
+    let cos_max = angular_radius_degrees.to_radians().cos();
+    let (t, b) = d.any_orthonormal_pair();
+    let mut rng = Rng::from_key(&[seed, 0x5a5]);
+    stratified_square(samples, &mut rng)
+        .into_iter()
+        .map(|uv| {
+            let cos_theta = 1.0 - uv.x * (1.0 - cos_max);
+            let sin_theta = (1.0 - cos_theta * cos_theta).max(0.0).sqrt();
+            let phi = 2.0 * PI * uv.y;
+            let dir = (d * cos_theta + t * (sin_theta * phi.cos()) + b * (sin_theta * phi.sin())).normalize();
+            DirectionalLight { direction: dir, irradiance: irradiance / samples as f32 }
+        })
+        .collect()
+}
+
+/// An environment: constant radiance, or a latitude-longitude image.
+/// Direction convention: +y is up; u = 0.5 + atan2(x, -z) / 2pi runs
+/// around the horizon, v = acos(y) / pi from the zenith (top row) down.
+#[derive(Debug, Clone)]
+pub enum Environment {
+    Constant(Vec3),
+    LatLong { width: usize, height: usize, texels: Vec<Vec3>, scale: f32 },
+}
+
+impl Environment {
+    /// Reads the R, G, B channels of a lat-long EXR.
+    pub fn load_exr(path: &Path, scale: f32) -> Result<Self, String> {
+        let image = crate::output::read::read_exr(path).map_err(|e| e.message)?;
+        let (r, g, b) = (image.channel(path, "R"), image.channel(path, "G"), image.channel(path, "B"));
+        let (r, g, b) = match (r, g, b) {
+            (Ok(r), Ok(g), Ok(b)) => (r, g, b),
+            _ => return Err("needs R, G and B channels".into()),
+        };
+        let texels: Vec<Vec3> = (0..r.len()).map(|i| Vec3::new(r[i], g[i], b[i])).collect();
+        if let Some(bad) = texels.iter().position(|t| !t.is_finite() || t.min_element() < 0.0) {
+            return Err(format!("pixel {bad} is not a finite, non-negative radiance"));
+        }
+        if texels.is_empty() {
+            return Err("the image is empty".into());
+        }
+        Ok(Self::LatLong { width: image.width, height: image.height, texels, scale })
+    }
+
+    fn pixel_of(width: usize, height: usize, d: Vec3) -> (usize, usize) {
+        let u = 0.5 + d.x.atan2(-d.z) / (2.0 * PI);
+        let v = d.y.clamp(-1.0, 1.0).acos() / PI;
+        ((u * width as f32) as usize % width.max(1), ((v * height as f32) as usize).min(height - 1))
+    }
+
+    /// Radiance arriving from unit direction `d` (W/(m^2 sr)).
+    #[must_use]
+    pub fn radiance(&self, d: Vec3) -> Vec3 {
+        match self {
+            Self::Constant(c) => *c,
+            Self::LatLong { width, height, texels, scale } => {
+                let (x, y) = Self::pixel_of(*width, *height, d);
+                texels[y * width + x] * *scale
+            }
+        }
+    }
+
+    /// `samples` directional lights: stratified importance sampling on
+    /// luminance times each pixel's solid angle, each with
+    /// irradiance L(w) / (samples * pdf(w)), so their sum estimates the
+    /// environment's illumination ([LC05] sec. 5).
+    #[must_use]
+    pub fn sample(&self, samples: usize, seed: u64) -> Vec<DirectionalLight> {
+        if samples == 0 {
+            return Vec::new();
+        }
+        let mut rng = Rng::from_key(&[seed, 0xe4f]);
+        match self {
+            Self::Constant(c) => {
+                // Uniform on the sphere, stratified in (cos theta, phi).
+                stratified_square(samples, &mut rng)
+                    .into_iter()
+                    .map(|uv| {
+                        let z = 1.0 - 2.0 * uv.x;
+                        let r = (1.0 - z * z).max(0.0).sqrt();
+                        let phi = 2.0 * PI * uv.y;
+                        let direction = Vec3::new(r * phi.cos(), z, r * phi.sin());
+                        DirectionalLight { direction, irradiance: *c * (4.0 * PI / samples as f32) }
+                    })
+                    .filter(|l| l.irradiance.max_element() > 0.0)
+                    .collect()
+            }
+            Self::LatLong { width, height, texels, scale } => {
+                let (w, h) = (*width, *height);
+                // Solid angle of a pixel in row y: (2 pi / w) (cos theta_0 - cos theta_1).
+                let solid_angle = |y: usize| {
+                    let (t0, t1) = (PI * y as f32 / h as f32, PI * (y + 1) as f32 / h as f32);
+                    2.0 * PI / w as f32 * (t0.cos() - t1.cos())
+                };
+                // Pixel weights: luminance x solid angle.
+                let weights: Vec<f64> =
+                    (0..w * h).map(|i| f64::from(luminance(texels[i]) * solid_angle(i / w))).collect();
+                let total: f64 = weights.iter().sum();
+                if total <= 0.0 {
+                    return Vec::new();
+                }
+                let mut cdf = Vec::with_capacity(w * h);
+                let mut running = 0.0;
+                for weight in &weights {
+                    running += weight / total;
+                    cdf.push(running);
+                }
+                let mut lights = Vec::with_capacity(samples);
+                for k in 0..samples {
+                    // Stratified in the CDF: sample k in [k, k+1) / samples.
+                    // The position inside the pixel is independent of k (a
+                    // jitter correlated with k biases it, as the CDF runs down
+                    // the rows).
+                    let jitter = Vec2::new(rng.next_f32(), rng.next_f32());
+                    let u = (k as f64 + f64::from(rng.next_f32())) / samples as f64;
+                    let pixel = cdf.partition_point(|&c| c < u).min(w * h - 1);
+                    let (x, y) = (pixel % w, pixel / w);
+                    // Uniform in solid angle within the pixel: uniform in
+                    // phi and in cos(theta), so the pdf is constant there.
+                    let (c0, c1) = ((PI * y as f32 / h as f32).cos(), (PI * (y + 1) as f32 / h as f32).cos());
+                    let cos_theta = c0 + (c1 - c0) * jitter.y;
+                    let sin_theta = (1.0 - cos_theta * cos_theta).max(0.0).sqrt();
+                    let phi = 2.0 * PI * ((x as f32 + jitter.x) / w as f32 - 0.5);
+                    let direction = Vec3::new(sin_theta * phi.sin(), cos_theta, -sin_theta * phi.cos());
+                    let pdf = (weights[pixel] / total) as f32 / solid_angle(y);
+                    let radiance = texels[pixel] * *scale;
+                    lights.push(DirectionalLight { direction, irradiance: radiance / (samples as f32 * pdf) });
+                }
+                lights
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn area_light_samples_carry_the_emitters_power() {
+        // A 2 x 3 quad as two triangles, radiance (1, 2, 3): power pi Le A.
+        let quad = [
+            EmitterTriangle { p: [Vec3::ZERO, Vec3::new(2.0, 0.0, 0.0), Vec3::new(2.0, 0.0, 3.0)] },
+            EmitterTriangle { p: [Vec3::ZERO, Vec3::new(2.0, 0.0, 3.0), Vec3::new(0.0, 0.0, 3.0)] },
+        ];
+        let le = Vec3::new(1.0, 2.0, 3.0);
+        for samples in [1, 7, 1000, 4096] {
+            let lights = sample_area_light(&quad, le, samples, 0.0, 3);
+            assert_eq!(lights.len(), samples);
+            // Each oriented light radiates pi * I in all (cosine lobe).
+            let power: Vec3 = lights.iter().map(|l| PI * l.intensity).sum();
+            let expected = PI * le * 6.0;
+            assert!((power - expected).abs().max_element() <= 1e-4 * expected.max_element(), "{power} vs {expected}");
+            for l in &lights {
+                assert!(l.position.x >= 0.0 && l.position.x <= 2.0 && l.position.z >= 0.0 && l.position.z <= 3.0);
+                assert!((l.normal - Vec3::new(0.0, -1.0, 0.0)).length() < 1e-6, "winding gives the normal");
+            }
+        }
+        // Deterministic for a seed, different across seeds.
+        assert_eq!(sample_area_light(&quad, le, 50, 0.0, 3), sample_area_light(&quad, le, 50, 0.0, 3));
+        assert_ne!(sample_area_light(&quad, le, 50, 0.0, 3), sample_area_light(&quad, le, 50, 0.0, 4));
+    }
+
+    #[test]
+    fn a_constant_environment_gives_pi_l_irradiance() {
+        let l = Vec3::new(0.5, 1.0, 2.0);
+        let lights = Environment::Constant(l).sample(4096, 1);
+        for n in [Vec3::Y, Vec3::X, Vec3::new(1.0, 1.0, -1.0).normalize()] {
+            let e: Vec3 = lights.iter().map(|d| d.irradiance * d.direction.dot(n).max(0.0)).sum();
+            let expected = PI * l;
+            assert!(
+                (e - expected).abs().max_element() <= 0.01 * expected.max_element(),
+                "{e} vs {expected} for n = {n}"
+            );
+        }
+    }
+
+    #[test]
+    fn a_constant_lat_long_map_gives_pi_l_too_and_sampling_follows_brightness() {
+        let (w, h) = (64, 32);
+        let map = Environment::LatLong { width: w, height: h, texels: vec![Vec3::splat(2.0); w * h], scale: 1.0 };
+        let lights = map.sample(8192, 2);
+        let e: f32 = lights.iter().map(|d| d.irradiance.x * d.direction.y.max(0.0)).sum();
+        assert!((e - 2.0 * PI).abs() <= 0.02 * 2.0 * PI, "{e}");
+        // A map bright only in its upper half sends every sample up there.
+        let mut texels = vec![Vec3::ZERO; w * h];
+        for t in &mut texels[..w * h / 2] {
+            *t = Vec3::ONE;
+        }
+        let sky = Environment::LatLong { width: w, height: h, texels, scale: 1.0 };
+        assert!(sky.sample(1000, 3).iter().all(|d| d.direction.y >= -1e-6));
+        assert_eq!(sky.radiance(Vec3::Y), Vec3::ONE);
+        assert_eq!(sky.radiance(-Vec3::Y), Vec3::ZERO);
+    }
+
+    #[test]
+    fn sun_samples_share_the_irradiance_within_the_disc() {
+        let d = Vec3::new(0.3, 1.0, 0.2).normalize();
+        let lights = sample_sun(d, Vec3::splat(100.0), 0.5, 64, 1);
+        assert_eq!(lights.len(), 64);
+        let total: Vec3 = lights.iter().map(|l| l.irradiance).sum();
+        assert!((total - Vec3::splat(100.0)).abs().max_element() < 1e-3);
+        let cos_max = 0.5f32.to_radians().cos();
+        assert!(lights.iter().all(|l| l.direction.dot(d) >= cos_max - 1e-6));
+        assert_eq!(sample_sun(d, Vec3::ONE, 0.0, 64, 1).len(), 1);
+    }
+}
