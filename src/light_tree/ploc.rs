@@ -118,7 +118,31 @@ pub fn build_with_radius(kind: LightKind, lights: &[TreeLight], seed: u64, radiu
                 write += 1;
             }
         }
-        debug_assert!(write < n, "every pass merges at least the globally closest pair");
+        if write == n {
+            // Unreachable while the pair order is strict (see `pair_size`);
+            // kept so that no floating-point surprise can loop forever: merge
+            // the first two clusters.
+            debug_assert!(false, "a pass merged nothing");
+            let (a, b) = (clusters[0], clusters[1]);
+            let full = |c: &Slim, k: usize| Cluster {
+                min: c.min,
+                max: c.max,
+                cone: if oriented { cones[k] } else { Cone::of_direction(Vec3::Z) },
+                intensity: intensities[k],
+                weight: c.weight,
+                node: c.node,
+            };
+            let merged = builder.merge(&full(&a, 0), &full(&b, 1));
+            clusters[0] = Slim::of(&merged);
+            intensities[0] = merged.intensity;
+            clusters.remove(1);
+            intensities.remove(1);
+            if oriented {
+                cones[0] = merged.cone;
+                cones.remove(1);
+            }
+            continue;
+        }
         clusters.truncate(write);
         intensities.truncate(write);
         cones.truncate(if oriented { write } else { 0 });
@@ -137,11 +161,20 @@ fn pair_size(metric: &Metric, clusters: &[Slim], cones: &[Cone], i: usize, j: us
     let (ci, cj) = (&clusters[i], &clusters[j]);
     let diagonal = ci.max.max(cj.max) - ci.min.min(cj.min);
     let weight = ci.weight + cj.weight;
-    if metric.kind == LightKind::Oriented {
+    let size = if metric.kind == LightKind::Oriented {
         let angular = 1.0 - f64::from(cones[i].union_half_angle(cones[j]).cos());
         (f64::from(weight) * (diagonal.as_dvec3().length_squared() + metric.c_squared * angular * angular)) as f32
     } else {
         weight * diagonal.length_squared()
+    };
+    // Summed intensities can overflow to infinity (lights near f32::MAX), and
+    // infinity times a zero diagonal is NaN, which compares false with
+    // everything and would break the strict order that guarantees a merge
+    // every pass: NaN counts as infinity (whose ties the hash breaks).
+    if size.is_nan() {
+        f32::INFINITY
+    } else {
+        size
     }
 }
 

@@ -197,3 +197,30 @@ fn coincident_lights_build_a_shallow_tree_not_a_chain() {
     let total = tree.node_intensity(tree.root.unwrap()).x;
     assert!((total - 100_000.0).abs() <= 1e-3, "total {total}");
 }
+
+#[test]
+fn intensities_near_f32_max_build_a_tree_and_terminate() {
+    // Sums overflow to infinity; with coincident lights infinity times a zero
+    // diagonal is NaN, which once made a pass merge nothing, forever.
+    for kind in KINDS {
+        let mut lights = random_lights(61, 5000, kind, true);
+        for (i, l) in lights.iter_mut().enumerate() {
+            l.intensity = Vec3::splat(3.4e38);
+            if i % 2 == 0 {
+                l.position = lights_first_position(kind);
+            }
+        }
+        let tree = ploc::build(kind, &lights, 1);
+        assert_eq!(tree.nodes.len(), 4999);
+        let d = depth(&tree, tree.root.unwrap());
+        assert!(d <= 64, "{kind:?}: depth {d} (a chain: one merge per pass)");
+    }
+}
+
+fn lights_first_position(kind: LightKind) -> Vec3 {
+    if kind == LightKind::Directional {
+        Vec3::Y
+    } else {
+        Vec3::ONE
+    }
+}
