@@ -14,11 +14,12 @@ bin=target/release/lightcuts
 
 declare -A WINDOWS=(
     [grid100k]="280,360,210,270"
+    [cornell]="224,288,224,288"
+    [atrium]="300,340,225,255"
 )
 
-printf '| scene | lights | window | exact (s) | lightcuts 2%% (s) | speedup | avg cut | mean rel. err | p99 rel. err | px > 2%% |\n'
-printf '|---|---|---|---|---|---|---|---|---|---|\n'
-for scene in "${@:2}"; do :; done
+printf '| scene | lights (omni / oriented / directional) | triangles | window | exact (s) | lightcuts 2%% (s) | speedup | avg cut | mean rel. err | p99 rel. err | px > 2%% |\n'
+printf '|---|---|---|---|---|---|---|---|---|---|---|\n'
 for scene in ${SCENES:-few4 grid100 grid10k grid100k}; do
     window=()
     label="full"
@@ -31,13 +32,14 @@ for scene in ${SCENES:-few4 grid100 grid10k grid100k}; do
     "$bin" compare "$out/$scene-lc.exr" "$out/$scene-exact.exr" --json --diff "$out/$scene-diff.png" >"$out/$scene-compare.json"
     t_exact=$(echo "$exact_log" | awk '/render time/ {print $3}')
     t_lc=$(echo "$lc_log" | awk '/render time/ {print $3}')
-    lights=$(echo "$lc_log" | awk '/^  lights/ {print $2}')
+    lights=$(echo "$lc_log" | awk '/^  lights/ {gsub(/[(),]/, ""); print $2 " (" $4 " / " $6 " / " $8 ")"}')
+    triangles=$(echo "$lc_log" | awk '/^  triangles/ {print $2}')
     cut=$(echo "$lc_log" | awk '/cut size/ {gsub(",", "", $4); print $4}')
-    python3 - "$scene" "$lights" "$label" "$t_exact" "$t_lc" "$cut" "$out/$scene-compare.json" <<'PY'
+    python3 - "$scene" "$lights" "$triangles" "$label" "$t_exact" "$t_lc" "$cut" "$out/$scene-compare.json" <<'PY'
 import json, sys
-scene, lights, label, te, tl, cut, path = sys.argv[1:]
+scene, lights, triangles, label, te, tl, cut, path = sys.argv[1:]
 c = json.load(open(path))
-print(f"| {scene} | {lights} | {label} | {float(te):.2f} | {float(tl):.2f} | {float(te)/float(tl):.1f}x | {cut} | "
+print(f"| {scene} | {lights} | {triangles} | {label} | {float(te):.2f} | {float(tl):.2f} | {float(te)/float(tl):.1f}x | {cut} | "
       f"{100*c['mean_relative_error']:.3f}% | {100*c['p99_relative_error']:.2f}% | {100*c['fraction_above_2_percent']:.2f}% |")
 PY
 done
