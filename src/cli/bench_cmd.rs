@@ -30,16 +30,8 @@ pub struct RaysArgs {
     pub error: f64,
     #[arg(long, default_value_t = 1000)]
     pub max_cut: usize,
-    #[arg(long, value_name = "WxH", value_parser = super::parse_resolution)]
-    pub resolution: Option<(u32, u32)>,
-    #[arg(long, value_name = "N")]
-    pub spp: Option<u32>,
-    #[arg(long, default_value_t = 0)]
-    pub seed: u64,
-    #[arg(long, default_value_t = 0)]
-    pub threads: usize,
-    #[arg(long, value_name = "x0,x1,y0,y1", value_parser = super::parse_pixel_bounds)]
-    pub pixel_bounds: Option<[u32; 4]>,
+    #[command(flatten)]
+    pub pass: super::render_cmd::PassArgs,
     #[arg(long)]
     pub json: bool,
     #[arg(long, short)]
@@ -104,9 +96,9 @@ pub fn run(args: &BenchArgs) -> Result<(), CliError> {
 
 fn rays(args: &RaysArgs) -> Result<(), CliError> {
     let scene = crate::scene::Scene::load(&args.scene)?;
-    let settings = super::render_cmd::pass_settings(&scene, args.resolution, args.spp, args.seed, args.pixel_bounds)?;
+    let settings = args.pass.settings(&scene)?;
     let cut = super::render_cmd::cut_settings(args.error, args.max_cut)?;
-    let session = crate::render::session::Session::try_new(&scene, args.threads)?;
+    let session = crate::render::session::Session::try_new(&scene, args.pass.threads)?;
     let f = crate::bench::rays::measure(&session, &settings, cut, args.quiet);
     if args.json {
         println!("{}", serde_json::to_string_pretty(&f).expect("plain data serialises"));

@@ -30,21 +30,8 @@ pub struct RenderArgs {
     /// Largest cut per shading point, in nodes.
     #[arg(long, default_value_t = 1000)]
     pub max_cut: usize,
-    /// Film size, overriding the scene's.
-    #[arg(long, value_name = "WxH", value_parser = parse_resolution)]
-    pub resolution: Option<(u32, u32)>,
-    /// Samples per pixel, overriding the scene's.
-    #[arg(long, value_name = "N")]
-    pub spp: Option<u32>,
-    /// Seed of every random choice (sample positions, representatives).
-    #[arg(long, default_value_t = 0)]
-    pub seed: u64,
-    /// Worker threads (0: one per CPU). The image does not depend on it.
-    #[arg(long, default_value_t = 0)]
-    pub threads: usize,
-    /// Render only this half-open window of the full frame, in pixels.
-    #[arg(long, value_name = "x0,x1,y0,y1", value_parser = parse_pixel_bounds)]
-    pub pixel_bounds: Option<[u32; 4]>,
+    #[command(flatten)]
+    pub pass: PassArgs,
     /// Write the beauty (R, G, B, A) as 16-bit half floats.
     #[arg(long)]
     pub half: bool,
@@ -61,6 +48,33 @@ pub struct RenderArgs {
     /// Embree (times every ray query), peak memory.
     #[arg(long)]
     pub stats: bool,
+}
+
+/// The options every rendering command shares (pbrt-style overrides).
+#[derive(Debug, Args)]
+pub struct PassArgs {
+    /// Film size, overriding the scene's.
+    #[arg(long, value_name = "WxH", value_parser = parse_resolution)]
+    pub resolution: Option<(u32, u32)>,
+    /// Samples per pixel, overriding the scene's.
+    #[arg(long, value_name = "N")]
+    pub spp: Option<u32>,
+    /// Seed of every random choice (sample positions, representatives, VPLs).
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// Worker threads (0: one per CPU). The image does not depend on it.
+    #[arg(long, default_value_t = 0)]
+    pub threads: usize,
+    /// Render only this half-open window of the full frame, in pixels.
+    #[arg(long, value_name = "x0,x1,y0,y1", value_parser = parse_pixel_bounds)]
+    pub pixel_bounds: Option<[u32; 4]>,
+}
+
+impl PassArgs {
+    /// The pass these options describe for `scene`.
+    pub fn settings(&self, scene: &Scene) -> Result<PassSettings, CliError> {
+        pass_settings(scene, self.resolution, self.spp, self.seed, self.pixel_bounds)
+    }
 }
 
 /// Film size, samples and window after applying the command-line overrides.
@@ -114,12 +128,12 @@ pub fn cut_settings(error: f64, max_cut: usize) -> Result<CutSettings, CliError>
 
 pub fn run(args: &RenderArgs) -> Result<(), CliError> {
     let scene = Scene::load(&args.scene)?;
-    let settings = pass_settings(&scene, args.resolution, args.spp, args.seed, args.pixel_bounds)?;
+    let settings = args.pass.settings(&scene)?;
     let cut = if args.exact { None } else { Some(cut_settings(args.error, args.max_cut)?) };
     if !args.exposure.is_finite() {
         return Err(CliError::Usage { flag: "--exposure", message: format!("must be finite, got {}", args.exposure) });
     }
-    let session = Session::try_new(&scene, args.threads)?;
+    let session = Session::try_new(&scene, args.pass.threads)?;
     let progress = Progress::for_stderr("render", args.quiet);
     crate::embree::set_timing(args.stats);
     let cpu_before = process_cpu_seconds();

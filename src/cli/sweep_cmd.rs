@@ -8,8 +8,8 @@ use clap::Args;
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
 
-use super::render_cmd::{cut_settings, pass_settings, render_mode};
-use super::{parse_pixel_bounds, parse_resolution, CliError};
+use super::render_cmd::{cut_settings, render_mode, PassArgs};
+use super::CliError;
 use crate::output::compare::compare_rgb;
 use crate::output::exr::{write_exr, ExrChannels, ExrMetadata};
 use crate::output::plot::{Plot, Series};
@@ -31,16 +31,8 @@ pub struct SweepArgs {
     pub out: PathBuf,
     #[arg(long, default_value_t = 1000)]
     pub max_cut: usize,
-    #[arg(long, value_name = "WxH", value_parser = parse_resolution)]
-    pub resolution: Option<(u32, u32)>,
-    #[arg(long, value_name = "N")]
-    pub spp: Option<u32>,
-    #[arg(long, default_value_t = 0)]
-    pub seed: u64,
-    #[arg(long, default_value_t = 0)]
-    pub threads: usize,
-    #[arg(long, value_name = "x0,x1,y0,y1", value_parser = parse_pixel_bounds)]
-    pub pixel_bounds: Option<[u32; 4]>,
+    #[command(flatten)]
+    pub pass: PassArgs,
     /// Print the rows as JSON instead of a table.
     #[arg(long)]
     pub json: bool,
@@ -145,7 +137,7 @@ fn reference(
 
 pub fn run(args: &SweepArgs) -> Result<(), CliError> {
     let scene = Scene::load(&args.scene)?;
-    let settings = pass_settings(&scene, args.resolution, args.spp, args.seed, args.pixel_bounds)?;
+    let settings = args.pass.settings(&scene)?;
     let cuts = args.errors.iter().map(|&e| cut_settings(e, args.max_cut)).collect::<Result<Vec<_>, _>>()?;
     if cuts.is_empty() {
         return Err(CliError::Usage { flag: "--errors", message: "give at least one threshold".into() });
@@ -163,7 +155,7 @@ pub fn run(args: &SweepArgs) -> Result<(), CliError> {
         seed: settings.seed,
         bounds: [b.x0, b.x1, b.y0, b.y1],
     };
-    let session = Session::try_new(&scene, args.threads)?;
+    let session = Session::try_new(&scene, args.pass.threads)?;
     let (reference_rgb, record) = reference(&session, &settings, &key, &args.out, args.quiet)?;
     let pixels = b.area().max(1) as f64;
     let mut rows = Vec::new();

@@ -1,0 +1,91 @@
+//! The measuring commands, run as the real binary on small inputs.
+
+mod common;
+use common::*;
+
+#[test]
+fn sweep_writes_csv_svg_png_and_reuses_its_reference() {
+    let dir = TempDir::new("sweep");
+    let scene = dir.write("s.toml", &small_scene(16));
+    let out = dir.path("out");
+    let stdout = lightcuts_ok(&[
+        "sweep",
+        s(&scene),
+        "--out",
+        s(&out),
+        "--errors",
+        "0.01,0.1",
+        "--resolution",
+        "32x24",
+        "--quiet",
+    ]);
+    assert!(stdout.contains("threshold") && stdout.contains("speedup"), "{stdout}");
+    let csv = std::fs::read_to_string(out.join("sweep.csv")).unwrap();
+    assert_eq!(csv.lines().count(), 3, "{csv}");
+    assert!(csv.starts_with("threshold,time_s,speedup"));
+    assert!(std::fs::read_to_string(out.join("sweep.svg")).unwrap().contains("<svg"));
+    assert!(png::Decoder::new(std::fs::File::open(out.join("sweep.png")).unwrap()).read_info().is_ok());
+    // The smaller threshold is no less accurate.
+    let rows: Vec<Vec<f64>> = csv.lines().skip(1).map(|l| l.split(',').map(|v| v.parse().unwrap()).collect()).collect();
+    assert!(rows[0][6] <= rows[1][6], "mean error at 1% {} vs 10% {}", rows[0][6], rows[1][6]);
+    // A second sweep with the same settings reuses the reference untouched.
+    let stamp = std::fs::metadata(out.join("reference.exr")).unwrap().modified().unwrap();
+    let json = lightcuts_ok(&[
+        "sweep",
+        s(&scene),
+        "--out",
+        s(&out),
+        "--errors",
+        "0.05",
+        "--resolution",
+        "32x24",
+        "--quiet",
+        "--json",
+    ]);
+    assert_eq!(std::fs::metadata(out.join("reference.exr")).unwrap().modified().unwrap(), stamp);
+    let rows: serde_json::Value = serde_json::from_str(&json).unwrap();
+    assert_eq!(rows.as_array().unwrap().len(), 1);
+    // Other settings render a new one.
+    lightcuts_ok(&[
+        "sweep",
+        s(&scene),
+        "--out",
+        s(&out),
+        "--errors",
+        "0.05",
+        "--resolution",
+        "32x24",
+        "--seed",
+        "3",
+        "--quiet",
+    ]);
+    assert_ne!(std::fs::metadata(out.join("reference.exr")).unwrap().modified().unwrap(), stamp);
+}
+
+#[test]
+fn bench_tree_and_rays_print_json_figures() {
+    let out =
+        lightcuts_ok(&["bench", "tree", "--lights", "1000,2000", "--quality-lights", "300", "--repeat", "1", "--json"]);
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    assert_eq!(v["builds"].as_array().unwrap().len(), 4, "two sizes, two distributions");
+    assert!(v["builds"][0]["tree_bytes_per_light"].as_f64().unwrap() > 0.0);
+    assert_eq!(v["quality"].as_array().unwrap().len(), 2);
+    let dir = TempDir::new("rays");
+    let scene = dir.write("s.toml", &small_scene(16));
+    let out = lightcuts_ok(&["bench", "rays", s(&scene), "--resolution", "32x24", "--quiet", "--json"]);
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    for key in ["embree_single_mrays_per_s", "embree_batch_mrays_per_s", "lightcuts_mrays_per_s", "exact_mrays_per_s"] {
+        assert!(v[key].as_f64().unwrap() > 0.0, "{key}: {v}");
+    }
+    assert!(v["recorded_rays"].as_u64().unwrap() > 1000);
+}
+
+#[test]
+fn render_stats_prints_the_full_block() {
+    let dir = TempDir::new("stats");
+    let scene = dir.write("s.toml", &small_scene(16));
+    let out = lightcuts_ok(&["render", s(&scene), "-o", s(&dir.path("o.exr")), "--quiet", "--stats"]);
+    for expect in ["statistics (--stats)", "Embree", "cut size       shading points", "peak memory"] {
+        assert!(out.contains(expect), "'{expect}' missing: {out}");
+    }
+}
