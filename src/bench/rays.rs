@@ -9,7 +9,6 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 use crate::embree::ShadowRay;
-use crate::light_tree::LightKind;
 use crate::lightcut::cut::CutSettings;
 use crate::render::direct::{light_sample, SHADOW_BATCH};
 use crate::render::progress::Progress;
@@ -56,23 +55,11 @@ fn record(session: &Session<'_>, settings: &PassSettings, stride: usize) -> Vec<
                 let mut rays = Vec::new();
                 if let Some(hit) = session.geometry.embree.intersect(&ray) {
                     let sp = session.geometry.surface(&ray, &hit);
-                    let lights = &scene.lights;
-                    let all = lights
-                        .omni
-                        .iter()
-                        .map(|l| (LightKind::Omni, l.position, glam::Vec3::ZERO, l.intensity))
-                        .chain(lights.oriented.iter().map(|l| (LightKind::Oriented, l.position, l.normal, l.intensity)))
-                        .chain(
-                            lights
-                                .directional
-                                .iter()
-                                .map(|l| (LightKind::Directional, l.direction, glam::Vec3::ZERO, l.irradiance)),
-                        );
-                    for (kind, position, normal, intensity) in all {
+                    scene.lights.for_each(|kind, position, normal, intensity| {
                         if let Some((_, Some(r))) = light_sample(kind, &sp, position, normal, intensity) {
                             rays.push(r);
                         }
-                    }
+                    });
                 }
                 rays
             })

@@ -66,6 +66,24 @@ impl Lights {
         }
     }
 
+    /// Calls `f(kind, position, normal, intensity)` for every light, omni
+    /// then oriented then directional, each in order: `position` is the
+    /// direction towards the light for a directional light, `normal` is zero
+    /// unless oriented, and `intensity` is a directional light's irradiance.
+    /// Three plain loops (the exact renderer's hot path; a chained iterator
+    /// branches on every light).
+    pub fn for_each(&self, mut f: impl FnMut(LightKind, Vec3, Vec3, Vec3)) {
+        for l in &self.omni {
+            f(LightKind::Omni, l.position, Vec3::ZERO, l.intensity);
+        }
+        for l in &self.oriented {
+            f(LightKind::Oriented, l.position, l.normal, l.intensity);
+        }
+        for l in &self.directional {
+            f(LightKind::Directional, l.direction, Vec3::ZERO, l.irradiance);
+        }
+    }
+
     /// The lights of one kind as tree leaves, in order.
     #[must_use]
     pub fn tree_lights(&self, kind: LightKind) -> Vec<TreeLight> {

@@ -10,7 +10,6 @@ use glam::{DVec3, Vec3};
 use super::direct::{BatchBuffers, LightBatch};
 use super::geometry::{Geometry, SurfacePoint};
 use crate::light::Lights;
-use crate::light_tree::LightKind;
 use crate::lightcut::cut::{self, CutScratch, CutSettings, LightTrees};
 
 /// How direct light is computed at each shading point.
@@ -150,15 +149,7 @@ fn exact_direct(
     stats: &mut ShadingStats,
 ) -> DVec3 {
     let mut batch = LightBatch::new(&geometry.embree, sp, &mut scratch.batch);
-    for l in &lights.omni {
-        batch.add(LightKind::Omni, l.position, Vec3::ZERO, l.intensity);
-    }
-    for l in &lights.oriented {
-        batch.add(LightKind::Oriented, l.position, l.normal, l.intensity);
-    }
-    for l in &lights.directional {
-        batch.add(LightKind::Directional, l.direction, Vec3::ZERO, l.irradiance);
-    }
+    lights.for_each(|kind, position, normal, intensity| batch.add(kind, position, normal, intensity));
     batch.finish(stats)
 }
 
