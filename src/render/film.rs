@@ -60,11 +60,3 @@ pub struct Film {
     /// bounds.area() pixels, row by row from (x0, y0).
     pub pixels: Vec<Pixel>,
 }
-
-impl Film {
-    #[must_use]
-    pub fn pixel(&self, x: u32, y: u32) -> &Pixel {
-        let b = &self.bounds;
-        &self.pixels[(y - b.y0) as usize * b.width() as usize + (x - b.x0) as usize]
-    }
-}
