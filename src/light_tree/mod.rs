@@ -151,10 +151,13 @@ impl LightTree {
         }
     }
 
-    /// Cone of normals (oriented trees only).
+    /// Cone of normals; omni and directional trees store none, and report a
+    /// zero-angle cone (their bounds and metric ignore it).
     #[must_use]
     pub fn node_cone(&self, node: NodeRef) -> Cone {
-        if node.is_leaf() {
+        if self.kind != LightKind::Oriented {
+            Cone::of_direction(Vec3::Z)
+        } else if node.is_leaf() {
             Cone::of_direction(self.light_normal[node.index()])
         } else {
             self.cones[node.index()]
@@ -198,7 +201,7 @@ impl LightTree {
                 let c = Cluster {
                     min: n.min,
                     max: n.max,
-                    cone: if self.kind == LightKind::Oriented { self.cones[i] } else { Cone::of_direction(Vec3::Z) },
+                    cone: self.node_cone(NodeRef::internal(i as u32)),
                     intensity: n.intensity,
                     weight: luminance(n.intensity),
                     node: NodeRef::internal(i as u32),
@@ -253,11 +256,7 @@ impl TreeBuilder {
         Cluster {
             min: leaf.position,
             max: leaf.position,
-            cone: if self.metric.kind == LightKind::Oriented {
-                Cone::of_direction(self.tree.light_normal[light])
-            } else {
-                Cone::of_direction(Vec3::Z)
-            },
+            cone: self.tree.node_cone(NodeRef::leaf(light as u32)),
             intensity: leaf.intensity,
             weight: luminance(leaf.intensity),
             node: NodeRef::leaf(light as u32),

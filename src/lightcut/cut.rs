@@ -24,7 +24,7 @@ use glam::DVec3;
 use super::bounds::{error_bound, PointBounds};
 use crate::embree::{Scene as EmbreeScene, ShadowRay};
 use crate::light::{luminance64, Lights};
-use crate::light_tree::{ploc, Cone, LightKind, LightTree, NodeRef};
+use crate::light_tree::{ploc, LightKind, LightTree, NodeRef};
 use crate::render::direct::{light_sample, BatchBuffers, LightBatch};
 use crate::render::geometry::SurfacePoint;
 use crate::render::integrator::ShadingStats;
@@ -176,8 +176,7 @@ impl Cut<'_, '_> {
             0.0
         } else {
             let (lo, hi) = t.node_bounds(node);
-            let cone =
-                if t.kind == LightKind::Oriented { t.node_cone(node) } else { Cone::of_direction(glam::Vec3::Z) };
+            let cone = t.node_cone(node);
             // Lights at one position (omni), or one direction (directional),
             // or one position and one normal (oriented) have identical M, G
             // and V: the representative's estimate is exact, the error 0.
