@@ -54,6 +54,51 @@ impl Slim {
     }
 }
 
+/// The clusters of a pass and what travels beside them: their cones
+/// (oriented trees only; empty otherwise) and their intensities (read only by
+/// merges, so the neighbour search does not carry them).
+struct Working {
+    clusters: Vec<Slim>,
+    cones: Vec<Cone>,
+    intensities: Vec<Vec3>,
+}
+
+impl Working {
+    fn full(&self, k: usize) -> Cluster {
+        let c = &self.clusters[k];
+        Cluster {
+            min: c.min,
+            max: c.max,
+            cone: self.cones.get(k).copied().unwrap_or(Cone::of_direction(Vec3::Z)),
+            intensity: self.intensities[k],
+            weight: c.weight,
+            node: c.node,
+        }
+    }
+
+    fn set(&mut self, k: usize, c: &Cluster) {
+        self.clusters[k] = Slim::of(c);
+        self.intensities[k] = c.intensity;
+        if let Some(cone) = self.cones.get_mut(k) {
+            *cone = c.cone;
+        }
+    }
+
+    fn copy(&mut self, from: usize, to: usize) {
+        self.clusters[to] = self.clusters[from];
+        self.intensities[to] = self.intensities[from];
+        if !self.cones.is_empty() {
+            self.cones[to] = self.cones[from];
+        }
+    }
+
+    fn truncate(&mut self, n: usize) {
+        self.clusters.truncate(n);
+        self.intensities.truncate(n);
+        self.cones.truncate(n);
+    }
+}
+
 /// Builds a light tree (on the current rayon pool).
 #[must_use]
 pub fn build(kind: LightKind, lights: &[TreeLight], seed: u64) -> LightTree {
@@ -69,52 +114,37 @@ pub fn build_with_radius(kind: LightKind, lights: &[TreeLight], seed: u64, radiu
         let root = (!lights.is_empty()).then(|| builder.leaf_cluster(0).node);
         return builder.finish(root);
     }
-    let oriented = kind == LightKind::Oriented;
     let order = morton_order(&builder.tree.leaves);
-    let mut clusters: Vec<Slim> = order.iter().map(|&i| Slim::of(&builder.leaf_cluster(i as usize))).collect();
-    let mut cones: Vec<Cone> =
-        if oriented { order.iter().map(|&i| builder.leaf_cluster(i as usize).cone).collect() } else { Vec::new() };
-    // Intensities travel beside the clusters (the neighbour search never
-    // reads them), so merges read them in order instead of from the tree.
-    let mut intensities: Vec<Vec3> = order.iter().map(|&i| builder.tree.leaves[i as usize].intensity).collect();
+    let mut work = Working {
+        clusters: order.iter().map(|&i| Slim::of(&builder.leaf_cluster(i as usize))).collect(),
+        cones: if kind == LightKind::Oriented {
+            order.iter().map(|&i| builder.leaf_cluster(i as usize).cone).collect()
+        } else {
+            Vec::new()
+        },
+        intensities: order.iter().map(|&i| builder.tree.leaves[i as usize].intensity).collect(),
+    };
     drop(order);
     let metric = builder.metric;
     let mut nearest: Vec<u32> = Vec::new();
-    while clusters.len() > 1 {
-        let n = clusters.len();
+    while work.clusters.len() > 1 {
+        let n = work.clusters.len();
         let early = kind == LightKind::Omni && n * EARLY_DIVISOR > lights.len();
         let pass_radius = if early { EARLY_RADIUS.min(radius) } else { radius };
-        nearest_neighbours(&metric, &clusters, &cones, pass_radius, &mut nearest);
+        nearest_neighbours(&metric, &work.clusters, &work.cones, pass_radius, &mut nearest);
         // Compaction in place: a merge writes to the lower index i of its pair
-        // and the write index never passes the read index, so clusters[j] for
-        // j > i is still unread when i is processed.
+        // and the write index never passes the read index, so cluster j > i
+        // is still unread when i is processed.
         let mut write = 0;
         for i in 0..n {
             let j = nearest[i] as usize;
             let mutual = nearest[j] as usize == i;
             if !mutual {
-                clusters[write] = clusters[i];
-                intensities[write] = intensities[i];
-                if oriented {
-                    cones[write] = cones[i];
-                }
+                work.copy(i, write);
                 write += 1;
             } else if i < j {
-                let full = |k: usize| Cluster {
-                    min: clusters[k].min,
-                    max: clusters[k].max,
-                    cone: if oriented { cones[k] } else { Cone::of_direction(Vec3::Z) },
-                    intensity: intensities[k],
-                    weight: clusters[k].weight,
-                    node: clusters[k].node,
-                };
-                let (a, b) = (full(i), full(j));
-                let merged = builder.merge(&a, &b);
-                clusters[write] = Slim::of(&merged);
-                intensities[write] = merged.intensity;
-                if oriented {
-                    cones[write] = merged.cone;
-                }
+                let merged = builder.merge(&work.full(i), &work.full(j));
+                work.set(write, &merged);
                 write += 1;
             }
         }
@@ -123,30 +153,16 @@ pub fn build_with_radius(kind: LightKind, lights: &[TreeLight], seed: u64, radiu
             // kept so that no floating-point surprise can loop forever: merge
             // the first two clusters.
             debug_assert!(false, "a pass merged nothing");
-            let (a, b) = (clusters[0], clusters[1]);
-            let full = |c: &Slim, k: usize| Cluster {
-                min: c.min,
-                max: c.max,
-                cone: if oriented { cones[k] } else { Cone::of_direction(Vec3::Z) },
-                intensity: intensities[k],
-                weight: c.weight,
-                node: c.node,
-            };
-            let merged = builder.merge(&full(&a, 0), &full(&b, 1));
-            clusters[0] = Slim::of(&merged);
-            intensities[0] = merged.intensity;
-            clusters.remove(1);
-            intensities.remove(1);
-            if oriented {
-                cones[0] = merged.cone;
-                cones.remove(1);
+            let merged = builder.merge(&work.full(0), &work.full(1));
+            work.set(0, &merged);
+            for k in 2..n {
+                work.copy(k, k - 1);
             }
-            continue;
+            write = n - 1;
         }
-        clusters.truncate(write);
-        intensities.truncate(write);
-        cones.truncate(if oriented { write } else { 0 });
+        work.truncate(write);
     }
+    let clusters = work.clusters;
     let root = Some(clusters[0].node);
     builder.finish(root)
 }
