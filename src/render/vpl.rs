@@ -22,6 +22,7 @@ use rayon::prelude::*;
 use super::geometry::Geometry;
 use crate::embree::Ray;
 use crate::light::{luminance, Lights, OrientedLight};
+use crate::light_tree::LightKind;
 use crate::sampling::Rng;
 use crate::scene::IndirectSettings;
 
@@ -67,17 +68,14 @@ pub fn trace(geometry: &Geometry<'_>, lights: &Lights, settings: IndirectSetting
     let radius = (0.5 * (hi - lo).length()).max(geometry.ray_epsilon);
     // Emitters with their power: 4 pi I for omni, pi I for oriented (cosine
     // lobe), E times the disc's area for directional.
-    let mut sources: Vec<(Source, Vec3)> = Vec::new();
-    sources.extend(lights.omni.iter().map(|l| (Source::Omni { position: l.position }, 4.0 * PI * l.intensity)));
-    sources.extend(
-        lights.oriented.iter().map(|l| (Source::Oriented { position: l.position, normal: l.normal }, PI * l.intensity)),
-    );
-    sources.extend(
-        lights
-            .directional
-            .iter()
-            .map(|l| (Source::Directional { direction: l.direction }, PI * radius * radius * l.irradiance)),
-    );
+    let mut sources: Vec<(Source, Vec3)> = Vec::with_capacity(lights.len());
+    lights.for_each(|kind, position, normal, intensity| {
+        sources.push(match kind {
+            LightKind::Omni => (Source::Omni { position }, 4.0 * PI * intensity),
+            LightKind::Oriented => (Source::Oriented { position, normal }, PI * intensity),
+            LightKind::Directional => (Source::Directional { direction: position }, PI * radius * radius * intensity),
+        });
+    });
     let total: f64 = sources.iter().map(|s| f64::from(luminance(s.1))).sum();
     if total <= 0.0 {
         return Vec::new();
