@@ -1,6 +1,16 @@
-"""Generates the gallery's assets (committed; rerun to reproduce them):
+"""Generates the gallery's assets, which are committed (a fresh clone needs
+them; tests/assets.rs checks that every file a scene reads is tracked):
 ring.obj (a torus), wood.png (procedural wood), sky.exr (an HDR lat-long sky).
-Needs numpy, pillow and OpenEXR from PyPI."""
+
+Run it in this directory with the PyPI packages of requirements.txt:
+
+    python3 -m venv /tmp/venv && /tmp/venv/bin/pip install -r requirements.txt
+    /tmp/venv/bin/python generate.py
+
+With those versions it reproduces all three files byte for byte. ring.obj
+depends only on Python's float formatting; wood.png depends on Pillow's
+bicubic resize and PNG encoder, and sky.exr on numpy's arithmetic and the
+OpenEXR library's ZIP encoder, so other versions may give other bytes."""
 import math
 import numpy as np
 import OpenEXR

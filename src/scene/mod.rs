@@ -63,6 +63,11 @@ pub struct Scene {
     pub indirect: Option<IndirectSettings>,
     /// Metres: 1/d^2 is evaluated at no less than this distance.
     pub distance_clamp: f32,
+    /// Every file the scene was read from, in the order it was read: the scene
+    /// file itself (when loaded from one), then its meshes, textures and
+    /// environment map. What a fresh clone must contain to render it, and
+    /// what a cached reference render depends on.
+    pub inputs: Vec<PathBuf>,
 }
 
 /// Instant-radiosity settings of a scene.
@@ -113,7 +118,9 @@ impl Scene {
         })?;
         let is_json = path.extension().is_some_and(|e| e.eq_ignore_ascii_case("json"));
         let spec = if is_json { parse_json(path, &text)? } else { parse_toml(path, &text)? };
-        Self::from_spec(path, spec)
+        let mut scene = Self::from_spec(path, spec)?;
+        scene.inputs.insert(0, path.to_path_buf());
+        Ok(scene)
     }
 
     /// Validates a parsed scene file; `path` is used for messages and to
@@ -141,6 +148,7 @@ impl Scene {
             "must not be parallel to the viewing direction".into()
         })?;
 
+        let mut inputs = Vec::new();
         let mut textures = Vec::new();
         let mut materials = Vec::new();
         let mut material_index = HashMap::new();
@@ -159,6 +167,7 @@ impl Scene {
                             format!("must be finite and > 0, got {:?}", m.texture_scale)
                         })?;
                         let texture_path = base.join(t);
+                        inputs.push(texture_path.clone());
                         textures.push(Texture::load_png(&texture_path).map_err(|e| SceneError {
                             location: format!("{} ({})", field("texture"), e.location),
                             ..e
@@ -231,6 +240,7 @@ impl Scene {
                     })?;
                     let t = v.point(*translate, &field("translate"))?;
                     let mesh_path = base.join(file);
+                    inputs.push(mesh_path.clone());
                     if !mesh_path.is_file() {
                         return Err(v.error(&field("file"), &format!("mesh file '{}' not found", mesh_path.display())));
                     }
@@ -295,6 +305,7 @@ impl Scene {
                     let radiance = v.non_negative_rgb(*radiance, &field("radiance"))?;
                     v.sample_count(*samples, &field("samples"))?;
                     let mesh_path = base.join(file);
+                    inputs.push(mesh_path.clone());
                     if !mesh_path.is_file() {
                         return Err(v.error(&field("file"), &format!("mesh file '{}' not found", mesh_path.display())));
                     }
@@ -336,6 +347,7 @@ impl Scene {
                     (Some(r), None) => Environment::Constant(v.non_negative_rgb(*r, &field("radiance"))?),
                     (None, Some(f)) => {
                         let exr = base.join(f);
+                        inputs.push(exr.clone());
                         Environment::load_exr(&exr, env.scale).map_err(|m| {
                             SceneError::new(&exr, field("file"), format!("cannot use as an environment: {m}"))
                         })?
@@ -385,6 +397,7 @@ impl Scene {
             environment,
             indirect,
             distance_clamp: clamp,
+            inputs,
         })
     }
 
