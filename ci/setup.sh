@@ -1,11 +1,25 @@
 #!/usr/bin/env bash
-# Installs the Debian packages lightcuts needs to build and test: Embree
-# (libembree-dev: Embree 3 on Debian 12, Embree 4 on Debian 13), libclang for
-# bindgen, and a C compiler for the shim. Idempotent: installs only what is
-# missing, and does nothing (not even apt-get update) when all is present.
+# Installs the Debian packages lightcuts needs. Idempotent: installs only what
+# is missing, and does nothing (not even apt-get update) when all is present.
+#
+#   ci/setup.sh          to build and render: Embree (libembree-dev: Embree 3
+#                        on Debian 12, Embree 4 on Debian 13), libclang for
+#                        bindgen, a C compiler for the shim
+#   ci/setup.sh --test   also what the tests and CI use: git (tests/assets.rs
+#                        checks that every file a scene reads is committed)
+#                        and OpenImageIO's tools (an independent reader of the
+#                        EXRs we write: oiiotool, iinfo, idiff)
 set -euo pipefail
 
 packages=(libembree-dev libclang-dev gcc libc6-dev)
+case "${1:-}" in
+"") ;;
+--test) packages+=(git openimageio-tools) ;;
+*)
+    echo "usage: ci/setup.sh [--test]" >&2
+    exit 2
+    ;;
+esac
 
 missing=()
 for p in "${packages[@]}"; do
