@@ -118,12 +118,8 @@ impl Integrator<'_> {
         stats.shading_points += 1;
         let before = stats.cut_nodes;
         let radiance = match self.direct {
-            DirectLighting::Exact => {
-                let n = self.lights.len() as u64;
-                stats.cut_nodes += n;
-                stats.max_cut = stats.max_cut.max(n);
-                exact_direct(self.geometry, self.lights, sp, scratch, stats)
-            }
+            // LightBatch::finish counts the lights (the exact cut) and the rays.
+            DirectLighting::Exact => exact_direct(self.geometry, self.lights, sp, scratch, stats),
             DirectLighting::Lightcuts { trees, settings } => cut::evaluate(
                 &trees.trees,
                 sp,

@@ -100,3 +100,82 @@ impl<'s> Session<'s> {
         PassResult { film, stats, seconds, trees: tree_list, tree_bytes, vpls, vpl_time, lights: counts }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::render::PixelBounds;
+
+    /// 2 x 2 pixels, all on a floor seen from above; `lights` TOML appended.
+    fn scene(lights: &str) -> Scene {
+        let text = format!(
+            r#"
+[film]
+width = 2
+height = 2
+[camera]
+eye = [0, 1, 0]
+look_at = [0, 0, 0]
+up = [0, 0, -1]
+fov_y = 10
+[materials.floor]
+albedo = [0.5, 0.5, 0.5]
+[[shapes]]
+type = "quad"
+corner = [-5, 0, 5]
+u = [10, 0, 0]
+v = [0, 0, -10]
+material = "floor"
+{lights}
+"#
+        );
+        Scene::from_spec(std::path::Path::new("stats.toml"), toml::from_str(&text).unwrap()).unwrap()
+    }
+
+    /// 256 lights at one point over the floor.
+    const COINCIDENT: &str = r#"
+[[lights]]
+type = "grid"
+corner = [0, 2, 0]
+u = [0, 0, 0]
+v = [0, 0, 0]
+count = [16, 16]
+intensity = [1, 1, 1]
+"#;
+
+    fn pass(scene: &Scene, cut: Option<CutSettings>) -> crate::render::integrator::ShadingStats {
+        let session = Session::try_new(scene, 1).unwrap();
+        let settings = PassSettings { width: 2, height: 2, spp: 1, seed: 0, bounds: PixelBounds::full(2, 2) };
+        let result = session.render(&settings, cut, &Progress::Silent);
+        assert_eq!(result.stats.camera_rays, 4);
+        result.stats.shading
+    }
+
+    #[test]
+    fn exact_statistics_count_every_light_once_and_every_ray_once() {
+        // One more light under the floor: evaluated (it is in the cut) but
+        // it contributes nothing, so it casts no shadow ray.
+        let under = "[[lights]]\ntype = \"point\"\nposition = [0, -1, 0]\nintensity = [1, 1, 1]\n";
+        let stats = pass(&scene(&format!("{COINCIDENT}{under}")), None);
+        assert_eq!(stats.shading_points, 4);
+        assert_eq!(stats.cut_nodes, 4 * 257, "each point's cut is every light, once");
+        assert_eq!(stats.max_cut, 257);
+        assert_eq!(stats.shadow_rays, 4 * 256, "no ray for the light under the floor");
+        let mut histogram = [0; crate::render::integrator::CUT_HISTOGRAM_BUCKETS];
+        histogram[8] = 4; // 256 <= 257 < 512
+        assert_eq!(stats.cut_histogram, histogram);
+    }
+
+    #[test]
+    fn lightcut_statistics_count_the_cut_and_its_rays() {
+        // 256 lights at one point: the root alone is exact, one ray per point.
+        let stats = pass(&scene(COINCIDENT), Some(CutSettings::default()));
+        assert_eq!(stats.shading_points, 4);
+        assert_eq!(stats.cut_nodes, 4);
+        assert_eq!(stats.max_cut, 1);
+        assert_eq!(stats.shadow_rays, 4);
+        let mut histogram = [0; crate::render::integrator::CUT_HISTOGRAM_BUCKETS];
+        histogram[0] = 4;
+        assert_eq!(stats.cut_histogram, histogram);
+    }
+}
