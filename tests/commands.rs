@@ -89,3 +89,35 @@ fn render_stats_prints_the_full_block() {
         assert!(out.contains(expect), "'{expect}' missing: {out}");
     }
 }
+
+/// A 2 x 2 PNG texture of one grey level.
+fn write_texture(path: &std::path::Path, grey: u8) {
+    let file = std::fs::File::create(path).unwrap();
+    let mut encoder = png::Encoder::new(std::io::BufWriter::new(file), 2, 2);
+    encoder.set_color(png::ColorType::Rgb);
+    encoder.set_depth(png::BitDepth::Eight);
+    encoder.write_header().unwrap().write_image_data(&[grey; 12]).unwrap();
+}
+
+#[test]
+fn sweep_renders_a_new_reference_when_a_file_the_scene_reads_changes() {
+    let dir = TempDir::new("sweep-inputs");
+    let scene = small_scene(16).replace("albedo = [0.7, 0.7, 0.7]", "texture = \"floor.png\"");
+    let scene = dir.write("s.toml", &scene);
+    write_texture(&dir.path("floor.png"), 200);
+    let out = dir.path("out");
+    let sweep = || {
+        lightcuts_ok(&["sweep", s(&scene), "--out", s(&out), "--errors", "0.05", "--resolution", "24x18", "--quiet"])
+    };
+    let reference = || read_exr(&out.join("reference.exr")).unwrap().channels["R"].clone();
+    sweep();
+    let (first, stamp) = (reference(), std::fs::metadata(out.join("reference.exr")).unwrap().modified().unwrap());
+    sweep();
+    assert_eq!(std::fs::metadata(out.join("reference.exr")).unwrap().modified().unwrap(), stamp, "reused");
+    // Same scene file, darker texture: the old reference is stale.
+    write_texture(&dir.path("floor.png"), 50);
+    sweep();
+    let second = reference();
+    assert_ne!(std::fs::metadata(out.join("reference.exr")).unwrap().modified().unwrap(), stamp, "re-rendered");
+    assert!(second.iter().sum::<f32>() < 0.5 * first.iter().sum::<f32>(), "the new reference sees the new texture");
+}

@@ -44,8 +44,13 @@ pub struct SweepArgs {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 struct ReferenceKey {
     scene: String,
-    /// SplitMix hash of the scene file's bytes.
-    scene_hash: u64,
+    /// Every file the scene read (the scene file, meshes, textures, the
+    /// environment map) with a SplitMix hash of its bytes: a changed texture
+    /// must not reuse a reference rendered with the old one.
+    inputs: Vec<(String, u64)>,
+    /// The renderer's version and a hash of its executable: a rebuilt binary
+    /// may render differently, so it renders its own reference.
+    renderer: String,
     width: u32,
     height: u32,
     spp: u32,
@@ -80,6 +85,18 @@ fn hash_bytes(bytes: &[u8]) -> u64 {
         word[..c.len()].copy_from_slice(c);
         crate::sampling::mix64(h ^ u64::from_le_bytes(word))
     })
+}
+
+fn hash_file(path: &Path) -> Result<u64, OutputError> {
+    let bytes = std::fs::read(path).map_err(|e| OutputError::new(path, format!("cannot read to hash it: {e}")))?;
+    Ok(hash_bytes(&bytes))
+}
+
+/// `lightcuts VERSION EXE-HASH`: the running binary, exactly.
+fn renderer_identity() -> Result<String, OutputError> {
+    let exe = std::env::current_exe()
+        .map_err(|e| OutputError::new(Path::new("lightcuts"), format!("cannot find the running executable: {e}")))?;
+    Ok(format!("lightcuts {} {:016x}", env!("CARGO_PKG_VERSION"), hash_file(&exe)?))
 }
 
 fn rgb(film: &Film) -> Vec<DVec3> {
@@ -144,11 +161,15 @@ pub fn run(args: &SweepArgs) -> Result<(), CliError> {
     }
     std::fs::create_dir_all(&args.out)
         .map_err(|e| OutputError::new(&args.out, format!("cannot create the directory: {e}")))?;
-    let bytes = std::fs::read(&scene.path).map_err(|e| OutputError::new(&scene.path, e.to_string()))?;
     let b = settings.bounds;
     let key = ReferenceKey {
         scene: std::fs::canonicalize(&scene.path).unwrap_or_else(|_| scene.path.clone()).display().to_string(),
-        scene_hash: hash_bytes(&bytes),
+        inputs: scene
+            .inputs
+            .iter()
+            .map(|path| Ok((path.display().to_string(), hash_file(path)?)))
+            .collect::<Result<_, OutputError>>()?,
+        renderer: renderer_identity()?,
         width: settings.width,
         height: settings.height,
         spp: settings.spp,
