@@ -243,10 +243,17 @@ fn impossible_resolutions_and_output_paths() {
     assert!(!dir.path("o.exr").exists());
 }
 
+/// Sends SIGINT with the shell's builtin kill: a minimal system (the
+/// Embree 4 chroot) has no /usr/bin/kill.
+fn interrupt(child: &std::process::Child) {
+    let killed = std::process::Command::new("sh").args(["-c", &format!("kill -INT {}", child.id())]).status().unwrap();
+    assert!(killed.success());
+}
+
 #[test]
-fn sigint_during_a_render_leaves_no_file() {
-    let dir = setup("sigint");
-    // Slow enough to still be rendering after half a second.
+fn sigint_while_rendering_exits_130_and_writes_nothing() {
+    let dir = setup("sigint-render");
+    // Still rendering (minutes of work) when interrupted after half a second.
     let text = full_scene()
         .replace("count = [2, 2]", "count = [300, 300]")
         .replace("width = 16", "width = 320")
@@ -259,11 +266,59 @@ fn sigint_during_a_render_leaves_no_file() {
         .spawn()
         .unwrap();
     std::thread::sleep(std::time::Duration::from_millis(500));
-    // The shell's builtin kill: a minimal system (the Embree 4 chroot) has no /usr/bin/kill.
-    let killed = std::process::Command::new("sh").args(["-c", &format!("kill -INT {}", child.id())]).status().unwrap();
-    assert!(killed.success());
+    interrupt(&child);
     let output = child.wait_with_output().unwrap();
     assert_eq!(output.status.code(), Some(130), "{}", String::from_utf8_lossy(&output.stderr));
     assert!(!out.exists());
     assert!(dir.files().iter().all(|f| !f.contains("slow.exr")), "{:?}", dir.files());
+}
+
+/// Interrupted while the EXR is being written: the temporary file it is
+/// written to must exist at that moment (so its removal is exercised), and
+/// afterwards neither it nor anything under the output name may exist.
+#[test]
+fn sigint_while_writing_the_exr_removes_the_temporary_file() {
+    let dir = setup("sigint-write");
+    // No lights: the 2400 x 2400 render takes a few seconds, and writing its
+    // 11 ZIP-compressed channels (250 MB of samples) takes a few more.
+    let text = r#"
+[film]
+width = 2400
+height = 2400
+[camera]
+eye = [0, 3, 6]
+look_at = [0, 0, 0]
+fov_y = 45
+[materials.grey]
+albedo = [0.5, 0.5, 0.5]
+[[shapes]]
+type = "sphere"
+center = [0, 0.5, 0]
+radius = 1
+material = "grey"
+"#;
+    let scene = dir.write("big.toml", text);
+    let out = dir.path("big.exr");
+    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_lightcuts"))
+        .args(["render", s(&scene), "-o", s(&out), "--exact", "--quiet", "--threads", "1"])
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let is_temporary = |f: &String| f.starts_with(".big.exr.") && f.ends_with(".partial");
+    let deadline = std::time::Instant::now() + std::time::Duration::from_secs(300);
+    let temporary = loop {
+        if let Some(t) = dir.files().into_iter().find(is_temporary) {
+            break t;
+        }
+        assert!(child.try_wait().unwrap().is_none(), "the render ended before its temporary file was seen");
+        assert!(std::time::Instant::now() < deadline, "no temporary file after 300 s");
+        std::thread::sleep(std::time::Duration::from_millis(2));
+    };
+    interrupt(&child);
+    let output = child.wait_with_output().unwrap();
+    assert_eq!(output.status.code(), Some(130), "{}", String::from_utf8_lossy(&output.stderr));
+    assert!(!dir.path(&temporary).exists(), "{temporary} survived the interrupt");
+    assert!(!out.exists(), "an output appeared under the output name");
+    assert!(dir.files().iter().all(|f| !f.contains("big.exr")), "{:?}", dir.files());
 }
