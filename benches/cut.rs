@@ -4,18 +4,19 @@
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use lightcuts::embree::Device;
-use lightcuts::lightcut::cut::{evaluate, CutScratch, CutSettings, LightTrees};
-use lightcuts::render::direct::BatchBuffers;
-use lightcuts::render::geometry::Geometry;
-use lightcuts::render::integrator::ShadingStats;
+use lightcuts::light::Lights;
+use lightcuts::light_tree::LightTrees;
+use lightcuts::lightcut::{evaluate, CutScratch, CutSettings};
 use lightcuts::scene::Scene;
+use lightcuts::shading::Geometry;
 
 fn cut(c: &mut Criterion) {
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/grid10k.toml");
     let scene = Scene::load(&path).expect("scenes/grid10k.toml loads");
     let device = Device::try_new().expect("Embree device");
-    let geometry = Geometry::try_new(&device, &scene).expect("geometry");
-    let trees = LightTrees::build(&scene.lights, 0);
+    let lights = Lights::from_scene(&scene);
+    let geometry = Geometry::try_new(&device, &scene, &lights).expect("geometry");
+    let trees = LightTrees::build(&lights, 0);
     let camera = scene.camera(64, 48);
     let points: Vec<_> = (0..48)
         .flat_map(|y| (0..64).map(move |x| (x, y)))
@@ -29,21 +30,15 @@ fn cut(c: &mut Criterion) {
     for error in [0.02, 0.005] {
         let settings = CutSettings { error, max_cut: 1000 };
         group.bench_function(format!("grid10k_{}_points_error_{error}", points.len()), |b| {
-            let (mut scratch, mut batch) = (CutScratch::default(), BatchBuffers::default());
+            let mut scratch = CutScratch::default();
             b.iter(|| {
-                let mut stats = ShadingStats::default();
+                let mut nodes = 0;
                 for sp in &points {
-                    std::hint::black_box(evaluate(
-                        &trees.trees,
-                        sp,
-                        &geometry.embree,
-                        &settings,
-                        &mut scratch,
-                        &mut batch,
-                        &mut stats,
-                    ));
+                    nodes +=
+                        std::hint::black_box(evaluate(&trees.trees, sp, &geometry.embree, &settings, &mut scratch))
+                            .nodes;
                 }
-                stats.cut_nodes
+                nodes
             });
         });
     }

@@ -3,13 +3,14 @@
 //! the figures (sizes up to 4M, memory, quality against greedy).
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
-use lightcuts::bench::tree::{random_lights, Distribution};
-use lightcuts::light_tree::{ploc, LightKind};
+use lightcuts::cli::bench::tree::{random_lights, Distribution};
+use lightcuts::light::LightKind;
+use lightcuts::light_tree::ploc;
 
 fn build(c: &mut Criterion) {
     let mut group = c.benchmark_group("ploc_build");
     group.sample_size(10);
-    for kind in [LightKind::Omni, LightKind::Oriented, LightKind::Directional] {
+    for kind in LightKind::ALL {
         for n in [10_000usize, 100_000] {
             let lights = random_lights(kind, n, Distribution::Clustered, 1);
             group.throughput(Throughput::Elements(n as u64));

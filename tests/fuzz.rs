@@ -14,13 +14,15 @@ use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::path::Path;
 
 use lightcuts::embree::Device;
-use lightcuts::lightcut::cut::{CutSettings, LightTrees};
+use lightcuts::light::Lights;
+use lightcuts::light_tree::LightTrees;
+use lightcuts::lightcut::CutSettings;
 use lightcuts::render::integrator::Integrator;
-use lightcuts::render::progress::Progress;
-use lightcuts::render::{self, DirectLighting, Geometry, PassSettings, PixelBounds};
-use lightcuts::sampling::Rng;
+use lightcuts::render::{self, DirectLighting, PassSettings, PixelBounds};
 use lightcuts::scene::mesh::Mesh;
 use lightcuts::scene::Scene;
+use lightcuts::shading::Geometry;
+use lightcuts::util::sampling::Rng;
 
 const SCENE: &str = r#"[film]
 width = 16
@@ -204,19 +206,20 @@ fn mutate(rng: &mut Rng, input: &[u8]) -> Vec<u8> {
 
 /// Renders a loaded scene at 4x3 in both modes; panics on a non-finite value.
 fn render_small(scene: &Scene) {
-    if scene.lights.len() > 20_000 || scene.triangle_count() > 200_000 {
+    if scene.light_count_bound() > 20_000 || scene.triangle_count() > 200_000 {
         return; // Valid but too slow for a fuzz iteration.
     }
+    let lights = Lights::from_scene(scene);
     let device = Device::try_new().unwrap();
-    let Ok(geometry) = Geometry::try_new(&device, scene) else { return };
+    let Ok(geometry) = Geometry::try_new(&device, scene, &lights) else { return };
     let camera = scene.camera(4, 3);
     let settings = PassSettings { width: 4, height: 3, spp: 1, seed: 1, bounds: PixelBounds::full(4, 3) };
-    let trees = LightTrees::build(&scene.lights, 1);
+    let trees = LightTrees::build(&lights, 1);
     for direct in [DirectLighting::Exact, DirectLighting::Lightcuts { trees: &trees, settings: CutSettings::default() }]
     {
         let integrator =
-            Integrator { geometry: &geometry, lights: &scene.lights, direct, max_mirror_depth: scene.max_mirror_depth };
-        let (film, _) = render::render(&integrator, &camera, &settings, &Progress::Silent);
+            Integrator { geometry: &geometry, lights: &lights, direct, max_mirror_depth: scene.max_mirror_depth };
+        let (film, _) = render::render(&integrator, &camera, &settings, &|_| {});
         for p in &film.pixels {
             let values = [
                 p.rgb.as_slice(),

@@ -1,8 +1,9 @@
 //! The command line. This is the only place an error becomes an exit code:
 //! everything below returns `Result`s.
 
-mod bench_cmd;
+pub mod bench;
 mod compare_cmd;
+mod progress;
 mod render_cmd;
 mod sweep_cmd;
 
@@ -29,7 +30,7 @@ pub enum Command {
     /// Speed against accuracy over a list of error thresholds.
     Sweep(sweep_cmd::SweepArgs),
     /// Benchmarks that print measured figures (--json for machines).
-    Bench(bench_cmd::BenchArgs),
+    Bench(bench::BenchArgs),
 }
 
 /// Everything that can stop a command, each naming its cause.
@@ -63,7 +64,7 @@ pub fn main() -> i32 {
     let result = match cli.command {
         Command::Render(args) => render_cmd::run(&args),
         Command::Compare(args) => compare_cmd::run(&args),
-        Command::Bench(args) => bench_cmd::run(&args),
+        Command::Bench(args) => bench::run(&args),
         Command::Sweep(args) => sweep_cmd::run(&args),
     };
     match result {
@@ -79,7 +80,7 @@ pub fn main() -> i32 {
 /// (the shell convention for death by SIGINT).
 fn ctrlc_cleanup() {
     let _ = ctrlc::set_handler(|| {
-        crate::interrupt::remove_temporaries();
+        crate::output::temporary::remove_temporaries();
         eprintln!("interrupted: no output written");
         std::process::exit(130);
     });

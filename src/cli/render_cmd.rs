@@ -4,11 +4,11 @@ use std::path::PathBuf;
 
 use clap::Args;
 
+use super::progress::Progress;
 use super::{parse_pixel_bounds, parse_resolution, CliError};
-use crate::lightcut::cut::CutSettings;
+use crate::lightcut::CutSettings;
 use crate::output::exr::{write_exr, ExrChannels, ExrMetadata};
 use crate::output::preview::write_png;
-use crate::render::progress::Progress;
 use crate::render::session::{PassResult, Session};
 use crate::render::{PassSettings, PixelBounds};
 use crate::scene::{check_resolution, Scene};
@@ -138,7 +138,7 @@ pub fn run(args: &RenderArgs) -> Result<(), CliError> {
     crate::embree::set_timing(args.stats);
     let cpu_before = process_cpu_seconds();
     let PassResult { film, stats, seconds, trees, tree_bytes, vpls, vpl_time, lights } =
-        session.render(&settings, cut, &progress);
+        session.render(&settings, cut, &|event| progress.report(event));
     let cpu_seconds = process_cpu_seconds().zip(cpu_before).map(|(after, before)| after - before);
     let mode = render_mode(cut);
 

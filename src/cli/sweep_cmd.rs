@@ -8,6 +8,7 @@ use clap::Args;
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
 
+use super::progress::Progress;
 use super::render_cmd::{cut_settings, render_mode, PassArgs};
 use super::CliError;
 use crate::output::compare::compare_rgb;
@@ -15,8 +16,7 @@ use crate::output::exr::{write_exr, ExrChannels, ExrMetadata};
 use crate::output::plot::{Plot, Series};
 use crate::output::read::read_exr;
 use crate::output::{write_atomically, OutputError};
-use crate::render::progress::Progress;
-use crate::render::session::Session;
+use crate::render::session::{PassResult, Session};
 use crate::render::{Film, PassSettings};
 use crate::scene::Scene;
 
@@ -83,7 +83,7 @@ fn hash_bytes(bytes: &[u8]) -> u64 {
     bytes.chunks(8).fold(0x243f_6a88_85a3_08d3, |h, c| {
         let mut word = [0u8; 8];
         word[..c.len()].copy_from_slice(c);
-        crate::sampling::mix64(h ^ u64::from_le_bytes(word))
+        crate::util::sampling::mix64(h ^ u64::from_le_bytes(word))
     })
 }
 
@@ -103,12 +103,12 @@ fn rgb(film: &Film) -> Vec<DVec3> {
     film.pixels.iter().map(|p| DVec3::new(f64::from(p.rgb[0]), f64::from(p.rgb[1]), f64::from(p.rgb[2]))).collect()
 }
 
-fn metadata(scene: &Scene, settings: &PassSettings, mode: String, seconds: f64) -> ExrMetadata {
+fn metadata(scene: &Scene, settings: &PassSettings, mode: String, result: &PassResult) -> ExrMetadata {
     ExrMetadata {
         scene_file: scene.path.clone(),
         render_mode: mode,
-        render_seconds: seconds,
-        lights: scene.lights.len() as u64,
+        render_seconds: result.seconds,
+        lights: result.lights.iter().sum::<usize>() as u64,
         spp: settings.spp,
         seed: settings.seed,
     }
@@ -142,8 +142,9 @@ fn reference(
             }
         }
     }
-    let result = session.render(settings, None, &Progress::for_stderr("exact", quiet));
-    let meta = metadata(session.scene, settings, "exact".into(), result.seconds);
+    let progress = Progress::for_stderr("exact", quiet);
+    let result = session.render(settings, None, &|event| progress.report(event));
+    let meta = metadata(session.scene, settings, "exact".into(), &result);
     write_exr(&exr_path, &result.film, ExrChannels { half_beauty: false, lightcut_aovs: false }, &meta)?;
     let record =
         ReferenceRecord { key: key.clone(), seconds: result.seconds, shadow_rays: result.stats.shading.shadow_rays };
@@ -181,12 +182,12 @@ pub fn run(args: &SweepArgs) -> Result<(), CliError> {
     let pixels = b.area().max(1) as f64;
     let mut rows = Vec::new();
     for cut in cuts {
-        let result =
-            session.render(&settings, Some(cut), &Progress::for_stderr(&format!("error {}", cut.error), args.quiet));
+        let progress = Progress::for_stderr(&format!("error {}", cut.error), args.quiet);
+        let result = session.render(&settings, Some(cut), &|event| progress.report(event));
         let comparison =
             compare_rgb(&rgb(&result.film), &reference_rgb, b.width() as usize, b.height() as usize).summary;
         let path = args.out.join(format!("error-{}.exr", cut.error));
-        let meta = metadata(&scene, &settings, render_mode(Some(cut)), result.seconds);
+        let meta = metadata(&scene, &settings, render_mode(Some(cut)), &result);
         write_exr(&path, &result.film, ExrChannels { half_beauty: false, lightcut_aovs: true }, &meta)?;
         let shading = &result.stats.shading;
         rows.push(SweepRow {

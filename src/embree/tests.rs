@@ -1,6 +1,6 @@
 //! The Embree wrapper against a brute-force ray-triangle intersector.
 use super::*;
-use crate::sampling::Rng;
+use crate::util::sampling::Rng;
 
 /// Möller–Trumbore in f64: the reference answer.
 fn brute_force(vertices: &[Vec3], triangles: &[[u32; 3]], ray: &Ray) -> Option<(f64, usize)> {

@@ -3,12 +3,13 @@
 //! into directional lights. Stratified and deterministic for a seed.
 
 use std::f32::consts::PI;
-use std::path::Path;
 
 use glam::{Vec2, Vec3};
 
-use super::{luminance, DirectionalLight, OrientedLight};
-use crate::sampling::Rng;
+use super::{DirectionalLight, OrientedLight};
+use crate::scene::EnvironmentMap;
+use crate::util::color::luminance;
+use crate::util::sampling::Rng;
 
 /// Stratified points on the unit square: an n_u x n_v grid (n_u * n_v >= n,
 /// as square as possible) with one jittered point per cell, the first n.
@@ -125,120 +126,72 @@ pub fn sample_sun(
         .collect()
 }
 
-/// An environment: constant radiance, or a latitude-longitude image.
-/// Direction convention: +y is up; u = 0.5 + atan2(x, -z) / 2pi runs
-/// around the horizon, v = acos(y) / pi from the zenith (top row) down.
-#[derive(Debug, Clone)]
-pub enum Environment {
-    Constant(Vec3),
-    LatLong { width: usize, height: usize, texels: Vec<Vec3>, scale: f32 },
-}
-
-impl Environment {
-    /// Reads the R, G, B channels of a lat-long EXR.
-    pub fn load_exr(path: &Path, scale: f32) -> Result<Self, String> {
-        let image = crate::output::read::read_exr(path).map_err(|e| e.message)?;
-        let (r, g, b) = (image.channel(path, "R"), image.channel(path, "G"), image.channel(path, "B"));
-        let (r, g, b) = match (r, g, b) {
-            (Ok(r), Ok(g), Ok(b)) => (r, g, b),
-            _ => return Err("needs R, G and B channels".into()),
-        };
-        let texels: Vec<Vec3> = (0..r.len()).map(|i| Vec3::new(r[i], g[i], b[i])).collect();
-        if let Some(bad) = texels.iter().position(|t| !t.is_finite() || t.min_element() < 0.0) {
-            return Err(format!("pixel {bad} is not a finite, non-negative radiance"));
-        }
-        if texels.is_empty() {
-            return Err("the image is empty".into());
-        }
-        Ok(Self::LatLong { width: image.width, height: image.height, texels, scale })
+/// The environment as `samples` directional lights: stratified importance
+/// sampling on luminance times each pixel's solid angle, each with
+/// irradiance L(w) / (samples * pdf(w)), so their sum estimates the
+/// environment's illumination ([LC05] sec. 5).
+#[must_use]
+pub fn sample_environment(map: &EnvironmentMap, samples: usize, seed: u64) -> Vec<DirectionalLight> {
+    if samples == 0 {
+        return Vec::new();
     }
-
-    fn pixel_of(width: usize, height: usize, d: Vec3) -> (usize, usize) {
-        let u = 0.5 + d.x.atan2(-d.z) / (2.0 * PI);
-        let v = d.y.clamp(-1.0, 1.0).acos() / PI;
-        ((u * width as f32) as usize % width.max(1), ((v * height as f32) as usize).min(height - 1))
-    }
-
-    /// Radiance arriving from unit direction `d` (W/(m^2 sr)).
-    #[must_use]
-    pub fn radiance(&self, d: Vec3) -> Vec3 {
-        match self {
-            Self::Constant(c) => *c,
-            Self::LatLong { width, height, texels, scale } => {
-                let (x, y) = Self::pixel_of(*width, *height, d);
-                texels[y * width + x] * *scale
-            }
+    let mut rng = Rng::from_key(&[seed, 0xe4f]);
+    match map {
+        EnvironmentMap::Constant(c) => {
+            // Uniform on the sphere, stratified in (cos theta, phi).
+            stratified_square(samples, &mut rng)
+                .into_iter()
+                .map(|uv| {
+                    let z = 1.0 - 2.0 * uv.x;
+                    let r = (1.0 - z * z).max(0.0).sqrt();
+                    let phi = 2.0 * PI * uv.y;
+                    let direction = Vec3::new(r * phi.cos(), z, r * phi.sin());
+                    DirectionalLight { direction, irradiance: *c * (4.0 * PI / samples as f32) }
+                })
+                .filter(|l| l.irradiance.max_element() > 0.0)
+                .collect()
         }
-    }
-
-    /// `samples` directional lights: stratified importance sampling on
-    /// luminance times each pixel's solid angle, each with
-    /// irradiance L(w) / (samples * pdf(w)), so their sum estimates the
-    /// environment's illumination ([LC05] sec. 5).
-    #[must_use]
-    pub fn sample(&self, samples: usize, seed: u64) -> Vec<DirectionalLight> {
-        if samples == 0 {
-            return Vec::new();
-        }
-        let mut rng = Rng::from_key(&[seed, 0xe4f]);
-        match self {
-            Self::Constant(c) => {
-                // Uniform on the sphere, stratified in (cos theta, phi).
-                stratified_square(samples, &mut rng)
-                    .into_iter()
-                    .map(|uv| {
-                        let z = 1.0 - 2.0 * uv.x;
-                        let r = (1.0 - z * z).max(0.0).sqrt();
-                        let phi = 2.0 * PI * uv.y;
-                        let direction = Vec3::new(r * phi.cos(), z, r * phi.sin());
-                        DirectionalLight { direction, irradiance: *c * (4.0 * PI / samples as f32) }
-                    })
-                    .filter(|l| l.irradiance.max_element() > 0.0)
-                    .collect()
+        EnvironmentMap::LatLong { width, height, texels, scale } => {
+            let (w, h) = (*width, *height);
+            // Solid angle of a pixel in row y: (2 pi / w) (cos theta_0 - cos theta_1).
+            let solid_angle = |y: usize| {
+                let (t0, t1) = (PI * y as f32 / h as f32, PI * (y + 1) as f32 / h as f32);
+                2.0 * PI / w as f32 * (t0.cos() - t1.cos())
+            };
+            // Pixel weights: luminance x solid angle.
+            let weights: Vec<f64> = (0..w * h).map(|i| f64::from(luminance(texels[i]) * solid_angle(i / w))).collect();
+            let total: f64 = weights.iter().sum();
+            if total <= 0.0 {
+                return Vec::new();
             }
-            Self::LatLong { width, height, texels, scale } => {
-                let (w, h) = (*width, *height);
-                // Solid angle of a pixel in row y: (2 pi / w) (cos theta_0 - cos theta_1).
-                let solid_angle = |y: usize| {
-                    let (t0, t1) = (PI * y as f32 / h as f32, PI * (y + 1) as f32 / h as f32);
-                    2.0 * PI / w as f32 * (t0.cos() - t1.cos())
-                };
-                // Pixel weights: luminance x solid angle.
-                let weights: Vec<f64> =
-                    (0..w * h).map(|i| f64::from(luminance(texels[i]) * solid_angle(i / w))).collect();
-                let total: f64 = weights.iter().sum();
-                if total <= 0.0 {
-                    return Vec::new();
-                }
-                let mut cdf = Vec::with_capacity(w * h);
-                let mut running = 0.0;
-                for weight in &weights {
-                    running += weight / total;
-                    cdf.push(running);
-                }
-                let mut lights = Vec::with_capacity(samples);
-                for k in 0..samples {
-                    // Stratified in the CDF: sample k in [k, k+1) / samples.
-                    // The position inside the pixel is independent of k (a
-                    // jitter correlated with k biases it, as the CDF runs down
-                    // the rows).
-                    let jitter = Vec2::new(rng.next_f32(), rng.next_f32());
-                    let u = (k as f64 + f64::from(rng.next_f32())) / samples as f64;
-                    let pixel = cdf.partition_point(|&c| c < u).min(w * h - 1);
-                    let (x, y) = (pixel % w, pixel / w);
-                    // Uniform in solid angle within the pixel: uniform in
-                    // phi and in cos(theta), so the pdf is constant there.
-                    let (c0, c1) = ((PI * y as f32 / h as f32).cos(), (PI * (y + 1) as f32 / h as f32).cos());
-                    let cos_theta = c0 + (c1 - c0) * jitter.y;
-                    let sin_theta = (1.0 - cos_theta * cos_theta).max(0.0).sqrt();
-                    let phi = 2.0 * PI * ((x as f32 + jitter.x) / w as f32 - 0.5);
-                    let direction = Vec3::new(sin_theta * phi.sin(), cos_theta, -sin_theta * phi.cos());
-                    let pdf = (weights[pixel] / total) as f32 / solid_angle(y);
-                    let radiance = texels[pixel] * *scale;
-                    lights.push(DirectionalLight { direction, irradiance: radiance / (samples as f32 * pdf) });
-                }
-                lights
+            let mut cdf = Vec::with_capacity(w * h);
+            let mut running = 0.0;
+            for weight in &weights {
+                running += weight / total;
+                cdf.push(running);
             }
+            let mut lights = Vec::with_capacity(samples);
+            for k in 0..samples {
+                // Stratified in the CDF: sample k in [k, k+1) / samples.
+                // The position inside the pixel is independent of k (a
+                // jitter correlated with k biases it, as the CDF runs down
+                // the rows).
+                let jitter = Vec2::new(rng.next_f32(), rng.next_f32());
+                let u = (k as f64 + f64::from(rng.next_f32())) / samples as f64;
+                let pixel = cdf.partition_point(|&c| c < u).min(w * h - 1);
+                let (x, y) = (pixel % w, pixel / w);
+                // Uniform in solid angle within the pixel: uniform in
+                // phi and in cos(theta), so the pdf is constant there.
+                let (c0, c1) = ((PI * y as f32 / h as f32).cos(), (PI * (y + 1) as f32 / h as f32).cos());
+                let cos_theta = c0 + (c1 - c0) * jitter.y;
+                let sin_theta = (1.0 - cos_theta * cos_theta).max(0.0).sqrt();
+                let phi = 2.0 * PI * ((x as f32 + jitter.x) / w as f32 - 0.5);
+                let direction = Vec3::new(sin_theta * phi.sin(), cos_theta, -sin_theta * phi.cos());
+                let pdf = (weights[pixel] / total) as f32 / solid_angle(y);
+                let radiance = texels[pixel] * *scale;
+                lights.push(DirectionalLight { direction, irradiance: radiance / (samples as f32 * pdf) });
+            }
+            lights
         }
     }
 }
@@ -275,7 +228,7 @@ mod tests {
     #[test]
     fn a_constant_environment_gives_pi_l_irradiance() {
         let l = Vec3::new(0.5, 1.0, 2.0);
-        let lights = Environment::Constant(l).sample(4096, 1);
+        let lights = sample_environment(&EnvironmentMap::Constant(l), 4096, 1);
         for n in [Vec3::Y, Vec3::X, Vec3::new(1.0, 1.0, -1.0).normalize()] {
             let e: Vec3 = lights.iter().map(|d| d.irradiance * d.direction.dot(n).max(0.0)).sum();
             let expected = PI * l;
@@ -289,8 +242,8 @@ mod tests {
     #[test]
     fn a_constant_lat_long_map_gives_pi_l_too_and_sampling_follows_brightness() {
         let (w, h) = (64, 32);
-        let map = Environment::LatLong { width: w, height: h, texels: vec![Vec3::splat(2.0); w * h], scale: 1.0 };
-        let lights = map.sample(8192, 2);
+        let map = EnvironmentMap::LatLong { width: w, height: h, texels: vec![Vec3::splat(2.0); w * h], scale: 1.0 };
+        let lights = sample_environment(&map, 8192, 2);
         let e: f32 = lights.iter().map(|d| d.irradiance.x * d.direction.y.max(0.0)).sum();
         assert!((e - 2.0 * PI).abs() <= 0.02 * 2.0 * PI, "{e}");
         // A map bright only in its upper half sends every sample up there.
@@ -298,8 +251,8 @@ mod tests {
         for t in &mut texels[..w * h / 2] {
             *t = Vec3::ONE;
         }
-        let sky = Environment::LatLong { width: w, height: h, texels, scale: 1.0 };
-        assert!(sky.sample(1000, 3).iter().all(|d| d.direction.y >= -1e-6));
+        let sky = EnvironmentMap::LatLong { width: w, height: h, texels, scale: 1.0 };
+        assert!(sample_environment(&sky, 1000, 3).iter().all(|d| d.direction.y >= -1e-6));
         assert_eq!(sky.radiance(Vec3::Y), Vec3::ONE);
         assert_eq!(sky.radiance(-Vec3::Y), Vec3::ZERO);
     }

@@ -1,12 +1,40 @@
-//! Light types. Each type gets its own light tree ([LC05] sec. 4.1,
-//! ../shared/LIGHTCUTS.md section 2); a scene builds trees only for the types
-//! it has. Every light reduces to a point light of one of three kinds.
+//! Light kinds and the lights of a scene. Every light reduces to a point
+//! light of one of three kinds, and each kind gets its own light tree
+//! ([LC05] sec. 4.1, ../shared/LIGHTCUTS.md section 2); a scene builds trees
+//! only for the kinds it has. `Lights::from_scene` turns the scene's light
+//! sources (point lights, grids, area emitters, the sun, the environment)
+//! into lights of these kinds ([LC05] sec. 5, `emitters`).
 
 use glam::Vec3;
 
 pub mod emitters;
 
-use crate::light_tree::{LightKind, TreeLight};
+use crate::scene::{LightSource, Scene};
+
+/// The three light kinds of [LC05], each with its own tree.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum LightKind {
+    /// Point lights radiating equally in all directions.
+    Omni,
+    /// Cosine-weighted lights with a normal (area-light samples, virtual point lights).
+    Oriented,
+    /// Lights at infinity from one direction (environment map samples, sun).
+    Directional,
+}
+
+impl LightKind {
+    /// Every kind, in the order the renderer visits them.
+    pub const ALL: [Self; 3] = [Self::Omni, Self::Oriented, Self::Directional];
+
+    #[must_use]
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Omni => "omni",
+            Self::Oriented => "oriented",
+            Self::Directional => "directional",
+        }
+    }
+}
 
 /// An omni-directional point light.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -37,7 +65,64 @@ pub struct DirectionalLight {
     pub irradiance: Vec3,
 }
 
-/// Every light of a scene, by type.
+/// One light of any kind.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Light {
+    Omni(OmniLight),
+    Oriented(OrientedLight),
+    Directional(DirectionalLight),
+}
+
+impl Light {
+    #[must_use]
+    pub fn kind(&self) -> LightKind {
+        match self {
+            Self::Omni(_) => LightKind::Omni,
+            Self::Oriented(_) => LightKind::Oriented,
+            Self::Directional(_) => LightKind::Directional,
+        }
+    }
+}
+
+/// What a light tree needs of one light (one leaf).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TreeLight {
+    /// The point the tree clusters: the position of an omni or oriented
+    /// light, the unit direction towards a directional light.
+    pub point: Vec3,
+    /// Unit normal of an oriented light; zero for the other kinds.
+    pub normal: Vec3,
+    /// W/sr (omni, oriented), or a directional light's irradiance in W/m^2.
+    pub intensity: Vec3,
+}
+
+impl TreeLight {
+    /// The leaf of `light`.
+    #[must_use]
+    pub fn of(light: &Light) -> Self {
+        match *light {
+            Light::Omni(l) => Self { point: l.position, normal: Vec3::ZERO, intensity: l.intensity },
+            Light::Oriented(l) => Self { point: l.position, normal: l.normal, intensity: l.intensity },
+            Light::Directional(l) => Self { point: l.direction, normal: Vec3::ZERO, intensity: l.irradiance },
+        }
+    }
+
+    /// The light this leaf stands for, given its tree's kind.
+    #[must_use]
+    pub fn light(&self, kind: LightKind) -> Light {
+        match kind {
+            LightKind::Omni => Light::Omni(OmniLight { position: self.point, intensity: self.intensity }),
+            LightKind::Oriented => {
+                Light::Oriented(OrientedLight { position: self.point, normal: self.normal, intensity: self.intensity })
+            }
+            LightKind::Directional => {
+                Light::Directional(DirectionalLight { direction: self.point, irradiance: self.intensity })
+            }
+        }
+    }
+}
+
+/// Every light of a scene, by kind.
 #[derive(Debug, Clone, Default)]
 pub struct Lights {
     pub omni: Vec<OmniLight>,
@@ -46,6 +131,61 @@ pub struct Lights {
 }
 
 impl Lights {
+    /// The scene's light sources as lights, in file order within each kind,
+    /// then the environment's directional lights. Deterministic: every
+    /// emitter samples from its own seeded stream.
+    #[must_use]
+    pub fn from_scene(scene: &Scene) -> Self {
+        let mut lights = Self::default();
+        for source in &scene.lights {
+            match *source {
+                LightSource::Point { position, intensity } => lights.omni.push(OmniLight { position, intensity }),
+                LightSource::Grid { corner, u, v, count, intensity } => {
+                    for j in 0..count[1] {
+                        for k in 0..count[0] {
+                            // Cell centres: the grid is symmetric within its parallelogram.
+                            let s = (k as f32 + 0.5) / count[0] as f32;
+                            let t = (j as f32 + 0.5) / count[1] as f32;
+                            lights.omni.push(OmniLight { position: corner + s * u + t * v, intensity });
+                        }
+                    }
+                }
+                LightSource::Area { mesh, radiance, samples, seed } => {
+                    let mesh = &scene.meshes[mesh];
+                    let triangles: Vec<emitters::EmitterTriangle> = mesh
+                        .triangles
+                        .iter()
+                        .map(|t| emitters::EmitterTriangle { p: t.map(|i| mesh.positions[i as usize]) })
+                        .collect();
+                    lights.oriented.extend(emitters::sample_area_light(
+                        &triangles,
+                        radiance,
+                        samples as usize,
+                        0.0,
+                        seed,
+                    ));
+                }
+                LightSource::Sun { direction, irradiance, angular_radius_degrees, samples, seed } => {
+                    lights.directional.extend(emitters::sample_sun(
+                        direction,
+                        irradiance,
+                        angular_radius_degrees,
+                        samples as usize,
+                        seed,
+                    ));
+                }
+            }
+        }
+        if let Some(environment) = &scene.environment {
+            lights.directional.extend(emitters::sample_environment(
+                &environment.map,
+                environment.samples as usize,
+                0xe4f,
+            ));
+        }
+        lights
+    }
+
     #[must_use]
     pub fn len(&self) -> usize {
         self.omni.len() + self.oriented.len() + self.directional.len()
@@ -66,21 +206,19 @@ impl Lights {
         }
     }
 
-    /// Calls `f(kind, position, normal, intensity)` for every light, omni
-    /// then oriented then directional, each in order: `position` is the
-    /// direction towards the light for a directional light, `normal` is zero
-    /// unless oriented, and `intensity` is a directional light's irradiance.
-    /// Three plain loops (the exact renderer's hot path; a chained iterator
-    /// branches on every light).
-    pub fn for_each(&self, mut f: impl FnMut(LightKind, Vec3, Vec3, Vec3)) {
+    /// Calls `f` for every light, omni then oriented then directional, each
+    /// in order. Three plain loops: after inlining, each loop's `Light`
+    /// variant is known, so the exact renderer's hot path does not branch
+    /// on the kind per light.
+    pub fn for_each(&self, mut f: impl FnMut(Light)) {
         for l in &self.omni {
-            f(LightKind::Omni, l.position, Vec3::ZERO, l.intensity);
+            f(Light::Omni(*l));
         }
         for l in &self.oriented {
-            f(LightKind::Oriented, l.position, l.normal, l.intensity);
+            f(Light::Oriented(*l));
         }
         for l in &self.directional {
-            f(LightKind::Directional, l.direction, Vec3::ZERO, l.irradiance);
+            f(Light::Directional(*l));
         }
     }
 
@@ -88,34 +226,77 @@ impl Lights {
     #[must_use]
     pub fn tree_lights(&self, kind: LightKind) -> Vec<TreeLight> {
         match kind {
-            LightKind::Omni => self
-                .omni
-                .iter()
-                .map(|l| TreeLight { position: l.position, normal: Vec3::ZERO, intensity: l.intensity })
-                .collect(),
-            LightKind::Oriented => self
-                .oriented
-                .iter()
-                .map(|l| TreeLight { position: l.position, normal: l.normal, intensity: l.intensity })
-                .collect(),
-            LightKind::Directional => self
-                .directional
-                .iter()
-                .map(|l| TreeLight { position: l.direction, normal: Vec3::ZERO, intensity: l.irradiance })
-                .collect(),
+            LightKind::Omni => self.omni.iter().map(|l| TreeLight::of(&Light::Omni(*l))).collect(),
+            LightKind::Oriented => self.oriented.iter().map(|l| TreeLight::of(&Light::Oriented(*l))).collect(),
+            LightKind::Directional => self.directional.iter().map(|l| TreeLight::of(&Light::Directional(*l))).collect(),
         }
     }
 }
 
-/// The scalar a light's RGB value is compared on: Rec. 709 luminance. Used
-/// for representative selection probabilities and for cut error bounds.
-#[must_use]
-pub fn luminance(rgb: Vec3) -> f32 {
-    0.2126 * rgb.x + 0.7152 * rgb.y + 0.0722 * rgb.z
-}
+#[cfg(test)]
+mod tests {
+    use super::*;
 
-/// Luminance in f64.
-#[must_use]
-pub fn luminance64(rgb: glam::DVec3) -> f64 {
-    0.2126 * rgb.x + 0.7152 * rgb.y + 0.0722 * rgb.z
+    #[test]
+    fn a_scene_becomes_lights_of_each_kind_in_file_order() {
+        let text = r#"
+[film]
+width = 4
+height = 4
+[camera]
+eye = [0, 1, 4]
+look_at = [0, 0, 0]
+fov_y = 45
+[[lights]]
+type = "point"
+position = [0, 2, 0]
+intensity = [1, 1, 1]
+[[lights]]
+type = "grid"
+corner = [-1, 3, -1]
+u = [2, 0, 0]
+v = [0, 0, 2]
+count = [3, 2]
+intensity = [0.5, 0.5, 0.5]
+[[lights]]
+type = "area"
+corner = [0, 2, 0]
+u = [1, 0, 0]
+v = [0, 0, 1]
+radiance = [1, 1, 1]
+samples = 10
+[[lights]]
+type = "sun"
+direction = [0, 2, 0]
+irradiance = [3, 3, 3]
+[environment]
+radiance = [0.1, 0.1, 0.1]
+samples = 7
+"#;
+        let scene = Scene::from_spec(std::path::Path::new("l.toml"), toml::from_str(text).unwrap()).unwrap();
+        let lights = Lights::from_scene(&scene);
+        assert_eq!(lights.omni.len(), 1 + 6);
+        // Grid lights sit at cell centres, row by row.
+        let first = lights.omni[1].position;
+        assert!((first - Vec3::new(-1.0 + 2.0 / 6.0, 3.0, -0.5)).length() < 1e-6, "{first}");
+        assert_eq!(lights.oriented.len(), 10);
+        assert_eq!(lights.directional.len(), 1 + 7, "the sun, then the environment");
+        assert_eq!(lights.directional[0], DirectionalLight { direction: Vec3::Y, irradiance: Vec3::splat(3.0) });
+        let mut kinds = Vec::new();
+        lights.for_each(|l| kinds.push(l.kind()));
+        assert_eq!(kinds.len(), lights.len());
+        assert!(kinds.windows(2).all(|w| w[0] as u8 <= w[1] as u8), "omni, then oriented, then directional");
+    }
+
+    #[test]
+    fn tree_leaves_round_trip_their_lights() {
+        let lights = [
+            Light::Omni(OmniLight { position: Vec3::X, intensity: Vec3::ONE }),
+            Light::Oriented(OrientedLight { position: Vec3::Y, normal: Vec3::Z, intensity: Vec3::ONE }),
+            Light::Directional(DirectionalLight { direction: Vec3::Z, irradiance: Vec3::ONE }),
+        ];
+        for light in lights {
+            assert_eq!(TreeLight::of(&light).light(light.kind()), light);
+        }
+    }
 }

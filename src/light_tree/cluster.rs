@@ -4,7 +4,8 @@
 
 use glam::Vec3;
 
-use super::{LightKind, NodeRef};
+use super::NodeRef;
+use crate::light::LightKind;
 
 /// A cone of directions: unit `axis` and half-angle in radians (0..=pi).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -113,7 +114,7 @@ impl Metric {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::sampling::Rng;
+    use crate::util::sampling::Rng;
 
     fn random_unit(rng: &mut Rng) -> Vec3 {
         loop {

@@ -3,7 +3,8 @@
 //! nearest neighbours; for tests and the quality benchmark only.
 
 use super::cluster::Cluster;
-use super::{LightKind, LightTree, TreeBuilder, TreeLight};
+use super::{LightTree, TreeBuilder};
+use crate::light::{LightKind, TreeLight};
 
 /// Builds the greedy tree (single-threaded, deterministic: ties go to the
 /// lower index).

@@ -12,35 +12,16 @@ pub mod cluster;
 pub mod greedy;
 pub mod ploc;
 
+use std::time::{Duration, Instant};
+
 use glam::Vec3;
 
 pub use cluster::Cone;
 use cluster::{Cluster, Metric};
 
-use crate::light::luminance;
-use crate::sampling::Rng;
-
-/// The three light types of [LC05], each with its own tree.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-pub enum LightKind {
-    /// Point lights radiating equally in all directions.
-    Omni,
-    /// Cosine-weighted lights with a normal (area-light samples, virtual point lights).
-    Oriented,
-    /// Lights at infinity from one direction (environment map samples, sun).
-    Directional,
-}
-
-impl LightKind {
-    #[must_use]
-    pub fn name(self) -> &'static str {
-        match self {
-            Self::Omni => "omni",
-            Self::Oriented => "oriented",
-            Self::Directional => "directional",
-        }
-    }
-}
+use crate::light::{Light, LightKind, Lights, TreeLight};
+use crate::util::color::luminance;
+use crate::util::sampling::Rng;
 
 /// A node: a leaf (one light, by index into the tree's lights) or an internal
 /// cluster (by index into the node arrays). The top bit tells which.
@@ -74,19 +55,13 @@ impl NodeRef {
     }
 }
 
-/// One light as a tree leaf: `position` is the direction *towards* the light
-/// for directional lights; `normal` is used by oriented lights only.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct TreeLight {
-    pub position: Vec3,
-    pub normal: Vec3,
-    pub intensity: Vec3,
-}
-
-/// A leaf: one light (omni and oriented: position; directional: direction).
+/// A leaf: one light.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Leaf {
-    pub position: Vec3,
+    /// The point clustered: a position, or a directional light's direction
+    /// (see [`TreeLight::point`]).
+    pub point: Vec3,
+    /// W/sr, or a directional light's irradiance (W/m^2).
     pub intensity: Vec3,
 }
 
@@ -130,6 +105,13 @@ impl LightTree {
         self.light_normal.get(light).copied().unwrap_or(Vec3::ZERO)
     }
 
+    /// Light `i` of the tree (its leaf `i`).
+    #[must_use]
+    pub fn light(&self, i: usize) -> Light {
+        let leaf = &self.leaves[i];
+        TreeLight { point: leaf.point, normal: self.light_normal(i), intensity: leaf.intensity }.light(self.kind)
+    }
+
     #[must_use]
     pub fn node_intensity(&self, node: NodeRef) -> Vec3 {
         if node.is_leaf() {
@@ -143,7 +125,7 @@ impl LightTree {
     #[must_use]
     pub fn node_bounds(&self, node: NodeRef) -> (Vec3, Vec3) {
         if node.is_leaf() {
-            let p = self.leaves[node.index()].position;
+            let p = self.leaves[node.index()].point;
             (p, p)
         } else {
             let n = &self.nodes[node.index()];
@@ -193,7 +175,7 @@ impl LightTree {
     /// builders minimise greedily (smaller is a better tree).
     #[must_use]
     pub fn total_cluster_size(&self) -> f64 {
-        let metric = metric_for(self.kind, self.leaves.iter().map(|l| l.position));
+        let metric = metric_for(self.kind, self.leaves.iter().map(|l| l.point));
         self.nodes
             .iter()
             .enumerate()
@@ -209,6 +191,38 @@ impl LightTree {
                 metric.size(&c)
             })
             .sum()
+    }
+}
+
+/// The light trees of a scene: one per light kind the scene has, no more.
+pub struct LightTrees {
+    pub trees: Vec<LightTree>,
+    /// Build time of each tree, in the order of `trees`.
+    pub build_times: Vec<Duration>,
+}
+
+impl LightTrees {
+    /// Builds a tree for each kind of light present (on the current rayon
+    /// pool; the trees do not depend on its thread count).
+    #[must_use]
+    pub fn build(lights: &Lights, seed: u64) -> Self {
+        let mut trees = Vec::new();
+        let mut build_times = Vec::new();
+        for kind in LightKind::ALL {
+            if lights.count(kind) == 0 {
+                continue;
+            }
+            let start = Instant::now();
+            let leaves = lights.tree_lights(kind);
+            trees.push(ploc::build(kind, &leaves, seed));
+            build_times.push(start.elapsed());
+        }
+        Self { trees, build_times }
+    }
+
+    #[must_use]
+    pub fn memory_bytes(&self) -> usize {
+        self.trees.iter().map(LightTree::memory_bytes).sum()
     }
 }
 
@@ -234,11 +248,11 @@ pub(crate) struct TreeBuilder {
 impl TreeBuilder {
     fn new(kind: LightKind, lights: &[TreeLight], seed: u64) -> Self {
         let n = lights.len();
-        let metric = metric_for(kind, lights.iter().map(|l| l.position));
+        let metric = metric_for(kind, lights.iter().map(|l| l.point));
         let oriented = kind == LightKind::Oriented;
         let tree = LightTree {
             kind,
-            leaves: lights.iter().map(|l| Leaf { position: l.position, intensity: l.intensity }).collect(),
+            leaves: lights.iter().map(|l| Leaf { point: l.point, intensity: l.intensity }).collect(),
             light_normal: if oriented {
                 lights.iter().map(|l| l.normal.normalize_or_zero()).collect()
             } else {
@@ -254,8 +268,8 @@ impl TreeBuilder {
     fn leaf_cluster(&self, light: usize) -> Cluster {
         let leaf = self.tree.leaves[light];
         Cluster {
-            min: leaf.position,
-            max: leaf.position,
+            min: leaf.point,
+            max: leaf.point,
             cone: self.tree.node_cone(NodeRef::leaf(light as u32)),
             intensity: leaf.intensity,
             weight: luminance(leaf.intensity),

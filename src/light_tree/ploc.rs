@@ -17,7 +17,8 @@ use glam::Vec3;
 use rayon::prelude::*;
 
 use super::cluster::{Cluster, Cone, Metric};
-use super::{Leaf, LightKind, LightTree, NodeRef, TreeBuilder, TreeLight};
+use super::{Leaf, LightTree, NodeRef, TreeBuilder};
+use crate::light::{LightKind, TreeLight};
 
 /// Neighbours searched on each side. [PLOC18] finds 8 to 16 close to the
 /// greedy tree's quality; 16 keeps our cut sizes within a few percent of the
@@ -201,7 +202,7 @@ fn pair_size(metric: &Metric, clusters: &[Slim], cones: &[Cone], i: usize, j: us
 /// pairs per pass.
 #[inline]
 fn tie_break(a: usize, b: usize) -> u64 {
-    crate::sampling::mix64(((a as u64) << 32) ^ b as u64)
+    crate::util::sampling::mix64(((a as u64) << 32) ^ b as u64)
 }
 
 /// nearest[i] = the j within `radius` of i minimising (size(i u j),
@@ -255,16 +256,15 @@ fn nearest_neighbours(metric: &Metric, clusters: &[Slim], cones: &[Cone], radius
 /// Light indices sorted by the 63-bit Morton code of their position in the
 /// lights' bounding box (ties by index, so the order is total).
 fn morton_order(leaves: &[Leaf]) -> Vec<u32> {
-    let (lo, hi) = leaves
-        .iter()
-        .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), l| (lo.min(l.position), hi.max(l.position)));
+    let (lo, hi) =
+        leaves.iter().fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), l| (lo.min(l.point), hi.max(l.point)));
     let extent = (hi - lo).max(Vec3::splat(f32::MIN_POSITIVE));
     let scale = 2_097_151.0 / extent; // 2^21 - 1 cells per axis
     let mut keyed: Vec<(u64, u32)> = leaves
         .par_iter()
         .enumerate()
         .map(|(i, leaf)| {
-            let p = leaf.position;
+            let p = leaf.point;
             let q = ((p - lo) * scale).clamp(Vec3::ZERO, Vec3::splat(2_097_151.0));
             (morton3(q.x as u64) | (morton3(q.y as u64) << 1) | (morton3(q.z as u64) << 2), i as u32)
         })

@@ -21,7 +21,7 @@ fn random_lights(seed: u64, n: usize, kind: LightKind, clustered: bool) -> Vec<T
                 position = normal;
             }
             let intensity = Vec3::new(rng.range_f32(0.0, 2.0), rng.range_f32(0.0, 2.0), rng.range_f32(0.0, 2.0));
-            TreeLight { position, normal, intensity }
+            TreeLight { point: position, normal, intensity }
         })
         .collect()
 }
@@ -101,12 +101,12 @@ fn degenerate_light_sets_build_valid_trees() {
     for kind in KINDS {
         // Coincident lights, zero-intensity lights, and both together.
         let coincident: Vec<TreeLight> = (0..500)
-            .map(|i| TreeLight { position: Vec3::ONE, normal: Vec3::Y, intensity: Vec3::splat(i as f32 % 3.0) })
+            .map(|i| TreeLight { point: Vec3::ONE, normal: Vec3::Y, intensity: Vec3::splat(i as f32 % 3.0) })
             .collect();
         let dark: Vec<TreeLight> =
             random_lights(21, 400, kind, false).into_iter().map(|l| TreeLight { intensity: Vec3::ZERO, ..l }).collect();
         let both: Vec<TreeLight> =
-            (0..300).map(|_| TreeLight { position: Vec3::ZERO, normal: Vec3::Y, intensity: Vec3::ZERO }).collect();
+            (0..300).map(|_| TreeLight { point: Vec3::ZERO, normal: Vec3::Y, intensity: Vec3::ZERO }).collect();
         for lights in [&coincident, &dark, &both] {
             check_tree(&ploc::build(kind, lights, 5), lights);
             check_tree(&greedy::build(kind, &lights[..100], 5), &lights[..100]);
@@ -139,7 +139,7 @@ fn representatives_are_chosen_in_proportion_to_intensity() {
     // Four lights with luminance weights 1 : 2 : 3 : 4, far from each other.
     let lights: Vec<TreeLight> = (0..4)
         .map(|i| TreeLight {
-            position: Vec3::new(i as f32 * 3.0, 0.0, 0.0),
+            point: Vec3::new(i as f32 * 3.0, 0.0, 0.0),
             normal: Vec3::Y,
             intensity: Vec3::splat(i as f32 + 1.0),
         })
@@ -189,7 +189,7 @@ fn coincident_lights_build_a_shallow_tree_not_a_chain() {
     // All pair sizes are 0: ties must not make every cluster pick the same
     // neighbour (one merge per pass, a chain of depth n).
     let lights: Vec<TreeLight> =
-        (0..100_000).map(|_| TreeLight { position: Vec3::ONE, normal: Vec3::Y, intensity: Vec3::ONE }).collect();
+        (0..100_000).map(|_| TreeLight { point: Vec3::ONE, normal: Vec3::Y, intensity: Vec3::ONE }).collect();
     let tree = ploc::build(LightKind::Omni, &lights, 1);
     let d = depth(&tree, tree.root.unwrap());
     assert!(d <= 64, "depth {d} for 100,000 coincident lights");
@@ -207,7 +207,7 @@ fn intensities_near_f32_max_build_a_tree_and_terminate() {
         for (i, l) in lights.iter_mut().enumerate() {
             l.intensity = Vec3::splat(3.4e38);
             if i % 2 == 0 {
-                l.position = lights_first_position(kind);
+                l.point = lights_first_position(kind);
             }
         }
         let tree = ploc::build(kind, &lights, 1);

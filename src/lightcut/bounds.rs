@@ -6,10 +6,11 @@ use std::f32::consts::PI;
 
 use glam::{DVec3, Vec3};
 
-use crate::light::luminance64;
-use crate::light_tree::{Cone, LightKind};
-use crate::render::geometry::SurfacePoint;
+use crate::light::LightKind;
+use crate::light_tree::Cone;
 use crate::scene::material::phong_normalisation;
+use crate::shading::SurfacePoint;
+use crate::util::color::luminance64;
 
 /// Relative slack added to every cosine bound: the bound is evaluated in f32
 /// with a few roundings (rotation, sqrt), each within 1 ulp; 1e-5 covers
@@ -152,35 +153,6 @@ pub fn cluster_bound(kind: LightKind, sp: &SurfacePoint<'_>, lo: Vec3, hi: Vec3,
 #[must_use]
 pub fn error_bound(mg_bound: DVec3, intensity: Vec3) -> f64 {
     luminance64(mg_bound * intensity.as_dvec3())
-}
-
-/// M * G of one light for the shading point, per unit intensity (V not
-/// included), in f64. `position` is the direction towards the light for a
-/// directional light; `normal` is used by oriented lights only.
-#[must_use]
-pub fn light_term(kind: LightKind, sp: &SurfacePoint<'_>, position: Vec3, normal: Vec3) -> DVec3 {
-    match kind {
-        LightKind::Directional => sp.material_term(position).as_dvec3(),
-        LightKind::Omni | LightKind::Oriented => {
-            let d = position - sp.p;
-            let d2 = d.length_squared();
-            if d2 == 0.0 {
-                // The shading point is at the light: the direction is undefined
-                // and the light contributes nothing here (docs/scene-format.md).
-                return DVec3::ZERO;
-            }
-            let wi = d / d2.sqrt();
-            let m = sp.material_term(wi);
-            if m == Vec3::ZERO {
-                return DVec3::ZERO;
-            }
-            let mut g = 1.0 / f64::from(d2).max(sp.min_distance_squared());
-            if kind == LightKind::Oriented {
-                g *= f64::from(normal.dot(-wi).max(0.0));
-            }
-            m.as_dvec3() * g
-        }
-    }
 }
 
 #[cfg(test)]

@@ -17,17 +17,14 @@
 
 use std::cmp::Ordering;
 use std::collections::BinaryHeap;
-use std::time::{Duration, Instant};
 
 use glam::DVec3;
 
 use super::bounds::{error_bound, PointBounds};
 use crate::embree::{Scene as EmbreeScene, ShadowRay};
-use crate::light::{luminance64, Lights};
-use crate::light_tree::{ploc, LightKind, LightTree, NodeRef};
-use crate::render::direct::{light_sample, BatchBuffers, LightBatch};
-use crate::render::geometry::SurfacePoint;
-use crate::render::integrator::ShadingStats;
+use crate::light_tree::{LightTree, NodeRef};
+use crate::shading::{light_sample, BatchBuffers, LightBatch, SurfacePoint};
+use crate::util::color::luminance64;
 
 /// A tree with at most this many lights is evaluated light by light: for so
 /// few lights the bounds cannot save a shadow ray worth their cost, and the
@@ -51,35 +48,18 @@ impl Default for CutSettings {
     }
 }
 
-/// The light trees of a scene: one per light kind the scene has, no more.
-pub struct LightTrees {
-    pub trees: Vec<LightTree>,
-    /// Build time of each tree, in the order of `trees`.
-    pub build_times: Vec<Duration>,
-}
-
-impl LightTrees {
-    /// Builds a tree for each kind of light present (on the current rayon pool).
-    #[must_use]
-    pub fn build(lights: &Lights, seed: u64) -> Self {
-        let mut trees = Vec::new();
-        let mut build_times = Vec::new();
-        for kind in [LightKind::Omni, LightKind::Oriented, LightKind::Directional] {
-            if lights.count(kind) == 0 {
-                continue;
-            }
-            let start = Instant::now();
-            let leaves = lights.tree_lights(kind);
-            trees.push(ploc::build(kind, &leaves, seed));
-            build_times.push(start.elapsed());
-        }
-        Self { trees, build_times }
-    }
-
-    #[must_use]
-    pub fn memory_bytes(&self) -> usize {
-        self.trees.iter().map(LightTree::memory_bytes).sum()
-    }
+/// What one shading point's cut found.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct CutResult {
+    /// Direct radiance towards the viewer, W/(m^2 sr) per channel.
+    pub radiance: DVec3,
+    /// Sum of the error bounds of the final cut's nodes: the design's
+    /// guarantee on this point's error in luminance (|L_cut - L_exact| <= it).
+    pub error_bound: f64,
+    /// Nodes of the final cut, counting each light of a tree evaluated
+    /// light by light as one node.
+    pub nodes: u64,
+    pub shadow_rays: u64,
 }
 
 /// One node of the cut (or one that was in it and has been refined).
@@ -129,9 +109,7 @@ impl PartialOrd for HeapItem {
 /// Per-thread buffers reused across shading points.
 #[derive(Default)]
 pub struct CutScratch {
-    /// Sum of the error bounds of the last cut's nodes: the design's guarantee
-    /// on that point's error in luminance (|L_cut - L_exact| <= this).
-    pub last_error_bound: f64,
+    batch: BatchBuffers,
     entries: Vec<Entry>,
     heap: BinaryHeap<HeapItem>,
     pending: Vec<Pending>,
@@ -154,12 +132,9 @@ impl Cut<'_, '_> {
     /// Queues a node whose representative is new to the cut.
     fn add_new(&mut self, tree: u8, node: NodeRef) {
         let t = &self.trees[tree as usize];
-        let rep = t.node_representative(node) as usize;
-        let normal = t.light_normal(rep);
-        let position = t.leaves[rep].position;
+        let representative = t.light(t.node_representative(node) as usize);
         // M * G per unit intensity of the representative, and its shadow ray.
-        let (unoccluded, ray) =
-            light_sample(t.kind, self.sp, position, normal, glam::Vec3::ONE).unwrap_or((DVec3::ZERO, None));
+        let (unoccluded, ray) = light_sample(&representative, self.sp, glam::Vec3::ONE).unwrap_or((DVec3::ZERO, None));
         let ray = ray.map(|r| {
             self.scratch.rays.push(r);
             (self.scratch.rays.len() - 1) as u32
@@ -221,32 +196,36 @@ pub fn evaluate(
     embree: &EmbreeScene,
     settings: &CutSettings,
     scratch: &mut CutScratch,
-    batch: &mut BatchBuffers,
-    stats: &mut ShadingStats,
-) -> DVec3 {
+) -> CutResult {
     // Small trees first, light by light with the exact renderer's code; their
     // sum is exact and counts in the total the threshold is relative to.
-    let mut exhaustive = LightBatch::new(embree, sp, batch);
-    let mut exhaustive_lights = 0u64;
+    let mut exhaustive = LightBatch::new(embree, sp, &mut scratch.batch);
     for tree in trees.iter().filter(|t| t.light_count() <= EXHAUSTIVE_LIGHTS) {
-        exhaustive_lights += tree.light_count() as u64;
         for i in 0..tree.light_count() {
-            let leaf = tree.leaves[i];
-            exhaustive.add(tree.kind, leaf.position, tree.light_normal(i), leaf.intensity);
+            exhaustive.add(&tree.light(i));
         }
     }
-    let fixed = exhaustive.finish(stats);
-    scratch.last_error_bound = 0.0;
-    if exhaustive_lights as usize == trees.iter().map(LightTree::light_count).sum::<usize>() {
-        return fixed;
+    let fixed = exhaustive.finish();
+    let mut result =
+        CutResult { radiance: fixed.radiance, error_bound: 0.0, nodes: fixed.lights, shadow_rays: fixed.shadow_rays };
+    if fixed.lights as usize == trees.iter().map(LightTree::light_count).sum::<usize>() {
+        return result;
     }
 
     scratch.entries.clear();
     scratch.heap.clear();
     scratch.pending.clear();
     scratch.rays.clear();
-    let mut cut =
-        Cut { trees, sp, bounds: PointBounds::new(sp), embree, scratch, total: fixed, cut_nodes: 0, shadow_rays: 0 };
+    let mut cut = Cut {
+        trees,
+        sp,
+        bounds: PointBounds::new(sp),
+        embree,
+        scratch,
+        total: fixed.radiance,
+        cut_nodes: 0,
+        shadow_rays: 0,
+    };
     for (i, tree) in trees.iter().enumerate() {
         if tree.light_count() > EXHAUSTIVE_LIGHTS {
             cut.add_new(i as u8, tree.root.expect("a tree with lights has a root"));
@@ -282,14 +261,13 @@ pub fn evaluate(
         }
         cut.flush();
     }
-    let radiance = cut.scratch.entries.iter().filter(|e| e.in_cut).fold(fixed, |sum, e| sum + e.estimate);
-    cut.scratch.last_error_bound = cut.scratch.entries.iter().filter(|e| e.in_cut).map(|e| e.bound).sum();
-    stats.shadow_rays += cut.shadow_rays;
-    // The exhaustive part has counted its lights already; the cut's nodes add
-    // to them, and the point's whole cut is both parts.
-    stats.cut_nodes += cut.cut_nodes as u64;
-    stats.max_cut = stats.max_cut.max(cut.cut_nodes as u64 + exhaustive_lights);
-    radiance
+    let in_cut = || cut.scratch.entries.iter().filter(|e| e.in_cut);
+    result.radiance = in_cut().fold(fixed.radiance, |sum, e| sum + e.estimate);
+    result.error_bound = in_cut().map(|e| e.bound).sum();
+    // The exhaustive part's lights are in the point's cut too.
+    result.nodes += cut.cut_nodes as u64;
+    result.shadow_rays += cut.shadow_rays;
+    result
 }
 
 #[cfg(test)]

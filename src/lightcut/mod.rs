@@ -1,6 +1,9 @@
 //! Lightcuts ([LC05] sec. 4): per shading point, a cut through the light
 //! trees whose every cluster's error bound is at most `error` times the total
-//! estimate, or `max_cut` nodes.
+//! estimate, or `max_cut` nodes. `bounds` holds the provable upper bounds of
+//! the material and geometric terms over a cluster; `cut` the refinement.
 
 pub mod bounds;
 pub mod cut;
+
+pub use cut::{evaluate, CutResult, CutScratch, CutSettings, EXHAUSTIVE_LIGHTS};

@@ -13,7 +13,7 @@ use serde::Serialize;
 
 use super::read::{read_exr, ExrImage};
 use super::OutputError;
-use crate::light::luminance64;
+use crate::util::color::luminance64;
 
 /// Fraction of the reference's mean luminance used as the denominator floor.
 pub const FLOOR_FRACTION: f64 = 1e-3;

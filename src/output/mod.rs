@@ -8,6 +8,7 @@ pub mod exr;
 pub mod plot;
 pub mod preview;
 pub mod read;
+pub mod temporary;
 
 use std::path::{Path, PathBuf};
 
@@ -39,11 +40,11 @@ pub fn write_atomically(path: &Path, write: impl FnOnce(&Path) -> Result<(), Str
     }
     let name = path.file_name().ok_or_else(|| OutputError::new(path, "not a file name"))?;
     let temporary = dir.join(format!(".{}.{}.partial", name.to_string_lossy(), std::process::id()));
-    crate::interrupt::register_temporary(&temporary);
+    temporary::register(&temporary);
     let result = write(&temporary).and_then(|()| std::fs::rename(&temporary, path).map_err(|e| e.to_string()));
     if result.is_err() {
         let _ = std::fs::remove_file(&temporary);
     }
-    crate::interrupt::unregister_temporary(&temporary);
+    temporary::unregister(&temporary);
     result.map_err(|m| OutputError::new(path, m))
 }

@@ -5,15 +5,7 @@ use std::path::Path;
 
 use super::{write_atomically, OutputError};
 use crate::render::Film;
-
-#[must_use]
-pub fn linear_to_srgb(c: f32) -> f32 {
-    if c <= 0.003_130_8 {
-        12.92 * c
-    } else {
-        1.055 * c.powf(1.0 / 2.4) - 0.055
-    }
-}
+use crate::util::color::linear_to_srgb;
 
 /// 8-bit sRGB value of a linear value after `exposure` stops.
 #[must_use]
@@ -48,12 +40,7 @@ mod tests {
     use super::*;
 
     #[test]
-    fn srgb_encoding_round_trips_the_decoder() {
-        for i in 0..=20 {
-            let c = i as f32 / 20.0;
-            let back = crate::scene::texture::srgb_to_linear(linear_to_srgb(c));
-            assert!((back - c).abs() < 1e-5, "{c} -> {back}");
-        }
+    fn previews_clamp_and_map_nan_to_black() {
         assert_eq!(to_srgb8(2.0, 1.0), 255);
         assert_eq!(to_srgb8(-1.0, 1.0), 0);
         assert_eq!(to_srgb8(f32::NAN, 1.0), 0);

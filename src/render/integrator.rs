@@ -7,10 +7,10 @@
 
 use glam::{DVec3, Vec3};
 
-use super::direct::{BatchBuffers, LightBatch};
-use super::geometry::{Geometry, SurfacePoint};
 use crate::light::Lights;
-use crate::lightcut::cut::{self, CutScratch, CutSettings, LightTrees};
+use crate::light_tree::LightTrees;
+use crate::lightcut::{self, CutScratch, CutSettings};
+use crate::shading::{BatchBuffers, Geometry, LightBatch, SurfacePoint};
 
 /// How direct light is computed at each shading point.
 #[derive(Clone, Copy)]
@@ -55,9 +55,13 @@ impl ShadingStats {
         }
     }
 
-    /// Records one shading point's cut of `size` nodes in the histogram.
-    pub fn record_cut(&mut self, size: u64) {
-        let bucket = (63 - size.max(1).leading_zeros()) as usize;
+    /// Records one shading point: its cut of `nodes` nodes and its shadow rays.
+    pub fn record_point(&mut self, nodes: u64, shadow_rays: u64) {
+        self.shading_points += 1;
+        self.shadow_rays += shadow_rays;
+        self.cut_nodes += nodes;
+        self.max_cut = self.max_cut.max(nodes);
+        let bucket = (63 - nodes.max(1).leading_zeros()) as usize;
         self.cut_histogram[bucket.min(CUT_HISTOGRAM_BUCKETS - 1)] += 1;
     }
 }
@@ -93,7 +97,7 @@ impl Integrator<'_> {
             let Some(hit) = self.geometry.embree.intersect(&ray) else {
                 // The environment, seen directly or in a mirror.
                 if let Some(environment) = &self.geometry.scene.environment {
-                    result.radiance += throughput * environment.radiance(ray.direction.normalize()).as_dvec3();
+                    result.radiance += throughput * environment.map.radiance(ray.direction.normalize()).as_dvec3();
                 }
                 break;
             };
@@ -115,38 +119,23 @@ impl Integrator<'_> {
     }
 
     fn direct_light(&self, sp: &SurfacePoint<'_>, scratch: &mut Scratch, stats: &mut ShadingStats) -> DVec3 {
-        stats.shading_points += 1;
-        let before = stats.cut_nodes;
-        let radiance = match self.direct {
-            // LightBatch::finish counts the lights (the exact cut) and the rays.
-            DirectLighting::Exact => exact_direct(self.geometry, self.lights, sp, scratch, stats),
-            DirectLighting::Lightcuts { trees, settings } => cut::evaluate(
-                &trees.trees,
-                sp,
-                &self.geometry.embree,
-                &settings,
-                &mut scratch.cut,
-                &mut scratch.batch,
-                stats,
-            ),
-        };
-        stats.record_cut(stats.cut_nodes - before);
-        radiance
+        match self.direct {
+            DirectLighting::Exact => {
+                // Every light, one shadow ray each, in batches; summed in
+                // light order (omni, oriented, directional): deterministic.
+                let mut batch = LightBatch::new(&self.geometry.embree, sp, &mut scratch.batch);
+                self.lights.for_each(|light| batch.add(&light));
+                let found = batch.finish();
+                stats.record_point(found.lights, found.shadow_rays);
+                found.radiance
+            }
+            DirectLighting::Lightcuts { trees, settings } => {
+                let found = lightcut::evaluate(&trees.trees, sp, &self.geometry.embree, &settings, &mut scratch.cut);
+                stats.record_point(found.nodes, found.shadow_rays);
+                found.radiance
+            }
+        }
     }
-}
-
-/// Every light, one shadow ray each, in batches; summed in light order
-/// (omni, oriented, directional), so deterministic.
-fn exact_direct(
-    geometry: &Geometry<'_>,
-    lights: &Lights,
-    sp: &SurfacePoint<'_>,
-    scratch: &mut Scratch,
-    stats: &mut ShadingStats,
-) -> DVec3 {
-    let mut batch = LightBatch::new(&geometry.embree, sp, &mut scratch.batch);
-    lights.for_each(|kind, position, normal, intensity| batch.add(kind, position, normal, intensity));
-    batch.finish(stats)
 }
 
 /// A finite f32 for the film: NaN becomes 0 and magnitudes beyond f32's

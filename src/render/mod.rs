@@ -6,11 +6,8 @@
 //! tiles are assembled in a fixed order, so the image is bit-identical for any
 //! thread count, tile order and pixel window.
 
-pub mod direct;
 pub mod film;
-pub mod geometry;
 pub mod integrator;
-pub mod progress;
 pub mod session;
 pub mod vpl;
 
@@ -19,13 +16,11 @@ use std::time::{Duration, Instant};
 use glam::DVec3;
 use rayon::prelude::*;
 
-use crate::sampling::Rng;
 use crate::scene::Camera;
+use crate::util::sampling::Rng;
 pub use film::{Film, Pixel, PixelBounds};
-pub use geometry::Geometry;
-pub use integrator::DirectLighting;
-use integrator::{film_value, Integrator, Scratch, ShadingStats};
-use progress::Progress;
+use integrator::{film_value, Integrator, Scratch};
+pub use integrator::{DirectLighting, ShadingStats};
 
 /// Tile edge in pixels: small enough to balance load across threads.
 pub const TILE: u32 = 16;
@@ -38,6 +33,18 @@ pub struct PassSettings {
     pub spp: u32,
     pub seed: u64,
     pub bounds: PixelBounds,
+}
+
+/// What a pass reports while it runs, through the caller's callback (the
+/// command line draws it). Called from the worker threads.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum PassProgress {
+    /// Before the first tile: how many tiles the pass has.
+    Started { tiles: u64 },
+    /// One more tile is done.
+    TileDone,
+    /// Every tile is done.
+    Finished,
 }
 
 /// Counters and times of a finished pass.
@@ -64,25 +71,26 @@ pub fn tiles(bounds: PixelBounds, tile: u32) -> Vec<PixelBounds> {
     out
 }
 
-/// Renders the window `settings.bounds` on the current rayon pool.
+/// Renders the window `settings.bounds` on the current rayon pool,
+/// reporting each finished tile to `progress`.
 pub fn render(
     integrator: &Integrator<'_>,
     camera: &Camera,
     settings: &PassSettings,
-    progress: &Progress,
+    progress: &(dyn Fn(PassProgress) + Sync),
 ) -> (Film, PassStats) {
     let start = Instant::now();
     let tile_list = tiles(settings.bounds, TILE);
-    progress.start(tile_list.len() as u64);
+    progress(PassProgress::Started { tiles: tile_list.len() as u64 });
     let rendered: Vec<(Vec<Pixel>, PassStats)> = tile_list
         .par_iter()
         .map_init(Scratch::default, |scratch, tile| {
             let result = render_tile(integrator, camera, settings, *tile, scratch);
-            progress.advance();
+            progress(PassProgress::TileDone);
             result
         })
         .collect();
-    progress.finish();
+    progress(PassProgress::Finished);
 
     let b = settings.bounds;
     let mut film = Film {

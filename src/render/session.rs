@@ -1,16 +1,17 @@
-//! One scene ready to render: its worker pool and its Embree geometry, with
-//! passes in either mode. Shared by `render`, `sweep` and the benchmarks.
+//! One scene ready to render: its lights, its worker pool and its Embree
+//! geometry, with passes in either mode. Shared by `render`, `sweep` and the
+//! benchmarks.
 
 use std::time::{Duration, Instant};
 
-use super::geometry::{Geometry, GeometryError};
 use super::integrator::{DirectLighting, Integrator};
-use super::progress::Progress;
-use super::{render, thread_pool, vpl, Film, PassSettings, PassStats};
+use super::{render, thread_pool, vpl, Film, PassProgress, PassSettings, PassStats};
 use crate::embree::{Device, EmbreeError};
-use crate::light_tree::LightKind;
-use crate::lightcut::cut::{CutSettings, LightTrees};
+use crate::light::{LightKind, Lights};
+use crate::light_tree::LightTrees;
+use crate::lightcut::CutSettings;
 use crate::scene::Scene;
+use crate::shading::{Geometry, GeometryError};
 
 /// Failure to prepare a scene for rendering.
 #[derive(Debug, thiserror::Error)]
@@ -28,6 +29,8 @@ pub enum SessionError {
 
 pub struct Session<'s> {
     pub scene: &'s Scene,
+    /// The scene's lights (without the VPLs, which each pass traces).
+    pub lights: Lights,
     pub pool: rayon::ThreadPool,
     pub geometry: Geometry<'s>,
 }
@@ -52,27 +55,32 @@ impl<'s> Session<'s> {
     /// `threads`: 0 for one per CPU.
     pub fn try_new(scene: &'s Scene, threads: usize) -> Result<Self, SessionError> {
         let pool = thread_pool(threads).map_err(|e| SessionError::Threads { threads, message: e.to_string() })?;
+        let lights = pool.install(|| Lights::from_scene(scene));
         let device = Device::try_new()?;
-        let geometry = Geometry::try_new(&device, scene)
+        let geometry = Geometry::try_new(&device, scene, &lights)
             .map_err(|source| SessionError::Geometry { file: scene.path.clone(), source })?;
-        Ok(Self { scene, pool, geometry })
+        Ok(Self { scene, lights, pool, geometry })
     }
 
     /// Renders one pass: exact when `cut` is None, else lightcuts (building
     /// the light trees first, timed as part of the pass).
-    pub fn render(&self, settings: &PassSettings, cut: Option<CutSettings>, progress: &Progress) -> PassResult {
+    pub fn render(
+        &self,
+        settings: &PassSettings,
+        cut: Option<CutSettings>,
+        progress: &(dyn Fn(PassProgress) + Sync),
+    ) -> PassResult {
         let start = Instant::now();
         // Indirect light: VPLs for this seed, added to the scene's oriented lights.
         let (lights, vpls) = match self.scene.indirect {
             Some(indirect) => {
-                let vpls =
-                    self.pool.install(|| vpl::trace(&self.geometry, &self.scene.lights, indirect, settings.seed));
+                let vpls = self.pool.install(|| vpl::trace(&self.geometry, &self.lights, indirect, settings.seed));
                 let count = vpls.len();
-                let mut lights = self.scene.lights.clone();
+                let mut lights = self.lights.clone();
                 lights.oriented.extend(vpls);
                 (std::borrow::Cow::Owned(lights), count)
             }
-            None => (std::borrow::Cow::Borrowed(&self.scene.lights), 0),
+            None => (std::borrow::Cow::Borrowed(&self.lights), 0),
         };
         let vpl_time = start.elapsed();
         let trees = cut.map(|_| self.pool.install(|| LightTrees::build(&lights, settings.seed)));
@@ -146,7 +154,7 @@ intensity = [1, 1, 1]
     fn pass(scene: &Scene, cut: Option<CutSettings>) -> crate::render::integrator::ShadingStats {
         let session = Session::try_new(scene, 1).unwrap();
         let settings = PassSettings { width: 2, height: 2, spp: 1, seed: 0, bounds: PixelBounds::full(2, 2) };
-        let result = session.render(&settings, cut, &Progress::Silent);
+        let result = session.render(&settings, cut, &|_| {});
         assert_eq!(result.stats.camera_rays, 4);
         result.stats.shading
     }

@@ -19,12 +19,12 @@ use std::f32::consts::PI;
 use glam::Vec3;
 use rayon::prelude::*;
 
-use super::geometry::Geometry;
 use crate::embree::Ray;
-use crate::light::{luminance, Lights, OrientedLight};
-use crate::light_tree::LightKind;
-use crate::sampling::Rng;
+use crate::light::{Light, Lights, OrientedLight};
 use crate::scene::IndirectSettings;
+use crate::shading::Geometry;
+use crate::util::color::luminance;
+use crate::util::sampling::Rng;
 
 /// Where a light path starts.
 #[derive(Debug, Clone, Copy)]
@@ -60,7 +60,7 @@ fn uniform_direction(u: f32, v: f32) -> Vec3 {
 /// Traces `settings.paths` light paths; returns their VPLs in path order.
 #[must_use]
 pub fn trace(geometry: &Geometry<'_>, lights: &Lights, settings: IndirectSettings, seed: u64) -> Vec<OrientedLight> {
-    let (lo, hi) = geometry.scene.bounds();
+    let (lo, hi) = geometry.bounds;
     if !(lo.is_finite() && hi.is_finite()) || settings.paths == 0 {
         return Vec::new();
     }
@@ -69,11 +69,13 @@ pub fn trace(geometry: &Geometry<'_>, lights: &Lights, settings: IndirectSetting
     // Emitters with their power: 4 pi I for omni, pi I for oriented (cosine
     // lobe), E times the disc's area for directional.
     let mut sources: Vec<(Source, Vec3)> = Vec::with_capacity(lights.len());
-    lights.for_each(|kind, position, normal, intensity| {
-        sources.push(match kind {
-            LightKind::Omni => (Source::Omni { position }, 4.0 * PI * intensity),
-            LightKind::Oriented => (Source::Oriented { position, normal }, PI * intensity),
-            LightKind::Directional => (Source::Directional { direction: position }, PI * radius * radius * intensity),
+    lights.for_each(|light| {
+        sources.push(match light {
+            Light::Omni(l) => (Source::Omni { position: l.position }, 4.0 * PI * l.intensity),
+            Light::Oriented(l) => (Source::Oriented { position: l.position, normal: l.normal }, PI * l.intensity),
+            Light::Directional(l) => {
+                (Source::Directional { direction: l.direction }, PI * radius * radius * l.irradiance)
+            }
         });
     });
     let total: f64 = sources.iter().map(|s| f64::from(luminance(s.1))).sum();
@@ -168,10 +170,11 @@ bounces = 1
     #[test]
     fn one_bounce_vpls_carry_the_reflected_power_and_are_deterministic() {
         let scene = scene();
+        let lights = Lights::from_scene(&scene);
         let device = Device::try_new().unwrap();
-        let geometry = Geometry::try_new(&device, &scene).unwrap();
+        let geometry = Geometry::try_new(&device, &scene, &lights).unwrap();
         let settings = scene.indirect.unwrap();
-        let vpls = trace(&geometry, &scene.lights, settings, 7);
+        let vpls = trace(&geometry, &lights, settings, 7);
         assert!(vpls.len() > 19_000, "nearly every path hits the floor: {}", vpls.len());
         // A VPL radiates pi * I in all (cosine lobe).
         let power: f32 = vpls.iter().map(|v| PI * v.intensity.x).sum();
@@ -181,9 +184,9 @@ bounces = 1
         let reflected = 0.5 * PI * 2.0 * 1.0;
         assert!((power - reflected).abs() <= 0.01 * reflected, "{power} vs {reflected}");
         assert!(vpls.iter().all(|v| v.normal.y > 0.99 && v.position.y > 0.0));
-        assert_eq!(vpls, trace(&geometry, &scene.lights, settings, 7), "same seed, same VPLs");
-        assert_ne!(vpls, trace(&geometry, &scene.lights, settings, 8), "another seed, other VPLs");
+        assert_eq!(vpls, trace(&geometry, &lights, settings, 7), "same seed, same VPLs");
+        assert_ne!(vpls, trace(&geometry, &lights, settings, 8), "another seed, other VPLs");
         let one_thread = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
-        assert_eq!(vpls, one_thread.install(|| trace(&geometry, &scene.lights, settings, 7)), "any thread count");
+        assert_eq!(vpls, one_thread.install(|| trace(&geometry, &lights, settings, 7)), "any thread count");
     }
 }

@@ -250,46 +250,84 @@ pub enum LightSpec {
     Sun(SunSpec),
 }
 
-/// Splits a `{ type = "...", ... }` table into its type and the rest;
-/// errors are (field path below the item, message).
-fn tagged(value: &toml::Value) -> Result<(String, toml::Value), (String, String)> {
+/// Why one `[[shapes]]` or `[[lights]]` entry does not parse: the user's
+/// file. [`SpecError::field`] is the path below the entry.
+#[derive(Debug, thiserror::Error)]
+pub enum SpecError {
+    /// The entry is not a table (e.g. `shapes = [1]`).
+    #[error("expected a table with a `type`, got {found}")]
+    NotATable { found: &'static str },
+    /// The table has no `type`.
+    #[error("missing field `type`")]
+    MissingType,
+    /// `type` is not a string.
+    #[error("expected a string, got {found}")]
+    TypeNotAString { found: &'static str },
+    /// `type` names no known shape or light.
+    #[error("unknown {what} type '{kind}', expected {expected}")]
+    UnknownType { what: &'static str, kind: String, expected: &'static str },
+    /// A field of the entry is missing, misspelt or of the wrong type.
+    #[error("{source}")]
+    Field {
+        /// Path below the entry, e.g. `.radius` (empty for the entry itself).
+        path: String,
+        #[source]
+        source: toml::de::Error,
+    },
+}
+
+impl SpecError {
+    /// The field path below the entry (`""`, `".type"`, `".radius"`), to be
+    /// appended to `shapes[i]` or `lights[i]`.
+    #[must_use]
+    pub fn field(&self) -> &str {
+        match self {
+            Self::NotATable { .. } | Self::MissingType => "",
+            Self::TypeNotAString { .. } | Self::UnknownType { .. } => ".type",
+            Self::Field { path, .. } => path,
+        }
+    }
+}
+
+/// Splits a `{ type = "...", ... }` table into its type and the rest.
+fn tagged(value: &toml::Value) -> Result<(String, toml::Value), SpecError> {
     let toml::Value::Table(table) = value else {
-        return Err((String::new(), format!("expected a table with a `type`, got {}", value.type_str())));
+        return Err(SpecError::NotATable { found: value.type_str() });
     };
     let mut rest = table.clone();
     match rest.remove("type") {
         Some(toml::Value::String(kind)) => Ok((kind, toml::Value::Table(rest))),
-        Some(other) => Err((".type".into(), format!("expected a string, got {}", other.type_str()))),
-        None => Err((String::new(), "missing field `type`".into())),
+        Some(other) => Err(SpecError::TypeNotAString { found: other.type_str() }),
+        None => Err(SpecError::MissingType),
     }
 }
 
 /// Deserializes one variant's fields, keeping the path of any error.
-fn fields<T: serde::de::DeserializeOwned>(value: toml::Value) -> Result<T, (String, String)> {
+fn fields<T: serde::de::DeserializeOwned>(value: toml::Value) -> Result<T, SpecError> {
     serde_path_to_error::deserialize(value).map_err(|e| {
         let path = e.path().to_string();
         let path = if path == "." { String::new() } else { format!(".{path}") };
-        (path, e.into_inner().to_string())
+        SpecError::Field { path, source: e.into_inner() }
     })
 }
 
 impl ShapeSpec {
-    /// Parses one `[[shapes]]` entry; errors are (path below `shapes[i]`, message).
-    pub fn parse(value: &toml::Value) -> Result<Self, (String, String)> {
+    /// Parses one `[[shapes]]` entry.
+    pub fn parse(value: &toml::Value) -> Result<Self, SpecError> {
         let (kind, rest) = tagged(value)?;
         match kind.as_str() {
             "quad" => fields(rest).map(Self::Quad),
             "box" => fields(rest).map(Self::Box),
             "sphere" => fields(rest).map(Self::Sphere),
             "mesh" => fields(rest).map(Self::Mesh),
-            other => Err((".type".into(), format!("unknown shape type '{other}', expected quad, box, sphere or mesh"))),
+            _ => Err(SpecError::UnknownType { what: "shape", kind, expected: "quad, box, sphere or mesh" }),
         }
     }
 }
 
 impl LightSpec {
-    /// Parses one `[[lights]]` entry; errors are (path below `lights[i]`, message).
-    pub fn parse(value: &toml::Value) -> Result<Self, (String, String)> {
+    /// Parses one `[[lights]]` entry.
+    pub fn parse(value: &toml::Value) -> Result<Self, SpecError> {
         let (kind, rest) = tagged(value)?;
         match kind.as_str() {
             "point" => fields(rest).map(Self::Point),
@@ -297,10 +335,7 @@ impl LightSpec {
             "area" => fields(rest).map(Self::Area),
             "area_mesh" => fields(rest).map(Self::AreaMesh),
             "sun" => fields(rest).map(Self::Sun),
-            other => Err((
-                ".type".into(),
-                format!("unknown light type '{other}', expected point, grid, area, area_mesh or sun"),
-            )),
+            _ => Err(SpecError::UnknownType { what: "light", kind, expected: "point, grid, area, area_mesh or sun" }),
         }
     }
 }

@@ -1,10 +1,14 @@
 //! Scenes: the file format (`file`), its validation into world-space meshes,
-//! materials and lights, and the camera. Every error names the file and the
-//! field path. Relative paths resolve against the scene file's directory.
+//! materials, light sources and the camera, and the images it names. Every
+//! error names the file and the field path. Relative paths resolve against
+//! the scene file's directory. The light sources are descriptions: the
+//! `light` layer above turns them into the point lights the trees cluster.
 
 pub mod camera;
+pub mod environment;
 pub mod error;
 pub mod file;
+pub mod image;
 pub mod material;
 pub mod mesh;
 pub mod texture;
@@ -15,6 +19,7 @@ use std::path::{Path, PathBuf};
 use glam::{Vec2, Vec3};
 
 pub use camera::Camera;
+pub use environment::{Environment, EnvironmentMap};
 pub use error::SceneError;
 use file::{
     AreaMeshSpec, AreaSpec, GridSpec, LightSpec, MeshSpec, PointSpec, QuadSpec, SceneFile, ShapeSpec, SphereSpec,
@@ -23,9 +28,6 @@ use file::{
 pub use material::{Albedo, Material};
 pub use mesh::Mesh;
 use texture::Texture;
-
-use crate::light::emitters::{sample_area_light, sample_sun, EmitterTriangle, Environment};
-use crate::light::{Lights, OmniLight};
 
 /// Largest film accepted: 2^27 pixels (about 11600 x 11600). The renderer
 /// keeps about 70 bytes per pixel, so this caps the image at about 9 GiB.
@@ -45,6 +47,23 @@ pub struct Film {
     pub spp: u32,
 }
 
+/// A light as the scene file describes it, validated. `light::Lights::from_scene`
+/// turns each into point lights of one kind ([LC05] sec. 5).
+#[derive(Debug, Clone, PartialEq)]
+pub enum LightSource {
+    /// One omni light of `intensity` W/sr.
+    Point { position: Vec3, intensity: Vec3 },
+    /// count[0] x count[1] omni lights of `intensity` W/sr each, at the cell
+    /// centres of the parallelogram corner + s u + t v.
+    Grid { corner: Vec3, u: Vec3, v: Vec3, count: [u32; 2], intensity: Vec3 },
+    /// An area emitter: the mesh `meshes[mesh]` (visible, emitting `radiance`
+    /// W/(m^2 sr) from the side its winding faces) as `samples` oriented lights.
+    Area { mesh: usize, radiance: Vec3, samples: u32, seed: u64 },
+    /// The sun: `irradiance` W/m^2 from `direction` (towards the sun, any length),
+    /// as `samples` directional lights over a disc of `angular_radius_degrees`.
+    Sun { direction: Vec3, irradiance: Vec3, angular_radius_degrees: f32, samples: u32, seed: u64 },
+}
+
 /// A loaded, validated scene.
 #[derive(Debug, Clone)]
 pub struct Scene {
@@ -54,10 +73,11 @@ pub struct Scene {
     pub materials: Vec<Material>,
     pub textures: Vec<Texture>,
     pub meshes: Vec<Mesh>,
-    pub lights: Lights,
+    /// The lights of `[[lights]]`, in file order.
+    pub lights: Vec<LightSource>,
     pub max_mirror_depth: u32,
-    /// Radiance from infinitely far away (visible in the background); its
-    /// directional lights are already in `lights`.
+    /// Radiance from infinitely far away: visible in the background, and
+    /// sampled into directional lights.
     pub environment: Option<Environment>,
     /// Instant radiosity: VPLs are traced per render (they need Embree and the seed).
     pub indirect: Option<IndirectSettings>,
@@ -82,19 +102,15 @@ pub const MAX_VPL_PATHS: u32 = 1 << 24;
 /// Most samples one emitter may become.
 pub const MAX_EMITTER_SAMPLES: u32 = 1 << 24;
 
-/// Adds an area emitter: its visible, black, emissive geometry and its samples.
+/// Adds an area emitter's geometry: visible, black, emitting `radiance` from
+/// the side its triangles' winding faces. Returns its mesh index.
 fn add_emitter(
-    lights: &mut Lights,
     meshes: &mut Vec<Mesh>,
     materials: &mut Vec<Material>,
     mut mesh: Mesh,
     radiance: Vec3,
-    samples: u32,
     seed: u64,
-) {
-    let triangles: Vec<EmitterTriangle> =
-        mesh.triangles.iter().map(|t| EmitterTriangle { p: t.map(|i| mesh.positions[i as usize]) }).collect();
-    lights.oriented.extend(sample_area_light(&triangles, radiance, samples as usize, 0.0, seed));
+) -> usize {
     mesh.material = materials.len();
     mesh.normals = None; // emission is one-sided by the triangles' winding
     materials.push(Material {
@@ -106,6 +122,7 @@ fn add_emitter(
         emission: radiance,
     });
     meshes.push(mesh);
+    meshes.len() - 1
 }
 
 impl Scene {
@@ -154,27 +171,25 @@ impl Scene {
         let mut material_index = HashMap::new();
         for (name, m) in &spec.materials {
             let field = |f: &str| format!("materials.{name}.{f}");
-            let albedo =
-                match (&m.albedo, &m.texture) {
-                    (Some(_), Some(_)) => {
-                        return Err(v.error(&field("texture"), "give either albedo or texture, not both"));
-                    }
-                    (None, None) => return Err(v.error(&field("albedo"), "missing: give albedo or texture")),
-                    (Some(a), None) => Albedo::Constant(v.unit_rgb(*a, &field("albedo"))?),
-                    (None, Some(t)) => {
-                        let scale = Vec2::from_array(m.texture_scale);
-                        v.check(scale.is_finite() && scale.min_element() > 0.0, &field("texture_scale"), || {
-                            format!("must be finite and > 0, got {:?}", m.texture_scale)
-                        })?;
-                        let texture_path = base.join(t);
-                        inputs.push(texture_path.clone());
-                        textures.push(Texture::load_png(&texture_path).map_err(|e| SceneError {
-                            location: format!("{} ({})", field("texture"), e.location),
-                            ..e
-                        })?);
-                        Albedo::Texture { texture: textures.len() - 1, scale }
-                    }
-                };
+            let albedo = match (&m.albedo, &m.texture) {
+                (Some(_), Some(_)) => {
+                    return Err(v.error(&field("texture"), "give either albedo or texture, not both"));
+                }
+                (None, None) => return Err(v.error(&field("albedo"), "missing: give albedo or texture")),
+                (Some(a), None) => Albedo::Constant(v.unit_rgb(*a, &field("albedo"))?),
+                (None, Some(t)) => {
+                    let scale = Vec2::from_array(m.texture_scale);
+                    v.check(scale.is_finite() && scale.min_element() > 0.0, &field("texture_scale"), || {
+                        format!("must be finite and > 0, got {:?}", m.texture_scale)
+                    })?;
+                    let texture_path = base.join(t);
+                    inputs.push(texture_path.clone());
+                    let image = image::read_srgb_png(&texture_path)
+                        .map_err(|e| SceneError::new(&texture_path, field("texture"), e.to_string()))?;
+                    textures.push(Texture::from_image(image));
+                    Albedo::Texture { texture: textures.len() - 1, scale }
+                }
+            };
             let specular = v.unit_rgb(m.specular, &field("specular"))?;
             v.check(m.exponent.is_finite() && (0.0..=1e6).contains(&m.exponent), &field("exponent"), || {
                 format!("must be between 0 and 1e6, got {}", m.exponent)
@@ -194,7 +209,8 @@ impl Scene {
         let mut meshes = Vec::new();
         for (i, raw) in spec.shapes.iter().enumerate() {
             let field = |f: &str| format!("shapes[{i}].{f}");
-            let shape = ShapeSpec::parse(raw).map_err(|(path, m)| v.error(&format!("shapes[{i}]{path}"), &m))?;
+            let shape =
+                ShapeSpec::parse(raw).map_err(|e| v.error(&format!("shapes[{i}]{}", e.field()), &e.to_string()))?;
             let material_of = |name: &String| {
                 material_index
                     .get(name)
@@ -259,15 +275,16 @@ impl Scene {
             meshes.push(mesh);
         }
 
-        let mut lights = Lights::default();
+        let mut lights = Vec::new();
         for (i, raw) in spec.lights.iter().enumerate() {
             let field = |f: &str| format!("lights[{i}].{f}");
-            let light = LightSpec::parse(raw).map_err(|(path, m)| v.error(&format!("lights[{i}]{path}"), &m))?;
+            let light =
+                LightSpec::parse(raw).map_err(|e| v.error(&format!("lights[{i}]{}", e.field()), &e.to_string()))?;
             match &light {
                 LightSpec::Point(PointSpec { position, intensity }) => {
                     let position = v.point(*position, &field("position"))?;
                     let intensity = v.non_negative_rgb(*intensity, &field("intensity"))?;
-                    lights.omni.push(OmniLight { position, intensity });
+                    lights.push(LightSource::Point { position, intensity });
                 }
                 LightSpec::Grid(GridSpec { corner, u, v: edge_v, count, intensity }) => {
                     let c = v.point(*corner, &field("corner"))?;
@@ -277,14 +294,14 @@ impl Scene {
                     v.check(count[0] >= 1 && count[1] >= 1 && total <= MAX_GRID_LIGHTS, &field("count"), || {
                         format!("must be at least [1, 1] and at most {MAX_GRID_LIGHTS} lights in all, got {count:?}")
                     })?;
-                    for j in 0..count[1] {
-                        for k in 0..count[0] {
-                            // Cell centres: the grid is symmetric within its parallelogram.
-                            let s = (k as f32 + 0.5) / count[0] as f32;
-                            let t = (j as f32 + 0.5) / count[1] as f32;
-                            lights.omni.push(OmniLight { position: c + s * u + t * w, intensity });
-                        }
+                    // The lights are convex combinations of the corners: corners
+                    // within the limits keep every light within them.
+                    for (corner, name) in [(c + u, "u"), (c + w, "v"), (c + u + w, "v")] {
+                        v.check(within_limits(corner), &field(name), || {
+                            format!("the grid reaches {corner}: coordinates must be within +/-{MAX_COORDINATE:e} m")
+                        })?;
                     }
+                    lights.push(LightSource::Grid { corner: c, u, v: w, count: *count, intensity });
                 }
                 LightSpec::Area(AreaSpec { corner, u, v: edge_v, radiance, samples }) => {
                     let c = v.point(*corner, &field("corner"))?;
@@ -294,8 +311,8 @@ impl Scene {
                     })?;
                     let radiance = v.non_negative_rgb(*radiance, &field("radiance"))?;
                     v.sample_count(*samples, &field("samples"))?;
-                    let mesh = Mesh::quad(c, u, w, materials.len());
-                    add_emitter(&mut lights, &mut meshes, &mut materials, mesh, radiance, *samples, i as u64);
+                    let mesh = add_emitter(&mut meshes, &mut materials, Mesh::quad(c, u, w, 0), radiance, i as u64);
+                    lights.push(LightSource::Area { mesh, radiance, samples: *samples, seed: i as u64 });
                 }
                 LightSpec::AreaMesh(AreaMeshSpec { file, scale, translate, radiance, samples }) => {
                     v.check(scale.is_finite() && *scale > 0.0, &field("scale"), || {
@@ -309,14 +326,15 @@ impl Scene {
                     if !mesh_path.is_file() {
                         return Err(v.error(&field("file"), &format!("mesh file '{}' not found", mesh_path.display())));
                     }
-                    let mesh = Mesh::load_obj(&mesh_path, *scale, t, materials.len())?;
+                    let mesh = Mesh::load_obj(&mesh_path, *scale, t, 0)?;
                     if let Some(bad) = mesh.positions.iter().position(|p| !within_limits(*p)) {
                         return Err(v.error(
                             &field("file"),
                             &format!("vertex {bad} is outside +/-{MAX_COORDINATE:e} m after scaling"),
                         ));
                     }
-                    add_emitter(&mut lights, &mut meshes, &mut materials, mesh, radiance, *samples, i as u64);
+                    let mesh = add_emitter(&mut meshes, &mut materials, mesh, radiance, i as u64);
+                    lights.push(LightSource::Area { mesh, radiance, samples: *samples, seed: i as u64 });
                 }
                 LightSpec::Sun(SunSpec { direction, irradiance, angular_radius, samples }) => {
                     let d = v.point(*direction, &field("direction"))?;
@@ -328,7 +346,13 @@ impl Scene {
                         || format!("must be between 0 and 45 degrees, got {angular_radius}"),
                     )?;
                     v.sample_count(*samples, &field("samples"))?;
-                    lights.directional.extend(sample_sun(d, irradiance, *angular_radius, *samples as usize, i as u64));
+                    lights.push(LightSource::Sun {
+                        direction: d,
+                        irradiance,
+                        angular_radius_degrees: *angular_radius,
+                        samples: *samples,
+                        seed: i as u64,
+                    });
                 }
             }
         }
@@ -341,20 +365,19 @@ impl Scene {
                 v.check(env.scale.is_finite() && env.scale >= 0.0, &field("scale"), || {
                     format!("must be finite and >= 0, got {}", env.scale)
                 })?;
-                let environment = match (&env.radiance, &env.file) {
+                let map = match (&env.radiance, &env.file) {
                     (Some(_), Some(_)) => return Err(v.error(&field("file"), "give either radiance or file, not both")),
                     (None, None) => return Err(v.error(&field("radiance"), "missing: give radiance or file")),
-                    (Some(r), None) => Environment::Constant(v.non_negative_rgb(*r, &field("radiance"))?),
+                    (Some(r), None) => EnvironmentMap::Constant(v.non_negative_rgb(*r, &field("radiance"))?),
                     (None, Some(f)) => {
                         let exr = base.join(f);
                         inputs.push(exr.clone());
-                        Environment::load_exr(&exr, env.scale).map_err(|m| {
-                            SceneError::new(&exr, field("file"), format!("cannot use as an environment: {m}"))
+                        EnvironmentMap::load_exr(&exr, env.scale).map_err(|e| {
+                            SceneError::new(&exr, field("file"), format!("cannot use as an environment: {e}"))
                         })?
                     }
                 };
-                lights.directional.extend(environment.sample(env.samples as usize, 0xe4f));
-                Some(environment)
+                Some(Environment { map, samples: env.samples })
             }
         };
 
@@ -374,16 +397,6 @@ impl Scene {
         v.check((0.0..=MAX_COORDINATE).contains(&clamp), "render.distance_clamp", || {
             format!("must be finite and >= 0, got {clamp}")
         })?;
-
-        if let Some(bad) = lights.omni.iter().position(|l| !within_limits(l.position)) {
-            return Err(v.error(
-                "lights",
-                &format!(
-                    "light {bad} is at {}: coordinates must be within +/-{MAX_COORDINATE:e} m",
-                    lights.omni[bad].position
-                ),
-            ));
-        }
 
         Ok(Self {
             path: path.to_path_buf(),
@@ -409,9 +422,9 @@ impl Scene {
         Camera::new(Vec3::from(c.eye), Vec3::from(c.look_at), Vec3::from(c.up), c.fov_y, width, height)
     }
 
-    /// Bounds of all geometry and lights: (min, max).
+    /// Bounds of all geometry: (min, max), infinite when there is none.
     #[must_use]
-    pub fn bounds(&self) -> (Vec3, Vec3) {
+    pub fn mesh_bounds(&self) -> (Vec3, Vec3) {
         let mut lo = Vec3::splat(f32::INFINITY);
         let mut hi = Vec3::splat(f32::NEG_INFINITY);
         for m in &self.meshes {
@@ -419,11 +432,23 @@ impl Scene {
             lo = lo.min(a);
             hi = hi.max(b);
         }
-        for l in &self.lights.omni {
-            lo = lo.min(l.position);
-            hi = hi.max(l.position);
-        }
         (lo, hi)
+    }
+
+    /// At most how many point lights the light sources and the environment
+    /// become (without VPLs), known before any is made.
+    #[must_use]
+    pub fn light_count_bound(&self) -> u64 {
+        let sources: u64 = self
+            .lights
+            .iter()
+            .map(|source| match *source {
+                LightSource::Point { .. } => 1,
+                LightSource::Grid { count, .. } => u64::from(count[0]) * u64::from(count[1]),
+                LightSource::Area { samples, .. } | LightSource::Sun { samples, .. } => u64::from(samples),
+            })
+            .sum();
+        sources + self.environment.as_ref().map_or(0, |e| u64::from(e.samples))
     }
 
     #[must_use]

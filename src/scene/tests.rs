@@ -62,11 +62,20 @@ fn error_of(name: &str, text: &str) -> String {
 fn a_valid_scene_loads_with_its_lights_and_shapes() {
     let scene = load_str("ok.toml", VALID).unwrap();
     assert_eq!(scene.film, Film { width: 64, height: 48, spp: 1 });
-    assert_eq!(scene.lights.omni.len(), 1 + 6);
     assert_eq!(scene.meshes.len(), 2);
-    // Grid lights sit at cell centres.
-    let first = scene.lights.omni[1].position;
-    assert!((first - Vec3::new(-1.0 + 2.0 / 6.0, 3.0, -0.5)).length() < 1e-6, "{first}");
+    assert_eq!(
+        scene.lights,
+        vec![
+            LightSource::Point { position: Vec3::new(0.0, 2.0, 0.0), intensity: Vec3::ONE },
+            LightSource::Grid {
+                corner: Vec3::new(-1.0, 3.0, -1.0),
+                u: Vec3::new(2.0, 0.0, 0.0),
+                v: Vec3::new(0.0, 0.0, 2.0),
+                count: [3, 2],
+                intensity: Vec3::splat(0.5),
+            },
+        ]
+    );
 }
 
 #[test]
@@ -74,7 +83,10 @@ fn json_with_the_same_schema_loads_too() {
     let json = r#"{"film": {"width": 8, "height": 8}, "camera": {"eye": [0,0,1], "look_at": [0,0,0], "fov_y": 30},
         "lights": [{"type": "point", "position": [0,0,2], "intensity": [1,2,3]}]}"#;
     let scene = load_str("s.json", json).unwrap();
-    assert_eq!(scene.lights.omni[0].intensity, Vec3::new(1.0, 2.0, 3.0));
+    assert_eq!(
+        scene.lights,
+        vec![LightSource::Point { position: Vec3::new(0.0, 0.0, 2.0), intensity: Vec3::new(1.0, 2.0, 3.0) }]
+    );
 }
 
 #[test]

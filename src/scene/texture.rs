@@ -1,11 +1,9 @@
-//! PNG textures: sRGB-encoded colours decoded to linear reflectance, looked
+//! Textures: linear reflectance (decoded from sRGB PNGs by `image`), looked
 //! up bilinearly with wrap-around.
-
-use std::path::Path;
 
 use glam::{Vec2, Vec3};
 
-use super::error::SceneError;
+use super::image::RgbImage;
 
 #[derive(Debug, Clone)]
 pub struct Texture {
@@ -15,49 +13,11 @@ pub struct Texture {
     texels: Vec<Vec3>,
 }
 
-/// The sRGB electro-optical transfer function (IEC 61966-2-1).
-#[must_use]
-pub fn srgb_to_linear(c: f32) -> f32 {
-    if c <= 0.04045 {
-        c / 12.92
-    } else {
-        ((c + 0.055) / 1.055).powf(2.4)
-    }
-}
-
 impl Texture {
-    pub fn load_png(path: &Path) -> Result<Self, SceneError> {
-        let err = |m: String| SceneError::new(path, "PNG", m);
-        let file = std::fs::File::open(path).map_err(|e| err(format!("cannot open texture: {e}")))?;
-        let mut decoder = png::Decoder::new(std::io::BufReader::new(file));
-        // Expand palettes and low bit depths to 8 bits; keep 16-bit as is.
-        decoder.set_transformations(png::Transformations::EXPAND);
-        let mut reader = decoder.read_info().map_err(|e| err(format!("not a readable PNG: {e}")))?;
-        let mut buf = vec![0; reader.output_buffer_size()];
-        let info = reader.next_frame(&mut buf).map_err(|e| err(format!("corrupt PNG data: {e}")))?;
-        let (width, height) = (info.width as usize, info.height as usize);
-        let channels = info.color_type.samples();
-        let sixteen = info.bit_depth == png::BitDepth::Sixteen;
-        let sample = |i: usize| -> f32 {
-            if sixteen {
-                f32::from(u16::from_be_bytes([buf[2 * i], buf[2 * i + 1]])) / 65535.0
-            } else {
-                f32::from(buf[i]) / 255.0
-            }
-        };
-        let mut texels = Vec::with_capacity(width * height);
-        for p in 0..width * height {
-            let base = p * channels;
-            let rgb = match channels {
-                1 | 2 => Vec3::splat(sample(base)),
-                _ => Vec3::new(sample(base), sample(base + 1), sample(base + 2)),
-            };
-            texels.push(Vec3::new(srgb_to_linear(rgb.x), srgb_to_linear(rgb.y), srgb_to_linear(rgb.z)));
-        }
-        if texels.is_empty() {
-            return Err(err("texture has no pixels".into()));
-        }
-        Ok(Self { width, height, texels })
+    /// A texture of a decoded image (see [`super::image::read_srgb_png`]).
+    #[must_use]
+    pub fn from_image(image: RgbImage) -> Self {
+        Self::from_texels(image.width, image.height, image.texels)
     }
 
     /// A texture from linear texels (tests and generated scenes).
@@ -91,13 +51,6 @@ impl Texture {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn srgb_decoding_hits_known_points() {
-        assert_eq!(srgb_to_linear(0.0), 0.0);
-        assert!((srgb_to_linear(1.0) - 1.0).abs() < 1e-6);
-        assert!((srgb_to_linear(0.5) - 0.214).abs() < 1e-3);
-    }
 
     #[test]
     fn lookup_wraps_and_interpolates() {

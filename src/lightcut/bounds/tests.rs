@@ -2,8 +2,16 @@
 //! thousands of random shading points, normals, view directions, materials
 //! and clusters (seeded).
 use super::*;
-use crate::sampling::Rng;
+use crate::light::TreeLight;
 use crate::scene::material::{reflect, Albedo, Material};
+use crate::shading::light_term;
+use crate::util::sampling::Rng;
+
+/// M * G per unit intensity of a light of `kind` at `point` (a direction
+/// for a directional light) with `normal` (oriented lights).
+fn term(kind: LightKind, sp: &SurfacePoint<'_>, point: Vec3, normal: Vec3) -> DVec3 {
+    light_term(&TreeLight { point, normal, intensity: Vec3::ONE }.light(kind), sp)
+}
 
 fn unit(rng: &mut Rng) -> Vec3 {
     loop {
@@ -132,7 +140,7 @@ fn check_random_cluster(rng: &mut Rng, kind: LightKind) {
     let bound = cluster_bound(kind, &sp, lo, hi, cone);
     assert!(bound.is_finite(), "bound {bound} not finite");
     for (position, normal) in &lights {
-        let value = light_term(kind, &sp, *position, *normal);
+        let value = term(kind, &sp, *position, *normal);
         let ok = value.cmple(bound * (1.0 + 1e-6)).all();
         assert!(ok, "{kind:?}: light term {value} exceeds bound {bound} at p={} n={} lights={lights:?}", sp.p, sp.n);
     }
@@ -178,6 +186,6 @@ fn a_point_inside_the_box_gets_a_finite_bound_above_every_light() {
     let b = cluster_bound(LightKind::Omni, &sp, lo, hi, Cone::of_direction(Vec3::Y));
     assert!(b.is_finite() && b.min_element() > 0.0);
     // A light on top of the point along the normal, at the clamp distance.
-    let near = light_term(LightKind::Omni, &sp, sp.p + sp.n * 1e-9, Vec3::ZERO);
+    let near = term(LightKind::Omni, &sp, sp.p + sp.n * 1e-9, Vec3::ZERO);
     assert!(near.cmple(b).all() && near.is_finite());
 }

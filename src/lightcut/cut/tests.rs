@@ -1,10 +1,11 @@
 //! The cut against the exact sum at real shading points of a real scene.
 use super::*;
 use crate::embree::Device;
-use crate::render::geometry::Geometry;
-use crate::render::integrator::ShadingStats;
-use crate::sampling::Rng;
+use crate::light::Lights;
+use crate::light_tree::LightTrees;
 use crate::scene::Scene;
+use crate::shading::Geometry;
+use crate::util::sampling::Rng;
 
 /// A floor, two occluding spheres (one glossy) and `n x n` lights of mixed
 /// brightness over them; returns the scene loaded from text.
@@ -64,27 +65,22 @@ intensity = [0.2, 0.1, 0.05]
 /// random pixels.
 fn at_shading_points(scene: &Scene, settings: CutSettings, mut check: impl FnMut(DVec3, DVec3, f64)) {
     let device = Device::try_new().unwrap();
-    let geometry = Geometry::try_new(&device, scene).unwrap();
-    let trees = LightTrees::build(&scene.lights, 3);
+    let lights = Lights::from_scene(scene);
+    let geometry = Geometry::try_new(&device, scene, &lights).unwrap();
+    let trees = LightTrees::build(&lights, 3);
     assert!(trees.trees.iter().any(|t| t.light_count() > EXHAUSTIVE_LIGHTS), "the test must exercise the cut");
     let camera = scene.camera(64, 48);
     let mut rng = Rng::seeded(5);
-    let (mut scratch, mut batch, mut stats) = (CutScratch::default(), BatchBuffers::default(), ShadingStats::default());
+    let (mut scratch, mut batch) = (CutScratch::default(), BatchBuffers::default());
     let mut points = 0;
     while points < 400 {
         let ray = camera.ray(rng.range_f32(0.0, 64.0), rng.range_f32(0.0, 48.0));
         let Some(hit) = geometry.embree.intersect(&ray) else { continue };
         let sp = geometry.surface(&ray, &hit);
-        let cut = evaluate(&trees.trees, &sp, &geometry.embree, &settings, &mut scratch, &mut batch, &mut stats);
-        let bound = scratch.last_error_bound;
+        let cut = evaluate(&trees.trees, &sp, &geometry.embree, &settings, &mut scratch);
         let mut exact = LightBatch::new(&geometry.embree, &sp, &mut batch);
-        for tree in &trees.trees {
-            for i in 0..tree.light_count() {
-                exact.add(tree.kind, tree.leaves[i].position, tree.light_normal(i), tree.leaves[i].intensity);
-            }
-        }
-        let exact = exact.finish(&mut ShadingStats::default());
-        check(cut, exact, bound);
+        lights.for_each(|light| exact.add(&light));
+        check(cut.radiance, exact.finish().radiance, cut.error_bound);
         points += 1;
     }
 }

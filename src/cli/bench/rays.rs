@@ -8,13 +8,14 @@ use std::time::Instant;
 use rayon::prelude::*;
 use serde::Serialize;
 
+use crate::cli::progress::Progress;
 use crate::embree::ShadowRay;
-use crate::lightcut::cut::CutSettings;
-use crate::render::direct::{light_sample, SHADOW_BATCH};
-use crate::render::progress::Progress;
+use crate::lightcut::CutSettings;
 use crate::render::session::Session;
 use crate::render::PassSettings;
-use crate::sampling::Rng;
+use crate::shading::direct::light_intensity;
+use crate::shading::{light_sample, SHADOW_BATCH};
+use crate::util::sampling::Rng;
 
 /// Largest number of rays recorded for (a): enough for a stable figure,
 /// small enough to keep in memory (32 bytes each).
@@ -55,8 +56,8 @@ fn record(session: &Session<'_>, settings: &PassSettings, stride: usize) -> Vec<
                 let mut rays = Vec::new();
                 if let Some(hit) = session.geometry.embree.intersect(&ray) {
                     let sp = session.geometry.surface(&ray, &hit);
-                    scene.lights.for_each(|kind, position, normal, intensity| {
-                        if let Some((_, Some(r))) = light_sample(kind, &sp, position, normal, intensity) {
+                    session.lights.for_each(|light| {
+                        if let Some((_, Some(r))) = light_sample(&light, &sp, light_intensity(&light)) {
                             rays.push(r);
                         }
                     });
@@ -68,10 +69,9 @@ fn record(session: &Session<'_>, settings: &PassSettings, stride: usize) -> Vec<
 }
 
 pub fn measure(session: &Session<'_>, settings: &PassSettings, cut: CutSettings, quiet: bool) -> RayFigures {
-    let scene = session.scene;
     let threads = session.pool.current_num_threads();
     // Pixels to record so that about MAX_RECORDED rays are kept.
-    let expected = settings.bounds.area() as f64 * scene.lights.len().max(1) as f64;
+    let expected = settings.bounds.area() as f64 * session.lights.len().max(1) as f64;
     let stride = (expected / MAX_RECORDED as f64).ceil().max(1.0) as usize;
     let rays = record(session, settings, stride);
     let embree = &session.geometry.embree;
@@ -94,8 +94,10 @@ pub fn measure(session: &Session<'_>, settings: &PassSettings, cut: CutSettings,
     let batch_seconds = start.elapsed().as_secs_f64();
     assert_eq!(single, batch, "single and batch calls disagree on occlusion");
 
-    let lightcuts = session.render(settings, Some(cut), &Progress::for_stderr("lightcuts", quiet));
-    let exact = session.render(settings, None, &Progress::for_stderr("exact", quiet));
+    let progress = Progress::for_stderr("lightcuts", quiet);
+    let lightcuts = session.render(settings, Some(cut), &|event| progress.report(event));
+    let progress = Progress::for_stderr("exact", quiet);
+    let exact = session.render(settings, None, &|event| progress.report(event));
     let embree_batch = rate(rays.len(), batch_seconds);
     let (lc_rays, ex_rays) = (lightcuts.stats.shading.shadow_rays, exact.stats.shading.shadow_rays);
     let (lc_s, ex_s) = (lightcuts.stats.time.as_secs_f64(), exact.stats.time.as_secs_f64());

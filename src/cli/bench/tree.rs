@@ -8,13 +8,12 @@ use glam::Vec3;
 use serde::Serialize;
 
 use crate::embree::Device;
-use crate::light_tree::{greedy, ploc, LightKind, LightTree, TreeLight};
-use crate::lightcut::cut::{evaluate, CutScratch, CutSettings};
-use crate::render::direct::BatchBuffers;
-use crate::render::geometry::SurfacePoint;
-use crate::render::integrator::ShadingStats;
-use crate::sampling::Rng;
+use crate::light::{LightKind, TreeLight};
+use crate::light_tree::{greedy, ploc, LightTree};
+use crate::lightcut::{evaluate, CutScratch, CutSettings};
 use crate::scene::material::{reflect, Albedo, Material};
+use crate::shading::SurfacePoint;
+use crate::util::sampling::Rng;
 
 /// How the benchmark's lights are spread.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
@@ -51,16 +50,16 @@ pub fn random_lights(kind: LightKind, n: usize, distribution: Distribution, seed
             let intensity =
                 Vec3::splat(rng.range_f32(0.5, 1.5)) * Vec3::new(1.0, rng.range_f32(0.8, 1.0), rng.range_f32(0.6, 1.0));
             match kind {
-                LightKind::Omni => TreeLight { position, normal: Vec3::ZERO, intensity },
+                LightKind::Omni => TreeLight { point: position, normal: Vec3::ZERO, intensity },
                 LightKind::Oriented => {
                     if direction.y > 0.0 {
                         direction.y = -direction.y;
                     }
-                    TreeLight { position, normal: direction, intensity }
+                    TreeLight { point: position, normal: direction, intensity }
                 }
                 LightKind::Directional => {
                     direction.y = direction.y.abs();
-                    TreeLight { position: direction, normal: Vec3::ZERO, intensity }
+                    TreeLight { point: direction, normal: Vec3::ZERO, intensity }
                 }
             }
         })
@@ -163,12 +162,10 @@ fn shading_points(material: &Material, count: usize) -> Vec<SurfacePoint<'_>> {
 /// Average cut size at 2% over the fixed shading points (no occluders).
 pub fn average_cut(tree: &LightTree, points: &[SurfacePoint<'_>], embree: &crate::embree::Scene) -> f64 {
     let settings = CutSettings { error: 0.02, max_cut: 1_000_000 };
-    let (mut scratch, mut batch, mut stats) = (CutScratch::default(), BatchBuffers::default(), ShadingStats::default());
+    let mut scratch = CutScratch::default();
     let trees = std::slice::from_ref(tree);
-    for sp in points {
-        let _ = evaluate(trees, sp, embree, &settings, &mut scratch, &mut batch, &mut stats);
-    }
-    stats.cut_nodes as f64 / points.len().max(1) as f64
+    let nodes: u64 = points.iter().map(|sp| evaluate(trees, sp, embree, &settings, &mut scratch).nodes).sum();
+    nodes as f64 / points.len().max(1) as f64
 }
 
 /// PLOC against greedy on `n` lights: cluster sizes and average cut size.

@@ -1,13 +1,17 @@
 //! `lightcuts bench ...`: benchmarks that print measured figures (a table,
 //! or JSON with --json). Targets are checked by reading them, never by
-//! timed assertions.
+//! timed assertions. The measurements sit beside the commands that print
+//! them: `tree` (build time, memory, quality) and `rays` (throughput).
 
 use clap::{Args, Subcommand, ValueEnum};
 use serde::Serialize;
 
+pub mod rays;
+pub mod tree;
+
 use super::CliError;
-use crate::bench::tree::{measure_build, measure_quality, random_lights, BuildFigure, Distribution, QualityFigure};
-use crate::light_tree::LightKind;
+use crate::light::LightKind;
+use tree::{measure_build, measure_quality, random_lights, BuildFigure, Distribution, QualityFigure};
 
 #[derive(Debug, Args)]
 pub struct BenchArgs {
@@ -99,7 +103,7 @@ fn rays(args: &RaysArgs) -> Result<(), CliError> {
     let settings = args.pass.settings(&scene)?;
     let cut = super::render_cmd::cut_settings(args.error, args.max_cut)?;
     let session = crate::render::session::Session::try_new(&scene, args.pass.threads)?;
-    let f = crate::bench::rays::measure(&session, &settings, cut, args.quiet);
+    let f = rays::measure(&session, &settings, cut, args.quiet);
     if args.json {
         println!("{}", serde_json::to_string_pretty(&f).expect("plain data serialises"));
         return Ok(());

@@ -1,10 +1,13 @@
-//! Render progress: a bar with ETA on a terminal (indicatif), plain lines
-//! every 10% otherwise (render-farm logs), or nothing.
+//! Render progress as the command line shows it: a bar with ETA on a
+//! terminal (indicatif), plain lines every 10% otherwise (render-farm logs),
+//! or nothing. Passes report to it through their progress callback.
 
 use std::io::{IsTerminal, Write};
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::Mutex;
 use std::time::Instant;
+
+use crate::render::PassProgress;
 
 pub enum Progress {
     Silent,
@@ -40,7 +43,16 @@ impl Progress {
         }
     }
 
-    pub fn start(&self, total: u64) {
+    /// What a pass reports (its progress callback).
+    pub fn report(&self, event: PassProgress) {
+        match event {
+            PassProgress::Started { tiles } => self.start(tiles),
+            PassProgress::TileDone => self.advance(),
+            PassProgress::Finished => self.finish(),
+        }
+    }
+
+    fn start(&self, total: u64) {
         match self {
             Self::Silent => {}
             Self::Bar(bar) => {
@@ -57,7 +69,7 @@ impl Progress {
         }
     }
 
-    pub fn advance(&self) {
+    fn advance(&self) {
         match self {
             Self::Silent => {}
             Self::Bar(bar) => bar.inc(1),
@@ -80,7 +92,7 @@ impl Progress {
         }
     }
 
-    pub fn finish(&self) {
+    fn finish(&self) {
         if let Self::Bar(bar) = self {
             bar.finish_and_clear();
         }

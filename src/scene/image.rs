@@ -1,0 +1,93 @@
+//! Reading the images a scene names: PNG textures (sRGB-encoded colours,
+//! decoded to linear reflectance) and OpenEXR environment maps (linear
+//! radiance). Both become linear RGB texels, row 0 at the top of the image.
+
+use std::path::Path;
+
+use glam::Vec3;
+
+use crate::util::color::srgb_to_linear;
+
+/// Linear RGB texels, `width * height` of them, row by row from the top.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RgbImage {
+    pub width: usize,
+    pub height: usize,
+    pub texels: Vec<Vec3>,
+}
+
+/// Why an image a scene names cannot be used. Caused by the user's file.
+#[derive(Debug, thiserror::Error)]
+pub enum ImageError {
+    /// The file cannot be opened (missing, a directory, no permission).
+    #[error("cannot open: {0}")]
+    Open(#[source] std::io::Error),
+    /// The PNG decoder rejected the file (not a PNG, truncated, corrupt).
+    #[error("not a readable PNG: {0}")]
+    Png(#[source] png::DecodingError),
+    /// The EXR reader rejected the file (not an EXR, truncated, no R, G and B).
+    #[error("cannot read EXR: {0}")]
+    Exr(#[source] exr::error::Error),
+    /// The image has no pixels.
+    #[error("the image is empty")]
+    Empty,
+    /// A radiance that no light can have (NaN, infinite or negative).
+    #[error("pixel {index} is not a finite, non-negative radiance")]
+    BadRadiance { index: usize },
+}
+
+/// Reads a PNG (8 or 16 bits, grey or colour, palettes expanded) and decodes
+/// its sRGB values to linear.
+pub fn read_srgb_png(path: &Path) -> Result<RgbImage, ImageError> {
+    let file = std::fs::File::open(path).map_err(ImageError::Open)?;
+    let mut decoder = png::Decoder::new(std::io::BufReader::new(file));
+    // Expand palettes and low bit depths to 8 bits; keep 16-bit as is.
+    decoder.set_transformations(png::Transformations::EXPAND);
+    let mut reader = decoder.read_info().map_err(ImageError::Png)?;
+    let mut buf = vec![0; reader.output_buffer_size()];
+    let info = reader.next_frame(&mut buf).map_err(ImageError::Png)?;
+    let (width, height) = (info.width as usize, info.height as usize);
+    let channels = info.color_type.samples();
+    let sixteen = info.bit_depth == png::BitDepth::Sixteen;
+    let sample = |i: usize| -> f32 {
+        if sixteen {
+            f32::from(u16::from_be_bytes([buf[2 * i], buf[2 * i + 1]])) / 65535.0
+        } else {
+            f32::from(buf[i]) / 255.0
+        }
+    };
+    let mut texels = Vec::with_capacity(width * height);
+    for p in 0..width * height {
+        let base = p * channels;
+        let rgb = match channels {
+            1 | 2 => Vec3::splat(sample(base)),
+            _ => Vec3::new(sample(base), sample(base + 1), sample(base + 2)),
+        };
+        texels.push(Vec3::new(srgb_to_linear(rgb.x), srgb_to_linear(rgb.y), srgb_to_linear(rgb.z)));
+    }
+    if texels.is_empty() {
+        return Err(ImageError::Empty);
+    }
+    Ok(RgbImage { width, height, texels })
+}
+
+/// Reads the R, G and B channels of an OpenEXR's first RGB layer as radiance,
+/// each finite and non-negative.
+pub fn read_radiance_exr(path: &Path) -> Result<RgbImage, ImageError> {
+    let image = exr::prelude::read_first_rgba_layer_from_file(
+        path,
+        |size, _| RgbImage { width: size.width(), height: size.height(), texels: vec![Vec3::ZERO; size.area()] },
+        |image: &mut RgbImage, at, (r, g, b, _): (f32, f32, f32, f32)| {
+            image.texels[at.y() * image.width + at.x()] = Vec3::new(r, g, b);
+        },
+    )
+    .map_err(ImageError::Exr)?;
+    let image = image.layer_data.channel_data.pixels;
+    if let Some(index) = image.texels.iter().position(|t| !t.is_finite() || t.min_element() < 0.0) {
+        return Err(ImageError::BadRadiance { index });
+    }
+    if image.texels.is_empty() {
+        return Err(ImageError::Empty);
+    }
+    Ok(image)
+}

@@ -1,0 +1,12 @@
+//! Shading: the shading point a ray hit describes (`surface`, built by
+//! `geometry` from Embree's hits) and the evaluation of one light at it,
+//! with its shadow ray, singly or in batches (`direct`). Both render modes
+//! and the light cuts above evaluate lights only through here.
+
+pub mod direct;
+pub mod geometry;
+pub mod surface;
+
+pub use direct::{light_sample, light_term, BatchBuffers, BatchResult, LightBatch, SHADOW_BATCH};
+pub use geometry::{Geometry, GeometryError};
+pub use surface::SurfacePoint;

@@ -1,0 +1,90 @@
+//! The shading point: where a camera (or light) path meets a surface, with
+//! what the material term and the shadow rays need ([LC05] eq. 1).
+
+use glam::Vec3;
+
+use crate::embree::{Ray, ShadowRay};
+use crate::scene::material::Material;
+
+/// A shading point: position, normals (facing the viewer), outgoing direction.
+#[derive(Debug, Clone)]
+pub struct SurfacePoint<'s> {
+    pub p: Vec3,
+    /// Shading normal, unit, on the viewer's side.
+    pub n: Vec3,
+    /// Geometric normal, unit, on the viewer's side.
+    pub ng: Vec3,
+    /// Unit direction towards the viewer.
+    pub wo: Vec3,
+    /// Mirror direction of wo about n.
+    pub r: Vec3,
+    /// Diffuse albedo here (texture evaluated).
+    pub kd: Vec3,
+    pub material: &'s Material,
+    /// Distance from the ray origin, metres.
+    pub distance: f32,
+    /// Radiance the surface emits towards the viewer (area-light emitters).
+    pub emitted: Vec3,
+    /// The ray offset, metres (see `Geometry::ray_epsilon`).
+    pub(crate) epsilon: f32,
+    /// The distance below which 1/d^2 is clamped: the ray offset, or the
+    /// scene's `render.distance_clamp` when larger.
+    pub(crate) min_distance: f32,
+}
+
+impl SurfacePoint<'_> {
+    /// The material term M = f_r(wi, wo) cos(theta_i) for a unit direction wi
+    /// ([LC05] eq. 1); 0 when wi is below the shading or the geometric
+    /// surface (light cannot reach this side through the surface).
+    #[must_use]
+    pub fn material_term(&self, wi: Vec3) -> Vec3 {
+        let cos_theta = self.n.dot(wi);
+        if cos_theta <= 0.0 || self.ng.dot(wi) <= 0.0 {
+            return Vec3::ZERO;
+        }
+        crate::scene::material::brdf(self.kd, self.material, self.r, wi) * cos_theta
+    }
+
+    /// Origin for rays leaving the surface on the viewer's side.
+    #[must_use]
+    pub fn offset_origin(&self) -> Vec3 {
+        self.p + self.ng * self.epsilon
+    }
+
+    /// The shadow ray from here to a point light at `y`, stopping `epsilon`
+    /// short of it so a light lying on a surface is not hidden by that surface.
+    /// `None` when the light is within `epsilon`: nothing can lie between.
+    #[must_use]
+    pub fn shadow_ray_to(&self, y: Vec3) -> Option<ShadowRay> {
+        let origin = self.offset_origin();
+        let direction = y - origin;
+        let length = direction.length();
+        if length <= 2.0 * self.epsilon {
+            return None;
+        }
+        Some(ShadowRay::new(Ray { origin, direction, t_near: 0.0, t_far: 1.0 - self.epsilon / length }))
+    }
+
+    /// The shadow ray towards a light at infinity in unit direction `d`.
+    #[must_use]
+    pub fn shadow_ray_towards(&self, d: Vec3) -> ShadowRay {
+        ShadowRay::new(Ray { origin: self.offset_origin(), direction: d, t_near: 0.0, t_far: f32::INFINITY })
+    }
+
+    /// The mirror-reflected ray.
+    #[must_use]
+    pub fn mirror_ray(&self) -> Ray {
+        Ray { origin: self.offset_origin(), direction: self.r, t_near: 0.0, t_far: f32::INFINITY }
+    }
+
+    /// The distance clamp for point-light singularities: squared distances
+    /// below min_distance^2 count as min_distance^2 (the ray offset, or the
+    /// scene's larger `render.distance_clamp`), so a light on a surface gives
+    /// a large but finite value. Applied identically by every render mode and
+    /// by the bounds.
+    #[must_use]
+    pub fn min_distance_squared(&self) -> f64 {
+        // f64: the offset may be as small as 1e-30, whose square underflows f32.
+        f64::from(self.min_distance) * f64::from(self.min_distance)
+    }
+}
