@@ -234,8 +234,8 @@ fn render_small(scene: &Scene) {
 }
 
 fn fuzz(iterations: u64, seed: u64, deadline: Option<std::time::Instant>) -> (u64, u64) {
-    let dir = std::env::temp_dir().join(format!("lightcuts-fuzz-{}-{seed}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let temporary = tempfile::tempdir().unwrap();
+    let dir = temporary.path();
     std::fs::write(dir.join("m.obj"), OBJ).unwrap();
     let scene_path = dir.join("scene.toml");
     let mut rng = Rng::seeded(seed);
@@ -272,7 +272,6 @@ fn fuzz(iterations: u64, seed: u64, deadline: Option<std::time::Instant>) -> (u6
             panic!("iteration {i}: panic on OBJ input:\n{}", String::from_utf8_lossy(&obj));
         }
     }
-    let _ = std::fs::remove_dir_all(&dir);
     (loaded, rejected)
 }
 

@@ -53,22 +53,14 @@ fn luminances(image: &ExrImage, path: &Path) -> Result<Vec<DVec3>, OutputError> 
 
 pub fn compare_files(test: &Path, reference: &Path) -> Result<ComparisonResult, OutputError> {
     let (t, r) = (read_exr(test)?, read_exr(reference)?);
-    if (t.x0, t.y0, t.width, t.height) != (r.x0, r.y0, r.width, r.height) {
-        return Err(OutputError::new(
-            test,
-            format!(
-                "data window {}x{} at ({}, {}) differs from the reference's {}x{} at ({}, {}) ({})",
-                t.width,
-                t.height,
-                t.x0,
-                t.y0,
-                r.width,
-                r.height,
-                r.x0,
-                r.y0,
-                reference.display()
-            ),
-        ));
+    let window = |i: &ExrImage| [i64::from(i.x0), i64::from(i.y0), i.width as i64, i.height as i64];
+    if window(&t) != window(&r) {
+        return Err(OutputError::WindowMismatch {
+            path: test.to_path_buf(),
+            reference: reference.to_path_buf(),
+            window: window(&t),
+            reference_window: window(&r),
+        });
     }
     Ok(compare_rgb(&luminances(&t, test)?, &luminances(&r, reference)?, t.width, t.height))
 }

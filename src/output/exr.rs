@@ -97,7 +97,12 @@ pub fn write_exr(
     let layer = Layer::new(size, attributes, encoding, AnyChannels::sort(list.into_iter().map(colour).collect()));
     let display = IntegerBounds::new(Vec2(0, 0), Vec2(film.full_width as usize, film.full_height as usize));
     let image = Image::new(ImageAttributes::new(display), layer);
-    write_atomically(path, |temporary| image.write().to_file(temporary).map_err(|e| format!("cannot write EXR: {e}")))
+    write_atomically(path, |file| image.write().to_unbuffered(file).map_err(write_error(path)))
+}
+
+/// The error of encoding the EXR behind `path`.
+fn write_error(path: &Path) -> impl FnOnce(::exr::error::Error) -> OutputError + '_ {
+    move |source| OutputError::Exr { path: path.to_path_buf(), action: "write", source }
 }
 
 /// Writes a comparison as an EXR: per-channel absolute difference (R, G, B)
@@ -113,5 +118,5 @@ pub fn write_diff_exr(path: &Path, result: &super::compare::ComparisonResult) ->
         channel("relative_error", result.relative.iter().map(|&e| finite(e)).collect()),
     ];
     let image = Image::from_channels((result.width, result.height), AnyChannels::sort(channels.into()));
-    write_atomically(path, |t| image.write().to_file(t).map_err(|e| format!("cannot write EXR: {e}")))
+    write_atomically(path, |file| image.write().to_unbuffered(file).map_err(write_error(path)))
 }

@@ -10,41 +10,119 @@ pub mod preview;
 pub mod read;
 pub mod temporary;
 
+use std::fs::File;
 use std::path::{Path, PathBuf};
 
-/// Failure to write an output file. Caused by the environment (missing
-/// directory, full disk, permissions) or by an encoder error.
+/// Failure to write (or read back) an output file. Each variant names the
+/// file; the cause is the environment (missing directory, full disk,
+/// permissions, a missing font) or an image that is not what the command
+/// needs (a missing channel, windows that differ).
 #[derive(Debug, thiserror::Error)]
-#[error("{}: {message}", path.display())]
-pub struct OutputError {
-    pub path: PathBuf,
-    pub message: String,
+pub enum OutputError {
+    /// The directory an output was to be written in does not exist.
+    #[error("{}: the directory '{}' does not exist", path.display(), directory.display())]
+    NoDirectory { path: PathBuf, directory: PathBuf },
+    /// Creating, writing, renaming or reading a file failed.
+    #[error("{}: cannot {action}: {source}", path.display())]
+    Io {
+        path: PathBuf,
+        /// What was being done, e.g. "create the temporary file".
+        action: &'static str,
+        #[source]
+        source: std::io::Error,
+    },
+    /// The EXR encoder failed, or the decoder rejected a file.
+    #[error("{}: cannot {action} EXR: {source}", path.display())]
+    Exr {
+        path: PathBuf,
+        /// "read" or "write".
+        action: &'static str,
+        #[source]
+        source: ::exr::error::Error,
+    },
+    /// The PNG encoder failed.
+    #[error("{}: cannot write PNG: {source}", path.display())]
+    Png {
+        path: PathBuf,
+        #[source]
+        source: png::EncodingError,
+    },
+    /// The CSV writer failed.
+    #[error("{}: cannot write CSV: {source}", path.display())]
+    Csv {
+        path: PathBuf,
+        #[source]
+        source: csv::Error,
+    },
+    /// Drawing a plot failed.
+    #[error("{}: cannot draw the plot: {source}", path.display())]
+    Plot {
+        path: PathBuf,
+        #[source]
+        source: Box<dyn std::error::Error + Send + Sync>,
+    },
+    /// No font to draw a plot's text with.
+    #[error(
+        "{}: no font for the plot's text: none of {tried} is a readable font; install fonts-dejavu-core \
+         (ci/setup.sh does) or set LIGHTCUTS_FONT to a TrueType font",
+        path.display()
+    )]
+    NoFont { path: PathBuf, tried: String },
+    /// An image lacks a channel the command needs.
+    #[error("{}: channel '{channel}' missing (has {available})", path.display())]
+    MissingChannel { path: PathBuf, channel: String, available: String },
+    /// Two images to compare do not cover the same pixels.
+    #[error(
+        "{}: data window {}x{} at ({}, {}) differs from the reference's {}x{} at ({}, {}) ({})",
+        path.display(), window[2], window[3], window[0], window[1],
+        reference_window[2], reference_window[3], reference_window[0], reference_window[1], reference.display()
+    )]
+    WindowMismatch {
+        path: PathBuf,
+        reference: PathBuf,
+        /// x0, y0, width, height.
+        window: [i64; 4],
+        reference_window: [i64; 4],
+    },
 }
 
 impl OutputError {
-    pub fn new(path: &Path, message: impl Into<String>) -> Self {
-        Self { path: path.to_path_buf(), message: message.into() }
+    /// An I/O failure while doing `action` to `path`.
+    pub fn io<'a>(path: &'a Path, action: &'static str) -> impl FnOnce(std::io::Error) -> Self + 'a {
+        move |source| Self::Io { path: path.to_path_buf(), action, source }
     }
 }
 
-/// Writes a file through `write` at a temporary path beside `path`, then
-/// renames it into place; on any failure the temporary file is removed and
-/// nothing appears under `path`.
-pub fn write_atomically(path: &Path, write: impl FnOnce(&Path) -> Result<(), String>) -> Result<(), OutputError> {
-    let dir = match path.parent() {
+/// Writes a file through `write` into a temporary file beside `path`, then
+/// renames it into place; on any failure (or a SIGINT meanwhile) the
+/// temporary file is removed and nothing appears under `path`.
+pub fn write_atomically(
+    path: &Path,
+    write: impl FnOnce(&mut File) -> Result<(), OutputError>,
+) -> Result<(), OutputError> {
+    let directory = match path.parent() {
         Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
         _ => PathBuf::from("."),
     };
-    if !dir.is_dir() {
-        return Err(OutputError::new(path, format!("the directory '{}' does not exist", dir.display())));
+    if !directory.is_dir() {
+        return Err(OutputError::NoDirectory { path: path.to_path_buf(), directory });
     }
-    let name = path.file_name().ok_or_else(|| OutputError::new(path, "not a file name"))?;
-    let temporary = dir.join(format!(".{}.{}.partial", name.to_string_lossy(), std::process::id()));
-    temporary::register(&temporary);
-    let result = write(&temporary).and_then(|()| std::fs::rename(&temporary, path).map_err(|e| e.to_string()));
-    if result.is_err() {
-        let _ = std::fs::remove_file(&temporary);
-    }
-    temporary::unregister(&temporary);
-    result.map_err(|m| OutputError::new(path, m))
+    let name = path.file_name().map_or_else(|| "output".into(), |n| n.to_string_lossy().into_owned());
+    let mut partial = tempfile::Builder::new()
+        .prefix(&format!(".{name}."))
+        .suffix(".partial")
+        .tempfile_in(&directory)
+        .map_err(OutputError::io(path, "create the temporary file"))?;
+    let partial_path = partial.path().to_path_buf();
+    temporary::register(&partial_path);
+    // Dropping the NamedTempFile on an error removes the temporary file.
+    let result = write(partial.as_file_mut()).and_then(|()| {
+        partial.persist(path).map(drop).map_err(|e| OutputError::Io {
+            path: path.to_path_buf(),
+            action: "rename the temporary file into place",
+            source: e.error,
+        })
+    });
+    temporary::unregister(&partial_path);
+    result
 }

@@ -23,15 +23,15 @@ pub fn write_png(path: &Path, film: &Film, exposure_stops: f32) -> Result<(), Ou
 
 /// Writes 8-bit RGB data as a PNG, atomically.
 pub fn write_rgb_png(path: &Path, width: u32, height: u32, rgb: &[u8]) -> Result<(), OutputError> {
-    write_atomically(path, |temporary| {
-        let file = std::fs::File::create(temporary).map_err(|e| e.to_string())?;
+    let png_error = |source| OutputError::Png { path: path.to_path_buf(), source };
+    write_atomically(path, |file| {
         let mut encoder = png::Encoder::new(std::io::BufWriter::new(file), width, height);
         encoder.set_color(png::ColorType::Rgb);
         encoder.set_depth(png::BitDepth::Eight);
         encoder.set_source_srgb(png::SrgbRenderingIntent::Perceptual);
-        let mut writer = encoder.write_header().map_err(|e| e.to_string())?;
-        writer.write_image_data(rgb).map_err(|e| e.to_string())?;
-        writer.finish().map_err(|e| e.to_string())
+        let mut writer = encoder.write_header().map_err(png_error)?;
+        writer.write_image_data(rgb).map_err(png_error)?;
+        writer.finish().map_err(png_error)
     })
 }
 

@@ -26,14 +26,10 @@ pub struct ExrImage {
 impl ExrImage {
     /// The named channel, or an error naming the file and the channel.
     pub fn channel(&self, path: &Path, name: &str) -> std::result::Result<&[f32], OutputError> {
-        self.channels.get(name).map(Vec::as_slice).ok_or_else(|| {
-            OutputError::new(
-                path,
-                format!(
-                    "channel '{name}' missing (has {})",
-                    self.channels.keys().cloned().collect::<Vec<_>>().join(", ")
-                ),
-            )
+        self.channels.get(name).map(Vec::as_slice).ok_or_else(|| OutputError::MissingChannel {
+            path: path.to_path_buf(),
+            channel: name.to_string(),
+            available: self.channels.keys().cloned().collect::<Vec<_>>().join(", "),
         })
     }
 }
@@ -46,7 +42,7 @@ pub fn read_exr(path: &Path) -> std::result::Result<ExrImage, OutputError> {
         .first_valid_layer()
         .all_attributes()
         .from_file(path)
-        .map_err(|e| OutputError::new(path, format!("cannot read EXR: {e}")))?;
+        .map_err(|source| OutputError::Exr { path: path.to_path_buf(), action: "read", source })?;
     let layer = &image.layer_data;
     let mut channels = BTreeMap::new();
     for channel in &layer.channel_data.list {

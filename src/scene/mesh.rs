@@ -230,20 +230,18 @@ mod tests {
 
     #[test]
     fn obj_errors_name_their_line() {
-        let dir = std::env::temp_dir().join(format!("lightcuts-obj-lines-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
+        let dir = tempfile::tempdir().unwrap();
         for (name, text, expect) in [
             ("range.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n", "line 4"),
             ("negative.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 -7\n", "line 4"),
             ("text.obj", "v 0 0 0\nv 1 zero 0\nv 0 1 0\nf 1 2 3\n", "line 2"),
             ("face.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 x\n", "line 4"),
         ] {
-            let path = dir.join(name);
+            let path = dir.path().join(name);
             std::fs::write(&path, text).unwrap();
             let e = Mesh::load_obj(&path, 1.0, Vec3::ZERO, 0).expect_err(name).to_string();
             assert!(e.contains(name) && e.contains(expect), "{e}");
         }
-        let _ = std::fs::remove_dir_all(&dir);
     }
 
     fn area(mesh: &Mesh) -> f32 {

@@ -42,13 +42,10 @@ intensity = [0.5, 0.5, 0.5]
 "#;
 
 fn load_str(name: &str, text: &str) -> Result<Scene, SceneError> {
-    let dir = std::env::temp_dir().join(format!("lightcuts-scene-test-{}-{name}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let path = dir.join(name);
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join(name);
     std::fs::write(&path, text).unwrap();
-    let result = Scene::load(&path);
-    let _ = std::fs::remove_dir_all(&dir);
-    result
+    Scene::load(&path)
 }
 
 fn error_of(name: &str, text: &str) -> String {
@@ -156,7 +153,8 @@ fn a_film_too_large_for_memory_is_rejected() {
 
 #[test]
 fn obj_meshes_load_relative_to_the_scene_file() {
-    let dir = std::env::temp_dir().join(format!("lightcuts-obj-test-{}", std::process::id()));
+    let temporary = tempfile::tempdir().unwrap();
+    let dir = temporary.path();
     std::fs::create_dir_all(dir.join("meshes")).unwrap();
     std::fs::write(
         dir.join("meshes/tri.obj"),
@@ -174,5 +172,4 @@ fn obj_meshes_load_relative_to_the_scene_file() {
     std::fs::write(dir.join("bad.toml"), &bad).unwrap();
     let e = Scene::load(&dir.join("bad.toml")).expect_err("out-of-range face index");
     assert!(e.to_string().contains("bad.obj"), "{e}");
-    let _ = std::fs::remove_dir_all(&dir);
 }
