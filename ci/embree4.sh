@@ -20,8 +20,9 @@ repo=$(cd "$(dirname "$0")/.." && pwd)
 cache=${LIGHTCUTS_TRIXIE_CACHE:-/var/cache/lightcuts}
 root="$cache/trixie-root"
 cargo_home=${CARGO_HOME:-$HOME/.cargo}
-# git: tests/assets.rs asks git which files are committed.
-packages=libembree-dev,libclang-dev,gcc,libc6-dev,ca-certificates,git
+# git: tests/assets.rs asks git which files are committed; fonts-dejavu-core:
+# the plots' text.
+packages=libembree-dev,libclang-dev,gcc,libc6-dev,ca-certificates,git,fonts-dejavu-core
 
 if [ "$(id -u)" -ne 0 ]; then
     echo "ci/embree4.sh: must run as root (debootstrap and chroot)" >&2

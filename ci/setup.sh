@@ -4,14 +4,15 @@
 #
 #   ci/setup.sh          to build and render: Embree (libembree-dev: Embree 3
 #                        on Debian 12, Embree 4 on Debian 13), libclang for
-#                        bindgen, a C compiler for the shim
+#                        bindgen, a C compiler for the shim, and DejaVu Sans
+#                        for the text of `sweep`'s plots
 #   ci/setup.sh --test   also what the tests and CI use: git (tests/assets.rs
 #                        checks that every file a scene reads is committed)
 #                        and OpenImageIO's tools (an independent reader of the
 #                        EXRs we write: oiiotool, iinfo, idiff)
 set -euo pipefail
 
-packages=(libembree-dev libclang-dev gcc libc6-dev)
+packages=(libembree-dev libclang-dev gcc libc6-dev fonts-dejavu-core)
 case "${1:-}" in
 "") ;;
 --test) packages+=(git openimageio-tools) ;;

@@ -22,7 +22,7 @@ fn sweep_writes_csv_svg_png_and_reuses_its_reference() {
     assert!(stdout.contains("threshold") && stdout.contains("speedup"), "{stdout}");
     let csv = std::fs::read_to_string(out.join("sweep.csv")).unwrap();
     assert_eq!(csv.lines().count(), 3, "{csv}");
-    assert!(csv.starts_with("threshold,time_s,speedup"));
+    assert!(csv.starts_with("threshold,seconds,speedup"), "{csv}");
     assert!(std::fs::read_to_string(out.join("sweep.svg")).unwrap().contains("<svg"));
     assert!(png::Decoder::new(std::fs::File::open(out.join("sweep.png")).unwrap()).read_info().is_ok());
     // The smaller threshold is no less accurate.

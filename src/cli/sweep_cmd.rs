@@ -2,6 +2,7 @@
 //! thresholds, each measured against the exact render of the same scene and
 //! settings (rendered once, and reused from DIR when it matches).
 
+use std::io::Write as _;
 use std::path::{Path, PathBuf};
 
 use clap::Args;
@@ -88,14 +89,14 @@ fn hash_bytes(bytes: &[u8]) -> u64 {
 }
 
 fn hash_file(path: &Path) -> Result<u64, OutputError> {
-    let bytes = std::fs::read(path).map_err(|e| OutputError::new(path, format!("cannot read to hash it: {e}")))?;
+    let bytes = std::fs::read(path).map_err(OutputError::io(path, "read the file to hash it"))?;
     Ok(hash_bytes(&bytes))
 }
 
 /// `lightcuts VERSION EXE-HASH`: the running binary, exactly.
 fn renderer_identity() -> Result<String, OutputError> {
-    let exe = std::env::current_exe()
-        .map_err(|e| OutputError::new(Path::new("lightcuts"), format!("cannot find the running executable: {e}")))?;
+    let exe =
+        std::env::current_exe().map_err(OutputError::io(Path::new("lightcuts"), "find the running executable"))?;
     Ok(format!("lightcuts {} {:016x}", env!("CARGO_PKG_VERSION"), hash_file(&exe)?))
 }
 
@@ -149,7 +150,9 @@ fn reference(
     let record =
         ReferenceRecord { key: key.clone(), seconds: result.seconds, shadow_rays: result.stats.shading.shadow_rays };
     let text = serde_json::to_string_pretty(&record).expect("plain data serialises");
-    write_atomically(&record_path, |t| std::fs::write(t, text.as_bytes()).map_err(|e| e.to_string()))?;
+    write_atomically(&record_path, |file| {
+        file.write_all(text.as_bytes()).map_err(OutputError::io(&record_path, "write"))
+    })?;
     Ok((rgb(&result.film), record))
 }
 
@@ -160,8 +163,7 @@ pub fn run(args: &SweepArgs) -> Result<(), CliError> {
     if cuts.is_empty() {
         return Err(CliError::Usage { flag: "--errors", message: "give at least one threshold".into() });
     }
-    std::fs::create_dir_all(&args.out)
-        .map_err(|e| OutputError::new(&args.out, format!("cannot create the directory: {e}")))?;
+    std::fs::create_dir_all(&args.out).map_err(OutputError::io(&args.out, "create the directory"))?;
     let b = settings.bounds;
     let key = ReferenceKey {
         scene: std::fs::canonicalize(&scene.path).unwrap_or_else(|_| scene.path.clone()).display().to_string(),
@@ -248,31 +250,24 @@ pub fn run(args: &SweepArgs) -> Result<(), CliError> {
     Ok(())
 }
 
+/// One CSV row per threshold, with the columns of [`SweepRow`].
 fn write_csv(path: &Path, rows: &[SweepRow]) -> Result<(), OutputError> {
-    let mut text = String::from("threshold,time_s,speedup,average_cut,max_cut,shadow_rays_per_pixel,mean_relative_error,p99_relative_error,max_relative_error,fraction_above_2_percent\n");
-    for r in rows {
-        text.push_str(&format!(
-            "{},{:.6},{:.4},{:.3},{},{:.3},{:.6e},{:.6e},{:.6e},{:.6e}\n",
-            r.threshold,
-            r.seconds,
-            r.speedup,
-            r.average_cut,
-            r.max_cut,
-            r.shadow_rays_per_pixel,
-            r.mean_relative_error,
-            r.p99_relative_error,
-            r.max_relative_error,
-            r.fraction_above_2_percent
-        ));
-    }
-    write_atomically(path, |t| std::fs::write(t, text.as_bytes()).map_err(|e| e.to_string()))
+    let csv_error = |source| OutputError::Csv { path: path.to_path_buf(), source };
+    write_atomically(path, |file| {
+        let mut writer = csv::Writer::from_writer(file);
+        for row in rows {
+            writer.serialize(row).map_err(csv_error)?;
+        }
+        writer.flush().map_err(OutputError::io(path, "write"))
+    })
 }
 
 fn plot(scene: &Scene, rows: &[SweepRow], exact_seconds: f64) -> Plot {
     let label = |t: f64| format!("{}%", 100.0 * t);
-    let series = |name: &str, colour, f: &dyn Fn(&SweepRow) -> f64| Series {
+    let series = |name: &str, colour, dashed, f: &dyn Fn(&SweepRow) -> f64| Series {
         name: name.into(),
         colour,
+        dashed,
         points: rows.iter().map(|r| (r.seconds, 100.0 * f(r), label(r.threshold))).collect(),
     };
     let name = scene.path.file_stem().map_or_else(|| "scene".into(), |s| s.to_string_lossy().into_owned());
@@ -281,8 +276,8 @@ fn plot(scene: &Scene, rows: &[SweepRow], exact_seconds: f64) -> Plot {
         x_label: "render time (s)".into(),
         y_label: "relative error (%)".into(),
         series: vec![
-            series("mean", [200, 40, 40], &|r| r.mean_relative_error),
-            series("99th percentile", [40, 80, 200], &|r| r.p99_relative_error),
+            series("mean", [200, 40, 40], false, &|r| r.mean_relative_error),
+            series("99th percentile", [40, 80, 200], true, &|r| r.p99_relative_error),
         ],
     }
 }
