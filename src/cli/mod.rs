@@ -3,6 +3,7 @@
 
 pub mod bench;
 mod compare_cmd;
+mod process;
 mod progress;
 mod render_cmd;
 mod sweep_cmd;

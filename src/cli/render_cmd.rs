@@ -136,10 +136,10 @@ pub fn run(args: &RenderArgs) -> Result<(), CliError> {
     let session = Session::try_new(&scene, args.pass.threads)?;
     let progress = Progress::for_stderr("render", args.quiet);
     crate::embree::set_timing(args.stats);
-    let cpu_before = process_cpu_seconds();
+    let cpu_before = super::process::cpu_seconds();
     let PassResult { film, stats, seconds, trees, tree_bytes, vpls, vpl_time, lights } =
         session.render(&settings, cut, &|event| progress.report(event));
-    let cpu_seconds = process_cpu_seconds().zip(cpu_before).map(|(after, before)| after - before);
+    let cpu_seconds = super::process::cpu_seconds().zip(cpu_before).map(|(after, before)| after - before);
     let mode = render_mode(cut);
 
     let meta = ExrMetadata {
@@ -205,23 +205,6 @@ pub fn run(args: &RenderArgs) -> Result<(), CliError> {
     Ok(())
 }
 
-/// User plus system CPU time of this process, from /proc (Linux), seconds.
-fn process_cpu_seconds() -> Option<f64> {
-    let stat = std::fs::read_to_string("/proc/self/stat").ok()?;
-    // Fields after the parenthesised command name; utime and stime are the
-    // 12th and 13th of them, in clock ticks (100 per second on Linux).
-    let rest = stat.rsplit_once(')')?.1;
-    let fields: Vec<&str> = rest.split_whitespace().collect();
-    let ticks: f64 = fields.get(11)?.parse::<f64>().ok()? + fields.get(12)?.parse::<f64>().ok()?;
-    Some(ticks / 100.0)
-}
-
-fn peak_memory_mib() -> Option<f64> {
-    let status = std::fs::read_to_string("/proc/self/status").ok()?;
-    let kib: f64 = status.lines().find(|l| l.starts_with("VmHWM:"))?.split_whitespace().nth(1)?.parse().ok()?;
-    Some(kib / 1024.0)
-}
-
 fn print_full_stats(stats: &crate::render::PassStats, cpu_seconds: Option<f64>, tree_bytes: usize, threads: usize) {
     let embree = crate::embree::timed_nanos() as f64 * 1e-9;
     println!("  statistics (--stats)");
@@ -237,7 +220,7 @@ fn print_full_stats(stats: &crate::render::PassStats, cpu_seconds: Option<f64>, 
         println!("    CPU time       {cpu:.2} s (user + system, whole process during the pass)");
     }
     println!("    tree memory    {:.1} MiB", tree_bytes as f64 / (1024.0 * 1024.0));
-    if let Some(peak) = peak_memory_mib() {
+    if let Some(peak) = super::process::peak_resident_mib() {
         println!("    peak memory    {peak:.1} MiB resident");
     }
     println!("    cut size       shading points");

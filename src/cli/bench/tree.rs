@@ -7,6 +7,7 @@ use std::time::Instant;
 use glam::Vec3;
 use serde::Serialize;
 
+use crate::cli::process;
 use crate::embree::Device;
 use crate::light::{LightKind, TreeLight};
 use crate::light_tree::{greedy, ploc, LightTree};
@@ -97,12 +98,6 @@ pub struct QualityFigure {
     pub greedy_build_seconds: f64,
 }
 
-fn proc_status_kib(field: &str) -> Option<f64> {
-    let status = std::fs::read_to_string("/proc/self/status").ok()?;
-    let line = status.lines().find(|l| l.starts_with(field))?;
-    line.split_whitespace().nth(1)?.parse().ok()
-}
-
 /// Builds a PLOC tree over `lights` and reports time and memory.
 pub fn measure_build(
     kind: LightKind,
@@ -110,15 +105,14 @@ pub fn measure_build(
     lights: &[TreeLight],
     seed: u64,
 ) -> (BuildFigure, LightTree) {
-    // Writing 5 to clear_refs resets VmHWM (the peak RSS) to the current RSS.
-    let reset = std::fs::write("/proc/self/clear_refs", "5").is_ok();
-    let before = proc_status_kib("VmRSS:");
+    let reset = process::reset_peak_resident();
+    let before = process::resident_mib();
     let start = Instant::now();
     let tree = ploc::build(kind, lights, seed);
     let build_seconds = start.elapsed().as_secs_f64();
-    let peak = proc_status_kib("VmHWM:");
+    let peak = process::peak_resident_mib();
     let peak_build_mib = match (reset, before, peak) {
-        (true, Some(b), Some(p)) => Some((p - b).max(0.0) / 1024.0),
+        (true, Some(b), Some(p)) => Some((p - b).max(0.0)),
         _ => None,
     };
     let figure = BuildFigure {
