@@ -53,8 +53,12 @@ pub enum CliError {
     #[error("{flag}: {message}")]
     Usage { flag: &'static str, message: String },
     /// The rayon thread pool could not start.
-    #[error("cannot start {threads} worker threads: {message}")]
-    Threads { threads: usize, message: String },
+    #[error("cannot start {threads} worker threads: {source}")]
+    Threads {
+        threads: usize,
+        #[source]
+        source: rayon::ThreadPoolBuildError,
+    },
 }
 
 /// Parses the command line, runs the command, and returns the exit code.

@@ -23,8 +23,12 @@ pub enum SessionError {
     #[error("{file}: {source}")]
     Geometry { file: std::path::PathBuf, source: GeometryError },
     /// The worker threads could not start.
-    #[error("cannot start {threads} worker threads: {message}")]
-    Threads { threads: usize, message: String },
+    #[error("cannot start {threads} worker threads: {source}")]
+    Threads {
+        threads: usize,
+        #[source]
+        source: rayon::ThreadPoolBuildError,
+    },
 }
 
 pub struct Session<'s> {
@@ -54,7 +58,7 @@ pub struct PassResult {
 impl<'s> Session<'s> {
     /// `threads`: 0 for one per CPU.
     pub fn try_new(scene: &'s Scene, threads: usize) -> Result<Self, SessionError> {
-        let pool = thread_pool(threads).map_err(|e| SessionError::Threads { threads, message: e.to_string() })?;
+        let pool = thread_pool(threads).map_err(|source| SessionError::Threads { threads, source })?;
         let lights = pool.install(|| Lights::from_scene(scene));
         let device = Device::try_new()?;
         let geometry = Geometry::try_new(&device, scene, &lights)

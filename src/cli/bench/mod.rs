@@ -130,7 +130,7 @@ fn tree(args: &TreeArgs) -> Result<(), CliError> {
         return Err(CliError::Usage { flag: "--lights", message: "every count must be between 1 and 2^31 - 1".into() });
     }
     let pool = crate::render::thread_pool(args.threads)
-        .map_err(|e| CliError::Threads { threads: args.threads, message: e.to_string() })?;
+        .map_err(|source| CliError::Threads { threads: args.threads, source })?;
     let kind = LightKind::from(args.kind);
     let mut builds = Vec::new();
     for distribution in [Distribution::Uniform, Distribution::Clustered] {
