@@ -1,13 +1,17 @@
-//! Criterion benchmark of the lightcut evaluation at a fixed set of shading
-//! points (the first hits of a 64x48 image of grid10k), at 2% and 0.5%.
-//! Run with `cargo bench --bench cut`.
+//! Criterion benchmarks of the lightcut at a fixed set of shading points
+//! (the first hits of a 64x48 image of grid10k): the whole cut at 2% and
+//! 0.5%, and its parts alone: the bounds of every block of the tree at one
+//! point, and one light's M * G and shadow ray. Run with
+//! `cargo bench --bench cut`.
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use lightcuts::embree::Device;
 use lightcuts::light::Lights;
 use lightcuts::light_tree::LightTrees;
+use lightcuts::lightcut::bounds::PointBounds;
 use lightcuts::lightcut::{evaluate, CutScratch, CutSettings};
 use lightcuts::scene::Scene;
+use lightcuts::shading::light_sample;
 use lightcuts::shading::Geometry;
 
 fn cut(c: &mut Criterion) {
@@ -35,13 +39,27 @@ fn cut(c: &mut Criterion) {
                 let mut nodes = 0;
                 for sp in &points {
                     nodes +=
-                        std::hint::black_box(evaluate(&trees.trees, sp, &geometry.embree, &settings, &mut scratch))
-                            .nodes;
+                        std::hint::black_box(evaluate(&trees, sp, &geometry.embree, &settings, &mut scratch)).nodes;
                 }
                 nodes
             });
         });
     }
+    let tree = &trees.trees[0];
+    let sp = &points[points.len() / 2];
+    group.bench_function(format!("bounds_of_{}_blocks", tree.blocks.len()), |b| {
+        b.iter(|| {
+            let bounds = PointBounds::new(sp, trees.scale);
+            tree.blocks.iter().map(|block| bounds.pair(tree.kind, block, None)[1]).sum::<f32>()
+        });
+    });
+    group.bench_function(format!("light_sample_of_{}_lights", tree.blocks.len()), |b| {
+        b.iter(|| {
+            (1..tree.blocks.len())
+                .filter_map(|k| light_sample(&tree.representative(k, 1).light(tree.kind), sp, glam::Vec3::ONE))
+                .count()
+        });
+    });
     group.finish();
 }
 

@@ -9,8 +9,11 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 out=${1:-out/measure}
 mkdir -p "$out"
-cargo build --release --quiet
-bin=target/release/lightcuts
+# BIN=path/to/lightcuts measures another build (e.g. the previous one) the same way.
+if [ -z "${BIN:-}" ]; then
+    cargo build --release --quiet
+fi
+bin=${BIN:-target/release/lightcuts}
 
 declare -A WINDOWS=(
     [grid100k]="280,360,210,270"

@@ -219,6 +219,13 @@ fn print_full_stats(stats: &crate::render::PassStats, cpu_seconds: Option<f64>, 
     if let Some(cpu) = cpu_seconds {
         println!("    CPU time       {cpu:.2} s (user + system, whole process during the pass)");
     }
+    if stats.shading.cut_nanos > 0 {
+        println!(
+            "    cut work       {:.1} ns per cut node ({:.3} thread-seconds choosing cuts, outside Embree)",
+            stats.shading.cut_nanos as f64 / stats.shading.cut_nodes.max(1) as f64,
+            stats.shading.cut_nanos as f64 * 1e-9
+        );
+    }
     println!("    tree memory    {:.1} MiB", tree_bytes as f64 / (1024.0 * 1024.0));
     if let Some(peak) = super::process::peak_resident_mib() {
         println!("    peak memory    {peak:.1} MiB resident");

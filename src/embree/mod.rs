@@ -9,6 +9,7 @@
 
 mod sys;
 
+use std::cell::Cell;
 use std::ffi::{CStr, CString};
 use std::ptr::NonNull;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
@@ -85,10 +86,20 @@ pub fn flush_denormals_enabled() -> bool {
 static TIMING: AtomicBool = AtomicBool::new(false);
 static TIMED_NANOS: AtomicU64 = AtomicU64::new(0);
 
+thread_local! {
+    static THREAD_TIMED_NANOS: Cell<u64> = const { Cell::new(0) };
+}
+
 /// Turns on (or off) timing of every ray query, summed over threads, for
 /// `render --stats`. Off by default: two clock reads per call are not free.
 pub fn set_timing(enabled: bool) {
     TIMING.store(enabled, Ordering::Relaxed);
+}
+
+/// Whether ray queries are being timed.
+#[must_use]
+pub fn timing() -> bool {
+    TIMING.load(Ordering::Relaxed)
 }
 
 /// Nanoseconds spent inside Embree queries since timing was turned on,
@@ -98,12 +109,20 @@ pub fn timed_nanos() -> u64 {
     TIMED_NANOS.load(Ordering::Relaxed)
 }
 
+/// Nanoseconds the calling thread has spent inside timed Embree queries.
+#[must_use]
+pub fn thread_timed_nanos() -> u64 {
+    THREAD_TIMED_NANOS.with(Cell::get)
+}
+
 #[inline]
 fn timed<R>(query: impl FnOnce() -> R) -> R {
     if TIMING.load(Ordering::Relaxed) {
         let start = Instant::now();
         let result = query();
-        TIMED_NANOS.fetch_add(start.elapsed().as_nanos() as u64, Ordering::Relaxed);
+        let nanos = start.elapsed().as_nanos() as u64;
+        TIMED_NANOS.fetch_add(nanos, Ordering::Relaxed);
+        THREAD_TIMED_NANOS.with(|t| t.set(t.get() + nanos));
         result
     } else {
         query()
@@ -402,6 +421,41 @@ impl Scene {
                 rays.len(),
             )
         });
+    }
+}
+
+/// How many rays Embree traces together in a packet query.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum PacketWidth {
+    Four = 4,
+    Eight = 8,
+    Sixteen = 16,
+}
+
+impl Scene {
+    /// Occlusion of many rays, traced `width` at a time by Embree's packet
+    /// queries (rtcOccluded4/8/16). `occluded` is resized to `rays.len()`.
+    pub fn occluded_packets(&self, rays: &[ShadowRay], occluded: &mut Vec<bool>, width: PacketWidth) {
+        occluded.clear();
+        occluded.resize(rays.len(), false);
+        if rays.is_empty() {
+            return;
+        }
+        // SAFETY: as for `occluded_batch`: ShadowRay is repr(transparent)
+        // over sys::LcRay, `occluded` holds rays.len() one-byte bools and the
+        // shim writes only 0 or 1 into them; the shim copies each packet
+        // into its own aligned RTCRayN, so the input needs no alignment, and
+        // the width is one the shim accepts (it returns -1 otherwise).
+        let status = timed(|| unsafe {
+            sys::lc_occluded_packets(
+                self.raw.ptr.as_ptr(),
+                rays.as_ptr().cast::<sys::LcRay>(),
+                occluded.as_mut_ptr().cast::<u8>(),
+                rays.len(),
+                width as i32,
+            )
+        });
+        debug_assert_eq!(status, 0, "every PacketWidth is supported by the shim");
     }
 }
 

@@ -202,6 +202,63 @@ void lc_occluded_batch(LcScene* scene, const LcRay* rays, uint8_t* occluded, siz
     for (size_t i = 0; i < n; ++i) occluded[i] = (uint8_t)occluded_one(scene->scene, &rays[i]);
 }
 
+/* One packet of up to W rays (W = 4, 8, 16): copied into Embree's SoA
+ * layout, lanes past `count` invalid; occlusion read back from tfar. */
+#define LC_PACKET(W)                                                                   \
+    static void occluded_packet##W(RTCScene scene, const LcRay* in, uint8_t* out, size_t count) { \
+        struct RTCRay##W packet;                                                       \
+        int valid[W];                                                                  \
+        for (int i = 0; i < W; ++i) {                                                  \
+            const LcRay* r = &in[(size_t)i < count ? (size_t)i : 0];                   \
+            valid[i] = (size_t)i < count ? -1 : 0;                                     \
+            packet.org_x[i] = r->org[0];                                               \
+            packet.org_y[i] = r->org[1];                                               \
+            packet.org_z[i] = r->org[2];                                               \
+            packet.tnear[i] = r->tnear;                                                \
+            packet.dir_x[i] = r->dir[0];                                               \
+            packet.dir_y[i] = r->dir[1];                                               \
+            packet.dir_z[i] = r->dir[2];                                               \
+            packet.time[i] = 0.0f;                                                     \
+            packet.tfar[i] = r->tfar;                                                  \
+            packet.mask[i] = LC_MASK_ALL;                                              \
+            packet.id[i] = (unsigned)i;                                                \
+            packet.flags[i] = 0;                                                       \
+        }                                                                              \
+        LC_OCCLUDED_PACKET(W, valid, scene, &packet);                                  \
+        for (size_t i = 0; i < count; ++i)                                             \
+            out[i] = packet.tfar[i] < 0.0f && isinf(packet.tfar[i]);                   \
+    }
+
+#if LC_EMBREE_MAJOR == 4
+#define LC_OCCLUDED_PACKET(W, valid, scene, packet) rtcOccluded##W(valid, scene, packet, NULL)
+#else
+#define LC_OCCLUDED_PACKET(W, valid, scene, packet)                                    \
+    do {                                                                               \
+        struct RTCIntersectContext context;                                            \
+        rtcInitIntersectContext(&context);                                             \
+        rtcOccluded##W(valid, scene, &context, packet);                                \
+    } while (0)
+#endif
+
+LC_PACKET(4)
+LC_PACKET(8)
+LC_PACKET(16)
+
+int32_t lc_occluded_packets(LcScene* scene, const LcRay* rays, uint8_t* occluded, size_t n, int32_t width) {
+    void (*trace)(RTCScene, const LcRay*, uint8_t*, size_t);
+    switch (width) {
+    case 4: trace = occluded_packet4; break;
+    case 8: trace = occluded_packet8; break;
+    case 16: trace = occluded_packet16; break;
+    default: return -1;
+    }
+    for (size_t start = 0; start < n; start += (size_t)width) {
+        size_t count = n - start < (size_t)width ? n - start : (size_t)width;
+        trace(scene->scene, &rays[start], &occluded[start], count);
+    }
+    return 0;
+}
+
 void lc_set_flush_denormals(void) {
     _MM_SET_FLUSH_ZERO_MODE(_MM_FLUSH_ZERO_ON);
     _MM_SET_DENORMALS_ZERO_MODE(_MM_DENORMALS_ZERO_ON);

@@ -76,6 +76,11 @@ int32_t lc_occluded1(LcScene* scene, const LcRay* ray);
 /* occluded[i] = 1 when rays[i] is blocked, in one call for n rays. */
 void lc_occluded_batch(LcScene* scene, const LcRay* rays, uint8_t* occluded, size_t n);
 
+/* occluded[i] = 1 when rays[i] is blocked, for n rays traced as packets of
+ * `width` rays (4, 8 or 16: rtcOccluded4/8/16; the last packet is padded
+ * with inactive lanes). Returns 0, or -1 for an unsupported width. */
+int32_t lc_occluded_packets(LcScene* scene, const LcRay* rays, uint8_t* occluded, size_t n, int32_t width);
+
 /* Sets flush-to-zero and denormals-are-zero on the calling thread, as Embree's
  * documentation recommends for every thread that traces rays. */
 void lc_set_flush_denormals(void);

@@ -97,8 +97,15 @@ fn closest_hit_and_occlusion_match_brute_force_on_random_meshes() {
         let id = builder.attach_triangles(&vertices, &tris).unwrap();
         let scene = builder.commit().unwrap();
         let rays: Vec<Ray> = (0..500).map(|_| random_ray(&mut rng)).collect();
+        let shadow_rays: Vec<ShadowRay> = rays.iter().map(|r| ShadowRay::new(*r)).collect();
         let mut batch = Vec::new();
-        scene.occluded_batch(&rays.iter().map(|r| ShadowRay::new(*r)).collect::<Vec<_>>(), &mut batch);
+        scene.occluded_batch(&shadow_rays, &mut batch);
+        // Packets of every width, on a count that leaves a partial packet.
+        for width in [PacketWidth::Four, PacketWidth::Eight, PacketWidth::Sixteen] {
+            let mut packets = Vec::new();
+            scene.occluded_packets(&shadow_rays[..499], &mut packets, width);
+            assert_eq!(packets, batch[..499], "packets of {width:?} agree with single rays");
+        }
         let mut batch_hits = Vec::new();
         scene.intersect_batch(&rays, &mut batch_hits);
         for (i, ray) in rays.iter().enumerate() {

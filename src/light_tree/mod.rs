@@ -10,6 +10,7 @@
 
 pub mod cluster;
 pub mod greedy;
+pub mod layout;
 pub mod ploc;
 
 use std::time::{Duration, Instant};
@@ -194,11 +195,21 @@ impl LightTree {
     }
 }
 
-/// The light trees of a scene: one per light kind the scene has, no more.
+/// A tree with at most this many lights is evaluated light by light: for so
+/// few lights the bounds cannot save a shadow ray worth their cost, and the
+/// renderer must never be slower than `--exact` (measured: few4 in the README).
+pub const EXHAUSTIVE_LIGHTS: usize = 200;
+
+/// The light trees of a scene, laid out for the cut: one per light kind the
+/// scene has, no more.
 pub struct LightTrees {
-    pub trees: Vec<LightTree>,
-    /// Build time of each tree, in the order of `trees`.
+    pub trees: Vec<layout::CutTree>,
+    /// Build time of each tree (clustering and layout), in the order of `trees`.
     pub build_times: Vec<Duration>,
+    /// 1 / the total luminance of every light (1 when that is 0 or not
+    /// finite): the cut's bounds are computed on intensities times this, so
+    /// that they stay within f32's range.
+    pub scale: f32,
 }
 
 impl LightTrees {
@@ -208,21 +219,38 @@ impl LightTrees {
     pub fn build(lights: &Lights, seed: u64) -> Self {
         let mut trees = Vec::new();
         let mut build_times = Vec::new();
+        let mut total = 0.0f64;
         for kind in LightKind::ALL {
             if lights.count(kind) == 0 {
                 continue;
             }
             let start = Instant::now();
             let leaves = lights.tree_lights(kind);
-            trees.push(ploc::build(kind, &leaves, seed));
+            total += leaves.iter().map(|l| f64::from(luminance(l.intensity))).sum::<f64>();
+            trees.push(if leaves.len() <= EXHAUSTIVE_LIGHTS {
+                layout::CutTree::exhaustive(kind, leaves)
+            } else {
+                layout::CutTree::from_tree(&ploc::build(kind, &leaves, seed))
+            });
             build_times.push(start.elapsed());
         }
-        Self { trees, build_times }
+        let scale = (1.0 / total) as f32;
+        let scale = if scale.is_finite() && scale > 0.0 { scale } else { 1.0 };
+        Self { trees, build_times, scale }
+    }
+
+    /// The trees of one built tree each (benchmarks of other builders).
+    #[must_use]
+    pub fn of(tree: &LightTree) -> Self {
+        let total: f64 = tree.leaves.iter().map(|l| f64::from(luminance(l.intensity))).sum();
+        let scale = (1.0 / total) as f32;
+        let scale = if scale.is_finite() && scale > 0.0 { scale } else { 1.0 };
+        Self { trees: vec![layout::CutTree::from_tree(tree)], build_times: vec![Duration::ZERO], scale }
     }
 
     #[must_use]
     pub fn memory_bytes(&self) -> usize {
-        self.trees.iter().map(LightTree::memory_bytes).sum()
+        self.trees.iter().map(layout::CutTree::memory_bytes).sum()
     }
 }
 

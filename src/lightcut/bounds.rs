@@ -1,158 +1,288 @@
-//! Upper bounds of the material and geometric terms over a cluster
-//! ([LC05] sec. 4.2; ../shared/LIGHTCUTS.md sections 2 to 4). Each is tested
-//! to be >= the true maximum over the cluster's lights at random points.
+//! Upper bounds of a cluster's error at a shading point ([LC05] sec. 4.2;
+//! ../shared/LIGHTCUTS.md sections 2 to 4): M_ub * G_ub * I_C, compared on
+//! luminance, for both children of a node at once (f32x4 lanes 0 and 1).
+//!
+//! Everything here is f32 and free of inverse trigonometric functions: the
+//! widened cone uses cos(theta - beta) = cos theta cos beta + sin theta
+//! sin beta with the cosine and sine of beta stored per node (pbrt-v4's
+//! `cosSubClamped`). Intensities are normalised (multiplied by 1 / the
+//! trees' total luminance) so that products stay in f32's range. Every
+//! rounding is covered by a slack that makes the bound larger, never smaller;
+//! each bound is tested to be >= the true maximum over the cluster's lights
+//! at 20,000 random configurations per light kind.
 
 use std::f32::consts::PI;
 
-use glam::{DVec3, Vec3};
+use glam::Vec3;
+use wide::{f32x4, CmpEq, CmpGe, CmpGt};
 
 use crate::light::LightKind;
-use crate::light_tree::Cone;
+use crate::light_tree::layout::{Block, ConeBlock};
 use crate::scene::material::phong_normalisation;
 use crate::shading::SurfacePoint;
-use crate::util::color::luminance64;
 
-/// Relative slack added to every cosine bound: the bound is evaluated in f32
-/// with a few roundings (rotation, sqrt), each within 1 ulp; 1e-5 covers
-/// them with a wide margin and changes cut sizes by nothing measurable.
+/// Slack of every cosine bound, relative and absolute: a bound takes a few
+/// f32 roundings (dot products, sqrt, divide), each within 2^-24 relative;
+/// 1e-5 covers them with a wide margin and changes cut sizes by nothing
+/// measurable.
 const COS_SLACK: f32 = 1e-5;
 
-/// An orthonormal frame whose third axis is a given unit axis, for
-/// [`cos_bound_in`]; build it once per shading point and axis.
-#[derive(Debug, Clone, Copy)]
-pub struct Frame {
-    tangent: Vec3,
-    bitangent: Vec3,
-    axis: Vec3,
+/// Relative slack of the final product (five multiplies and a divide, each
+/// within 2^-24, and the normalisation's own rounding).
+const PRODUCT_SLACK: f32 = 1.0 + 1.0 / 1_048_576.0;
+
+/// Rec. 709 luminance weights (util::color::luminance), for the weighted
+/// sums below.
+const LUMINANCE: Vec3 = Vec3::new(0.2126, 0.7152, 0.0722);
+
+type V3 = [f32x4; 3];
+
+fn splat3(v: Vec3) -> V3 {
+    [f32x4::splat(v.x), f32x4::splat(v.y), f32x4::splat(v.z)]
+}
+
+/// Lanes 0 and 1 from a slot pair (lanes 2 and 3 are 0).
+#[inline(always)]
+fn lanes(pair: [f32; 2]) -> f32x4 {
+    f32x4::new([pair[0], pair[1], 0.0, 0.0])
+}
+
+#[inline(always)]
+fn dot(a: &V3, b: &V3) -> f32x4 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+
+#[inline(always)]
+fn abs3(a: &V3) -> V3 {
+    [a[0].abs(), a[1].abs(), a[2].abs()]
+}
+
+#[inline(always)]
+fn sub3(a: &V3, b: &V3) -> V3 {
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+}
+
+/// An orthonormal frame (tangent, bitangent, axis) per lane, with the
+/// absolute values the box projection needs.
+#[derive(Clone, Copy)]
+struct Frame {
+    tangent: V3,
+    bitangent: V3,
+    axis: V3,
+    abs_tangent: V3,
+    abs_bitangent: V3,
+    abs_axis: V3,
 }
 
 impl Frame {
-    #[must_use]
-    pub fn new(axis: Vec3) -> Self {
-        let (tangent, bitangent) = axis.any_orthonormal_pair();
-        Self { tangent, bitangent, axis }
+    /// The frame of unit `axis` in every lane (per shading point).
+    fn splat(axis: Vec3) -> Self {
+        let (t, b) = axis.any_orthonormal_pair();
+        Self::of(splat3(t), splat3(b), splat3(axis))
     }
-}
 
-/// Upper bound of cos(angle between unit `axis` and v) over all v in the box
-/// [lo, hi] (LIGHTCUTS.md section 3).
-#[must_use]
-pub fn cos_bound(axis: Vec3, lo: Vec3, hi: Vec3) -> f32 {
-    cos_bound_in(&Frame::new(axis), 0.5 * (lo + hi), 0.5 * (hi - lo))
-}
-
-/// [`cos_bound`] in a prepared frame, for the box with centre `c` and
-/// half-extent `h` (>= 0): along a unit axis e the box spans
-/// e.c -/+ |e|.h, which gives the box of the rotated box; then
-/// w / sqrt(u^2 + v^2 + w^2) at the largest w and the smallest |u|, |v|.
-#[must_use]
-pub fn cos_bound_in(frame: &Frame, c: Vec3, h: Vec3) -> f32 {
-    let z1 = frame.axis.dot(c) + frame.axis.abs().dot(h);
-    if z1 <= 0.0 {
-        return 0.0;
+    /// A frame per lane around unit axes `a`, without branches (Duff et al.
+    /// 2017, the construction glam's `any_orthonormal_pair` uses).
+    #[inline(always)]
+    fn around(a: V3) -> Self {
+        let sign = f32x4::ONE.copysign(a[2]);
+        let k = -f32x4::ONE / (sign + a[2]);
+        let b = a[0] * a[1] * k;
+        let tangent = [f32x4::ONE + sign * a[0] * a[0] * k, sign * b, -sign * a[0]];
+        let bitangent = [b, sign + a[1] * a[1] * k, -a[1]];
+        Self::of(tangent, bitangent, a)
     }
-    // Distance from 0 to the interval m -/+ r, 0 when it contains 0.
-    let nearest = |e: Vec3| (e.dot(c).abs() - e.abs().dot(h)).max(0.0);
-    let (mx, my) = (nearest(frame.tangent), nearest(frame.bitangent));
-    if mx == 0.0 && my == 0.0 {
-        // The box reaches the axis itself: the bound is 1 (saves a divide).
-        return 1.0;
-    }
-    let bound = z1 / (mx * mx + my * my + z1 * z1).sqrt();
-    (bound * (1.0 + COS_SLACK) + COS_SLACK).min(1.0)
-}
 
-/// Squared distance from `p` to the box [lo, hi] (0 inside).
-#[must_use]
-pub fn distance_squared_to_box(p: Vec3, lo: Vec3, hi: Vec3) -> f64 {
-    let d = (lo - p).max(p - hi).max(Vec3::ZERO);
-    d.as_dvec3().length_squared()
+    fn of(tangent: V3, bitangent: V3, axis: V3) -> Self {
+        Self {
+            tangent,
+            bitangent,
+            axis,
+            abs_tangent: abs3(&tangent),
+            abs_bitangent: abs3(&bitangent),
+            abs_axis: abs3(&axis),
+        }
+    }
+
+    /// Upper bound of cos(angle between the axis and v) over v in the box of
+    /// centre `c` and half-extent `h` (LIGHTCUTS.md section 3): along a unit
+    /// axis e the box spans e.c -/+ |e|.h, which gives the box of the
+    /// rotated box; then w / sqrt(u^2 + v^2 + w^2) at the largest w and the
+    /// smallest |u|, |v|. 0 where the whole box is behind the plane.
+    #[inline(always)]
+    fn cos_bound(&self, c: &V3, h: &V3) -> f32x4 {
+        let z1 = dot(&self.axis, c) + dot(&self.abs_axis, h);
+        let zero = f32x4::ZERO;
+        let mx = (dot(&self.tangent, c).abs() - dot(&self.abs_tangent, h)).fast_max(zero);
+        let my = (dot(&self.bitangent, c).abs() - dot(&self.abs_bitangent, h)).fast_max(zero);
+        let ratio = z1 / (mx * mx + my * my + z1 * z1).sqrt();
+        let bound = (ratio * f32x4::splat(1.0 + COS_SLACK) + f32x4::splat(COS_SLACK)).fast_min(f32x4::ONE);
+        z1.cmp_gt(zero).blend(bound, zero)
+    }
 }
 
 /// What the bounds need of one shading point, prepared once per point.
-pub struct PointBounds<'a, 'p> {
-    pub sp: &'a SurfacePoint<'p>,
-    normal_frame: Frame,
-    /// The Phong lobe: (frame around the mirror direction, k_s (n+2)/(2 pi), n).
-    phong: Option<(Frame, Vec3, f32)>,
-    diffuse: Vec3,
-    min_distance_squared: f64,
+pub struct PointBounds {
+    p: V3,
+    normal: Frame,
+    /// The Phong lobe's frame around the mirror direction, and its exponent.
+    phong: Option<(Frame, f32)>,
+    /// Luminance weights times the diffuse BRDF k_d / pi, and times the
+    /// Phong lobe's peak k_s (n + 2) / (2 pi): M's luminance against an
+    /// intensity I is diffuse.I + cos_r^n lobe.I, times cos theta.
+    diffuse: V3,
+    lobe: V3,
+    /// The distance clamp squared (f32, rounded down: 0 if it underflows,
+    /// which makes G's bound infinite, still an upper bound).
+    min_distance_squared: f32x4,
+    /// 1 / the trees' total luminance: normalises intensities.
+    scale: f32x4,
 }
 
-impl<'a, 'p> PointBounds<'a, 'p> {
+impl PointBounds {
+    /// `scale` normalises intensities (see [`crate::light_tree::LightTrees::scale`]).
     #[must_use]
-    pub fn new(sp: &'a SurfacePoint<'p>) -> Self {
+    pub fn new(sp: &SurfacePoint<'_>, scale: f32) -> Self {
         let m = sp.material;
-        let phong =
-            m.has_specular().then(|| (Frame::new(sp.r), m.specular * phong_normalisation(m.exponent), m.exponent));
+        let lobe = if m.has_specular() { m.specular * phong_normalisation(m.exponent) } else { Vec3::ZERO };
+        let clamp = sp.min_distance_squared();
+        let mut clamp32 = clamp as f32;
+        if f64::from(clamp32) > clamp {
+            clamp32 = f32::from_bits(clamp32.to_bits() - 1);
+        }
         Self {
-            sp,
-            normal_frame: Frame::new(sp.n),
-            phong,
-            diffuse: sp.kd * (1.0 / PI),
-            min_distance_squared: sp.min_distance_squared(),
+            p: splat3(sp.p),
+            normal: Frame::splat(sp.n),
+            phong: m.has_specular().then(|| (Frame::splat(sp.r), m.exponent)),
+            diffuse: splat3(LUMINANCE * sp.kd * (1.0 / PI)),
+            lobe: splat3(LUMINANCE * lobe),
+            min_distance_squared: f32x4::splat(clamp32),
+            scale: f32x4::splat(scale),
         }
     }
 
-    /// Upper bound of the material term M = f_r cos(theta) over directions in
-    /// the box [lo, hi] (vectors from the shading point; any length), per
-    /// channel (LIGHTCUTS.md section 4).
-    #[must_use]
-    pub fn material(&self, lo: Vec3, hi: Vec3) -> DVec3 {
-        let (c, h) = (0.5 * (lo + hi), 0.5 * (hi - lo));
-        let cos_theta = cos_bound_in(&self.normal_frame, c, h);
-        if cos_theta == 0.0 {
-            return DVec3::ZERO;
+    /// M's bound against the slots' intensities, luminance-weighted:
+    /// cos_theta * (diffuse.I + cos_r^n lobe.I), for directions in the boxes
+    /// (c, h) (vectors from the shading point; any length).
+    #[inline(always)]
+    fn material(&self, c: &V3, h: &V3, intensity: &V3) -> (f32x4, f32x4) {
+        let cos_theta = self.normal.cos_bound(c, h);
+        let mut weighted = dot(&self.diffuse, intensity);
+        if let Some((frame, exponent)) = &self.phong {
+            let lobe = frame.cos_bound(c, h).to_array().map(|r| r.powf(*exponent));
+            weighted += dot(&self.lobe, intensity) * f32x4::new(lobe);
         }
-        let mut f = self.diffuse;
-        if let Some((frame, lobe, exponent)) = &self.phong {
-            f += *lobe * cos_bound_in(frame, c, h).powf(*exponent);
-        }
-        (f * cos_theta).as_dvec3()
+        (cos_theta, weighted)
     }
 
-    /// Upper bound of M * G over a cluster, per channel (V's bound is 1).
-    /// `lo, hi`: the cluster's box of positions (omni, oriented) or
-    /// directions (directional); `cone`: its cone of normals (oriented only).
+    /// G's bound for point lights in the boxes: 1 / max(d_min^2, clamp^2),
+    /// with d_min the distance from the point to the box (0 inside it). The
+    /// clamp is the one the exact evaluation applies, so the bound stays
+    /// finite inside a box.
+    #[inline(always)]
+    fn geometric(&self, c: &V3, h: &V3) -> f32x4 {
+        let zero = f32x4::ZERO;
+        let d = [
+            ((c[0] - self.p[0]).abs() - h[0]).fast_max(zero),
+            ((c[1] - self.p[1]).abs() - h[1]).fast_max(zero),
+            ((c[2] - self.p[2]).abs() - h[2]).fast_max(zero),
+        ];
+        // Rounded down a little: the squared distance's roundings must not
+        // make G's bound smaller.
+        let d2 = dot(&d, &d) * f32x4::splat(1.0 - 1.0 / 1_048_576.0);
+        f32x4::ONE / d2.fast_max(self.min_distance_squared)
+    }
+
+    /// The normalised error bounds of a block's two slots: luminance of
+    /// M_ub * G_ub * I_C times the normalisation. 0 for an exact slot (a
+    /// leaf, or coincident lights) and for a cluster that cannot reach the
+    /// point; never NaN.
     #[must_use]
-    pub fn cluster(&self, kind: LightKind, lo: Vec3, hi: Vec3, cone: Cone) -> DVec3 {
-        let p = self.sp.p;
-        match kind {
-            LightKind::Directional => self.material(lo, hi),
-            LightKind::Omni | LightKind::Oriented => {
-                let m = self.material(lo - p, hi - p);
-                if m == DVec3::ZERO {
-                    return m;
-                }
-                // The same clamp as the exact evaluation: G_i <= 1 / max(d_i^2, eps^2),
-                // so 1 / max(d_min^2, eps^2) bounds it and stays finite inside the box.
-                let g = 1.0 / distance_squared_to_box(p, lo, hi).max(self.min_distance_squared);
-                if kind == LightKind::Omni {
-                    return m * g;
-                }
-                // cos(phi) <= cos(max(theta_min - beta, 0)), theta_min the smallest
-                // angle between the cone axis and x - y over the box.
-                let cos_theta_min = cos_bound(cone.axis, p - hi, p - lo);
-                let theta_min = cos_theta_min.clamp(-1.0, 1.0).acos();
-                let cos_phi = (theta_min - cone.half_angle).max(0.0).cos();
-                m * g * f64::from((cos_phi * (1.0 + COS_SLACK) + COS_SLACK).min(1.0))
+    #[inline(always)]
+    pub fn pair(&self, kind: LightKind, block: &Block, cones: Option<&ConeBlock>) -> [f32; 2] {
+        let gather = |pairs: &[[f32; 2]; 3]| -> V3 { [lanes(pairs[0]), lanes(pairs[1]), lanes(pairs[2])] };
+        let cone = cones.map(|c| (gather(&c.axis), lanes(c.cos_half_angle), lanes(c.sin_half_angle)));
+        let [b0, b1, ..] = self
+            .lanes(kind, &gather(&block.centre), &gather(&block.half), &gather(&block.intensity), cone.as_ref())
+            .to_array();
+        let exact = |k: usize| block.child[k].is_exact();
+        [if exact(0) { 0.0 } else { b0 }, if exact(1) { 0.0 } else { b1 }]
+    }
+
+    /// The bounds of the slots of two blocks of one tree at once, in the
+    /// order (first's 0, first's 1, second's 0, second's 1).
+    #[must_use]
+    #[inline(always)]
+    pub fn quad(&self, kind: LightKind, blocks: [&Block; 2], cones: Option<[&ConeBlock; 2]>) -> [f32; 4] {
+        let two = |a: [f32; 2], b: [f32; 2]| f32x4::new([a[0], a[1], b[0], b[1]]);
+        let gather = |field: fn(&Block) -> &[[f32; 2]; 3]| -> V3 {
+            let (a, b) = (field(blocks[0]), field(blocks[1]));
+            [two(a[0], b[0]), two(a[1], b[1]), two(a[2], b[2])]
+        };
+        let cone = cones.map(|[a, b]| {
+            let axis = [two(a.axis[0], b.axis[0]), two(a.axis[1], b.axis[1]), two(a.axis[2], b.axis[2])];
+            (axis, two(a.cos_half_angle, b.cos_half_angle), two(a.sin_half_angle, b.sin_half_angle))
+        });
+        let bounds = self
+            .lanes(kind, &gather(|b| &b.centre), &gather(|b| &b.half), &gather(|b| &b.intensity), cone.as_ref())
+            .to_array();
+        let exact = |k: usize| blocks[k / 2].child[k % 2].is_exact();
+        [0, 1, 2, 3].map(|k| if exact(k) { 0.0 } else { bounds[k] })
+    }
+
+    /// The bounds of up to four clusters, one per lane: boxes (centre `c`,
+    /// half-extent `h`), summed intensities, and for oriented lights the
+    /// cones (axis, cos and sin of the half-angle).
+    #[inline(always)]
+    fn lanes(&self, kind: LightKind, c: &V3, h: &V3, intensity: &V3, cone: Option<&(V3, f32x4, f32x4)>) -> f32x4 {
+        let (cos_theta, weighted, geometric) = match kind {
+            LightKind::Directional => {
+                let (cos_theta, weighted) = self.material(c, h, intensity);
+                (cos_theta, weighted, f32x4::ONE)
             }
-        }
+            LightKind::Omni | LightKind::Oriented => {
+                let to_box = sub3(c, &self.p);
+                let (cos_theta, weighted) = self.material(&to_box, h, intensity);
+                let mut geometric = self.geometric(c, h);
+                if let Some((axis, cos_beta, sin_beta)) = cone {
+                    geometric *= self.emission(c, h, axis, *cos_beta, *sin_beta);
+                }
+                (cos_theta, weighted, geometric)
+            }
+        };
+        let zero = f32x4::ZERO;
+        let bound = cos_theta * (weighted * self.scale) * geometric;
+        let bound = bound * f32x4::splat(PRODUCT_SLACK) + f32x4::splat(f32::MIN_POSITIVE);
+        // inf * 0 (an unreachable box inside the clamp) is NaN: count it as
+        // infinite, the bound that is always safe.
+        let bound = bound.cmp_eq(bound).blend(bound, f32x4::splat(f32::INFINITY));
+        let reaches = cos_theta.cmp_gt(zero) & weighted.cmp_gt(zero) & geometric.cmp_gt(zero);
+        reaches.blend(bound, zero)
+    }
+
+    /// Oriented lights: the bound of max(0, cos phi) over the cluster,
+    /// phi between a light's normal and the direction to the point.
+    /// theta_min, the smallest angle between the cone's axis and x - y over
+    /// the box, has an upper-bounded cosine; with the cone's half-angle beta,
+    /// cos phi <= cos(max(theta_min - beta, 0)) = 1 when theta_min <= beta,
+    /// else cos theta cos beta + sin theta sin beta.
+    #[inline(always)]
+    fn emission(&self, c: &V3, h: &V3, axis: &V3, cos_beta: f32x4, sin_beta: f32x4) -> f32x4 {
+        let from_box = sub3(&self.p, c);
+        let cos_theta = Frame::around(*axis).cos_bound(&from_box, h);
+        let sin_theta = (f32x4::ONE - cos_theta * cos_theta).fast_max(f32x4::ZERO).sqrt();
+        let widened = cos_theta * cos_beta + sin_theta * sin_beta;
+        let widened = (widened * f32x4::splat(1.0 + COS_SLACK) + f32x4::splat(COS_SLACK)).fast_min(f32x4::ONE);
+        cos_theta.cmp_ge(cos_beta).blend(f32x4::ONE, widened.fast_max(f32x4::ZERO))
     }
 }
 
-/// Upper bound of M * G over a cluster (one-off form of [`PointBounds::cluster`]).
+/// Upper bound of cos(angle between unit `axis` and v) over v in the box
+/// [lo, hi], by the same code as the cut's (for tests and one-off use).
 #[must_use]
-pub fn cluster_bound(kind: LightKind, sp: &SurfacePoint<'_>, lo: Vec3, hi: Vec3, cone: Cone) -> DVec3 {
-    PointBounds::new(sp).cluster(kind, lo, hi, cone)
-}
-
-/// The scalar error bound of a cluster of total intensity `intensity`:
-/// luminance of M_ub * G_ub * I_C (all terms are non-negative, so the
-/// luminance of the bound bounds the luminance of the error).
-#[must_use]
-pub fn error_bound(mg_bound: DVec3, intensity: Vec3) -> f64 {
-    luminance64(mg_bound * intensity.as_dvec3())
+pub fn cos_bound(axis: Vec3, lo: Vec3, hi: Vec3) -> f32 {
+    let (c, h) = (0.5 * (lo + hi), 0.5 * (hi - lo));
+    Frame::splat(axis).cos_bound(&splat3(c), &splat3(h)).to_array()[0]
 }
 
 #[cfg(test)]

@@ -11,27 +11,32 @@
 //! traces their new rays in one call. Refining a node the one-at-a-time
 //! algorithm would have kept only tightens the result.
 //!
-//! Bounds and estimates are compared on luminance. The final radiance is the
-//! sum of the cut's estimates in creation order, so it is deterministic and
-//! free of the cancellation a running total accumulates.
+//! A refinement reads one block of the tree's layout (both children's boxes,
+//! intensities, cones and representatives), bounds both children at once
+//! (`bounds`), and keys the heap with integers: the bound's f32 bits (a
+//! non-negative float orders like its bits) above the entry's index.
+//!
+//! Bounds and estimates are compared on luminance. Estimates are f64: the
+//! representative's M G V, exactly the exact renderer's, times the node's
+//! intensity. The final radiance is the sum of the cut's estimates in
+//! creation order, so it is deterministic and free of the cancellation a
+//! running total accumulates.
 
-use std::cmp::Ordering;
 use std::collections::BinaryHeap;
 
-use glam::DVec3;
+use glam::{DVec3, Vec3};
 
-use super::bounds::{error_bound, PointBounds};
-use crate::embree::{Scene as EmbreeScene, ShadowRay};
-use crate::light_tree::{LightTree, NodeRef};
-use crate::shading::{light_sample, BatchBuffers, LightBatch, SurfacePoint};
+use super::bounds::PointBounds;
+use crate::embree::{PacketWidth, Scene as EmbreeScene, ShadowRay};
+use crate::light_tree::layout::{Child, CutTree};
+use crate::light_tree::LightTrees;
+use crate::shading::{BatchBuffers, Lanes, LightBatch, LightEvaluator, SurfacePoint};
 use crate::util::color::luminance64;
 
-/// A tree with at most this many lights is evaluated light by light: for so
-/// few lights the bounds cannot save a shadow ray worth their cost, and the
-/// renderer must never be slower than `--exact` (measured: few4 in the README).
-pub const EXHAUSTIVE_LIGHTS: usize = 200;
+pub use crate::light_tree::EXHAUSTIVE_LIGHTS;
 
-/// Nodes refined per batch of shadow rays.
+/// Nodes refined per batch of shadow rays (each refinement needs one ray:
+/// one child shares its parent's representative).
 pub const REFINE_BATCH: usize = 8;
 
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -65,45 +70,61 @@ pub struct CutResult {
 /// One node of the cut (or one that was in it and has been refined).
 #[derive(Debug, Clone, Copy)]
 struct Entry {
-    tree: u8,
-    node: NodeRef,
     /// M * G * V of the node's representative, per unit intensity.
     unit: DVec3,
-    estimate: DVec3,
-    /// The node's error bound (0 for a leaf, which is exact).
-    bound: f64,
+    /// The node's summed intensity: its estimate is unit * intensity.
+    intensity: Vec3,
+    /// Normalised error bound (0 for an exact node).
+    bound: f32,
+    child: Child,
+    representative: u32,
+    /// While its shadow ray is in flight: the ray's index in the batch
+    /// (`NO_RAY` when it needs none).
+    ray: u32,
+    tree: u8,
     in_cut: bool,
 }
 
-/// A node whose representative still needs its shadow ray.
+impl Entry {
+    /// The node's estimate, M * G * V of the representative times the
+    /// node's intensity ([LC05] eq. 2); f64, the same bits every time.
+    #[inline]
+    fn estimate(&self) -> DVec3 {
+        self.unit * self.intensity.as_dvec3()
+    }
+}
+
+const NO_RAY: u32 = u32::MAX;
+
+/// A node whose representative's M * G and shadow ray are still to be
+/// found (the child of a refined node that does not share its
+/// representative).
 #[derive(Debug, Clone, Copy)]
-struct Pending {
+struct Fresh {
+    intensity: Vec3,
+    bound: f32,
+    child: Child,
+    representative: u32,
+    block: u32,
+    slot: u8,
     tree: u8,
-    node: NodeRef,
-    unoccluded: DVec3,
-    /// Index into the ray batch, or None when no ray is needed.
-    ray: Option<u32>,
 }
 
-#[derive(Debug, Clone, Copy, PartialEq)]
-struct HeapItem {
-    bound: f64,
-    entry: u32,
+/// The heap key of an entry: its bound's bits above the complement of its
+/// index, so the largest bound comes first and ties go to the earlier entry.
+#[inline]
+fn key(bound: f32, entry: usize) -> u64 {
+    (u64::from(bound.to_bits()) << 32) | u64::from(!(entry as u32))
 }
 
-impl Eq for HeapItem {}
-
-impl Ord for HeapItem {
-    fn cmp(&self, other: &Self) -> Ordering {
-        // Largest bound first; ties go to the earlier entry (deterministic).
-        self.bound.total_cmp(&other.bound).then_with(|| other.entry.cmp(&self.entry))
-    }
+#[inline]
+fn key_entry(key: u64) -> usize {
+    !(key as u32) as usize
 }
 
-impl PartialOrd for HeapItem {
-    fn partial_cmp(&self, other: &Self) -> Option<Ordering> {
-        Some(self.cmp(other))
-    }
+#[inline]
+fn key_bound(key: u64) -> f32 {
+    f32::from_bits((key >> 32) as u32)
 }
 
 /// Per-thread buffers reused across shading points.
@@ -111,16 +132,16 @@ impl PartialOrd for HeapItem {
 pub struct CutScratch {
     batch: BatchBuffers,
     entries: Vec<Entry>,
-    heap: BinaryHeap<HeapItem>,
-    pending: Vec<Pending>,
+    heap: BinaryHeap<u64>,
+    fresh: Vec<Fresh>,
     rays: Vec<ShadowRay>,
     occluded: Vec<bool>,
 }
 
 struct Cut<'a, 'p> {
-    trees: &'a [LightTree],
-    sp: &'a SurfacePoint<'p>,
-    bounds: PointBounds<'a, 'p>,
+    trees: &'a [CutTree],
+    evaluator: LightEvaluator<'a, 'p>,
+    bounds: PointBounds,
     embree: &'a EmbreeScene,
     scratch: &'a mut CutScratch,
     total: DVec3,
@@ -129,69 +150,141 @@ struct Cut<'a, 'p> {
 }
 
 impl Cut<'_, '_> {
-    /// Queues a node whose representative is new to the cut.
-    fn add_new(&mut self, tree: u8, node: NodeRef) {
+    /// Adds both children of the node whose block is `b` (the roots: slot 0
+    /// of block 0). `parent` is the refined node's representative and its
+    /// M * G * V, which the child that shares the representative reuses; the
+    /// other child waits in `fresh` for its representative's evaluation.
+    fn add_children(&mut self, tree: u8, b: usize, parent: Option<(u32, DVec3)>) {
         let t = &self.trees[tree as usize];
-        let representative = t.light(t.node_representative(node) as usize);
-        // M * G per unit intensity of the representative, and its shadow ray.
-        let (unoccluded, ray) = light_sample(&representative, self.sp, glam::Vec3::ONE).unwrap_or((DVec3::ZERO, None));
-        let ray = ray.map(|r| {
-            self.scratch.rays.push(r);
-            (self.scratch.rays.len() - 1) as u32
-        });
-        self.scratch.pending.push(Pending { tree, node, unoccluded, ray });
+        let bounds = self.bounds.pair(t.kind, &t.blocks[b], t.cones.get(b));
+        self.add_slots(tree, b, bounds, parent);
     }
 
-    /// Adds a node whose M * G * V is known (it shares its parent's representative).
-    fn add_known(&mut self, tree: u8, node: NodeRef, unit: DVec3) {
+    /// [`Cut::add_children`] of two refined nodes of one tree, their four
+    /// children bounded at once.
+    fn add_children_of_two(&mut self, tree: u8, parents: [&Entry; 2]) {
         let t = &self.trees[tree as usize];
-        let intensity = t.node_intensity(node);
-        let estimate = unit * intensity.as_dvec3();
-        let bound = if node.is_leaf() {
-            0.0
-        } else {
-            let (lo, hi) = t.node_bounds(node);
-            let cone = t.node_cone(node);
-            // Lights at one position (omni), or one direction (directional),
-            // or one position and one normal (oriented) have identical M, G
-            // and V: the representative's estimate is exact, the error 0.
-            if lo == hi && cone.half_angle == 0.0 {
-                0.0
-            } else {
-                error_bound(self.bounds.cluster(t.kind, lo, hi, cone), intensity)
+        let [b0, b1] = parents.map(|p| p.child.index());
+        let cones = (!t.cones.is_empty()).then(|| [&t.cones[b0], &t.cones[b1]]);
+        let [a0, a1, c0, c1] = self.bounds.quad(t.kind, [&t.blocks[b0], &t.blocks[b1]], cones);
+        self.add_slots(tree, b0, [a0, a1], Some((parents[0].representative, parents[0].unit)));
+        self.add_slots(tree, b1, [c0, c1], Some((parents[1].representative, parents[1].unit)));
+    }
+
+    fn add_slots(&mut self, tree: u8, b: usize, bounds: [f32; 2], parent: Option<(u32, DVec3)>) {
+        let block = &self.trees[tree as usize].blocks[b];
+        for (k, &bound) in bounds.iter().enumerate() {
+            let child = block.child[k];
+            if child == Child::EMPTY {
+                continue;
             }
-        };
-        let index = self.scratch.entries.len() as u32;
-        self.scratch.entries.push(Entry { tree, node, unit, estimate, bound, in_cut: true });
-        self.total += estimate;
-        self.cut_nodes += 1;
-        if bound > 0.0 {
-            self.scratch.heap.push(HeapItem { bound, entry: index });
+            let representative = block.representative[k];
+            let intensity = Vec3::new(block.intensity[0][k], block.intensity[1][k], block.intensity[2][k]);
+            match parent {
+                Some((shared, unit)) if shared == representative => {
+                    let entry =
+                        Entry { unit, intensity, bound, child, representative, ray: NO_RAY, tree, in_cut: true };
+                    let index = self.scratch.entries.len();
+                    self.scratch.entries.push(entry);
+                    self.admit(index);
+                }
+                _ => self.scratch.fresh.push(Fresh {
+                    intensity,
+                    bound,
+                    child,
+                    representative,
+                    block: b as u32,
+                    slot: k as u8,
+                    tree,
+                }),
+            }
         }
     }
 
-    /// Traces the queued shadow rays in one batch and adds their nodes.
+    /// Takes the node with the largest bound out of the cut, if that bound
+    /// exceeds `threshold`: the node to refine.
+    fn pop_above(&mut self, threshold: f32) -> Option<Entry> {
+        let &top = self.scratch.heap.peek()?;
+        if key_bound(top) <= threshold {
+            return None;
+        }
+        self.scratch.heap.pop();
+        let entry = &mut self.scratch.entries[key_entry(top)];
+        entry.in_cut = false;
+        let entry = *entry;
+        self.total -= entry.estimate();
+        self.cut_nodes -= 1;
+        Some(entry)
+    }
+
+    /// Counts entry `index` into the cut: its estimate into the total, its
+    /// bound into the heap.
+    #[inline]
+    fn admit(&mut self, index: usize) {
+        let entry = &self.scratch.entries[index];
+        self.total += entry.estimate();
+        self.cut_nodes += 1;
+        if entry.bound > 0.0 {
+            self.scratch.heap.push(key(entry.bound, index));
+        }
+    }
+
+    /// Evaluates the fresh nodes' representatives four at a time, traces
+    /// their shadow rays in one packet call, and admits the nodes.
     fn flush(&mut self) {
-        if self.scratch.pending.is_empty() {
+        if self.scratch.fresh.is_empty() {
             return;
         }
-        self.embree.occluded_batch(&self.scratch.rays, &mut self.scratch.occluded);
-        self.shadow_rays += self.scratch.rays.len() as u64;
-        let pending = std::mem::take(&mut self.scratch.pending);
-        for p in &pending {
-            let visible = p.ray.is_none_or(|r| !self.scratch.occluded[r as usize]);
-            let unit = if visible { p.unoccluded } else { DVec3::ZERO };
-            self.add_known(p.tree, p.node, unit);
+        let first = self.scratch.entries.len();
+        let CutScratch { fresh, entries, rays, .. } = &mut *self.scratch;
+        for group in fresh.chunk_by(|a, b| a.tree == b.tree) {
+            let tree = &self.trees[group[0].tree as usize];
+            for quad in group.chunks(4) {
+                let mut lanes = Lanes::default();
+                for f in quad {
+                    let light = tree.representative(f.block as usize, f.slot as usize);
+                    lanes.push(light.point, light.normal);
+                }
+                let terms = self.evaluator.terms(tree.kind, &lanes);
+                for (f, found) in quad.iter().zip(terms) {
+                    // No ray for a representative that contributes nothing here.
+                    let ray = match found.ray {
+                        Some(r) if found.term != DVec3::ZERO => {
+                            rays.push(r);
+                            (rays.len() - 1) as u32
+                        }
+                        _ => NO_RAY,
+                    };
+                    entries.push(Entry {
+                        unit: found.term,
+                        intensity: f.intensity,
+                        bound: f.bound,
+                        child: f.child,
+                        representative: f.representative,
+                        ray,
+                        tree: f.tree,
+                        in_cut: true,
+                    });
+                }
+            }
         }
-        self.scratch.pending = pending;
-        self.scratch.pending.clear();
+        fresh.clear();
+        self.embree.occluded_packets(&self.scratch.rays, &mut self.scratch.occluded, PacketWidth::Eight);
+        self.shadow_rays += self.scratch.rays.len() as u64;
+        for index in first..self.scratch.entries.len() {
+            let entry = &mut self.scratch.entries[index];
+            if entry.ray != NO_RAY && self.scratch.occluded[entry.ray as usize] {
+                entry.unit = DVec3::ZERO;
+            }
+            self.admit(index);
+        }
         self.scratch.rays.clear();
     }
 }
 
 /// Direct light at `sp` from every tree, by a lightcut.
 pub fn evaluate(
-    trees: &[LightTree],
+    trees: &LightTrees,
     sp: &SurfacePoint<'_>,
     embree: &EmbreeScene,
     settings: &CutSettings,
@@ -200,70 +293,72 @@ pub fn evaluate(
     // Small trees first, light by light with the exact renderer's code; their
     // sum is exact and counts in the total the threshold is relative to.
     let mut exhaustive = LightBatch::new(embree, sp, &mut scratch.batch);
-    for tree in trees.iter().filter(|t| t.light_count() <= EXHAUSTIVE_LIGHTS) {
-        for i in 0..tree.light_count() {
-            exhaustive.add(&tree.light(i));
+    for tree in &trees.trees {
+        for light in &tree.lights {
+            exhaustive.add(&light.light(tree.kind));
         }
     }
     let fixed = exhaustive.finish();
     let mut result =
         CutResult { radiance: fixed.radiance, error_bound: 0.0, nodes: fixed.lights, shadow_rays: fixed.shadow_rays };
-    if fixed.lights as usize == trees.iter().map(LightTree::light_count).sum::<usize>() {
+    if trees.trees.iter().all(|t| t.blocks.is_empty()) {
         return result;
     }
 
     scratch.entries.clear();
     scratch.heap.clear();
-    scratch.pending.clear();
+    scratch.fresh.clear();
     scratch.rays.clear();
+    let scale = trees.scale;
     let mut cut = Cut {
-        trees,
-        sp,
-        bounds: PointBounds::new(sp),
+        trees: &trees.trees,
+        evaluator: LightEvaluator::new(sp),
+        bounds: PointBounds::new(sp, scale),
         embree,
         scratch,
         total: fixed.radiance,
         cut_nodes: 0,
         shadow_rays: 0,
     };
-    for (i, tree) in trees.iter().enumerate() {
-        if tree.light_count() > EXHAUSTIVE_LIGHTS {
-            cut.add_new(i as u8, tree.root.expect("a tree with lights has a root"));
+    for (i, tree) in trees.trees.iter().enumerate() {
+        if !tree.blocks.is_empty() {
+            cut.add_children(i as u8, 0, None);
         }
     }
     cut.flush();
     loop {
-        let threshold = settings.error * luminance64(cut.total).max(0.0);
+        // In the bounds' normalised units.
+        let threshold = (settings.error * luminance64(cut.total).max(0.0) * f64::from(scale)) as f32;
         let mut refined = 0;
+        // Only internal nodes have bounds above 0, so a popped entry has a block.
         while refined < REFINE_BATCH && cut.cut_nodes + refined < settings.max_cut {
-            let Some(top) = cut.scratch.heap.peek().copied() else { break };
-            if top.bound <= threshold {
-                break;
-            }
-            cut.scratch.heap.pop();
-            let entry = cut.scratch.entries[top.entry as usize];
-            cut.scratch.entries[top.entry as usize].in_cut = false;
-            cut.total -= entry.estimate;
-            cut.cut_nodes -= 1;
-            let tree = &trees[entry.tree as usize];
-            let representative = tree.node_representative(entry.node);
-            for child in tree.node_children(entry.node) {
-                if tree.node_representative(child) == representative {
-                    cut.add_known(entry.tree, child, entry.unit);
-                } else {
-                    cut.add_new(entry.tree, child);
-                }
-            }
+            let Some(first) = cut.pop_above(threshold) else { break };
             refined += 1;
+            // The next largest too, when it is of the same tree and the batch
+            // and the cut have room: both nodes' children are bounded at once.
+            let room = refined < REFINE_BATCH && cut.cut_nodes + refined + 1 < settings.max_cut;
+            let same_tree =
+                cut.scratch.heap.peek().is_some_and(|&k| cut.scratch.entries[key_entry(k)].tree == first.tree);
+            match (room && same_tree).then(|| cut.pop_above(threshold)).flatten() {
+                Some(second) => {
+                    refined += 1;
+                    cut.add_children_of_two(first.tree, [&first, &second]);
+                }
+                None => cut.add_children(first.tree, first.child.index(), Some((first.representative, first.unit))),
+            }
         }
         if refined == 0 {
             break;
         }
         cut.flush();
     }
-    let in_cut = || cut.scratch.entries.iter().filter(|e| e.in_cut);
-    result.radiance = in_cut().fold(fixed.radiance, |sum, e| sum + e.estimate);
-    result.error_bound = in_cut().map(|e| e.bound).sum();
+    let (mut radiance, mut bound) = (fixed.radiance, 0.0f64);
+    for entry in cut.scratch.entries.iter().filter(|e| e.in_cut) {
+        radiance += entry.estimate();
+        bound += f64::from(entry.bound);
+    }
+    result.radiance = radiance;
+    result.error_bound = bound / f64::from(scale);
     // The exhaustive part's lights are in the point's cut too.
     result.nodes += cut.cut_nodes as u64;
     result.shadow_rays += cut.shadow_rays;

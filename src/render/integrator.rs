@@ -5,6 +5,8 @@
 //! 1e30 W/sr and G up to 1/epsilon^2 overflows f32. Values are clamped to
 //! finite f32 only when a pixel is stored (see `film_value`).
 
+use std::time::Instant;
+
 use glam::{DVec3, Vec3};
 
 use crate::light::Lights;
@@ -42,6 +44,10 @@ pub struct ShadingStats {
     pub max_cut: u64,
     /// Shading points by cut size (see [`CUT_HISTOGRAM_BUCKETS`]).
     pub cut_histogram: [u64; CUT_HISTOGRAM_BUCKETS],
+    /// Thread-time spent choosing cuts (in `lightcut::evaluate`, outside
+    /// Embree's queries), nanoseconds; counted only while Embree's queries
+    /// are timed (`render --stats`).
+    pub cut_nanos: u64,
 }
 
 impl ShadingStats {
@@ -50,6 +56,7 @@ impl ShadingStats {
         self.shading_points += other.shading_points;
         self.cut_nodes += other.cut_nodes;
         self.max_cut = self.max_cut.max(other.max_cut);
+        self.cut_nanos += other.cut_nanos;
         for (a, b) in self.cut_histogram.iter_mut().zip(&other.cut_histogram) {
             *a += b;
         }
@@ -130,7 +137,12 @@ impl Integrator<'_> {
                 found.radiance
             }
             DirectLighting::Lightcuts { trees, settings } => {
-                let found = lightcut::evaluate(&trees.trees, sp, &self.geometry.embree, &settings, &mut scratch.cut);
+                let timed = crate::embree::timing().then(|| (Instant::now(), crate::embree::thread_timed_nanos()));
+                let found = lightcut::evaluate(trees, sp, &self.geometry.embree, &settings, &mut scratch.cut);
+                if let Some((start, embree_before)) = timed {
+                    let embree = crate::embree::thread_timed_nanos() - embree_before;
+                    stats.cut_nanos += (start.elapsed().as_nanos() as u64).saturating_sub(embree);
+                }
                 stats.record_point(found.nodes, found.shadow_rays);
                 found.radiance
             }

@@ -7,6 +7,8 @@ pub mod direct;
 pub mod geometry;
 pub mod surface;
 
-pub use direct::{light_sample, light_term, BatchBuffers, BatchResult, LightBatch, SHADOW_BATCH};
+pub use direct::{
+    light_sample, light_term, BatchBuffers, BatchResult, Lanes, LightBatch, LightEvaluator, LightTerm, SHADOW_BATCH,
+};
 pub use geometry::{Geometry, GeometryError};
 pub use surface::SurfacePoint;

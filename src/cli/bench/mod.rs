@@ -112,6 +112,9 @@ fn rays(args: &RaysArgs) -> Result<(), CliError> {
     println!("  (a) Embree alone, {} recorded exact shadow rays", f.recorded_rays);
     println!("      single-ray calls       {:>8.2} Mrays/s", f.embree_single_mrays_per_s);
     println!("      batch calls (256)      {:>8.2} Mrays/s", f.embree_batch_mrays_per_s);
+    println!("      packets of 4           {:>8.2} Mrays/s", f.embree_packet4_mrays_per_s);
+    println!("      packets of 8           {:>8.2} Mrays/s", f.embree_packet8_mrays_per_s);
+    println!("      packets of 16          {:>8.2} Mrays/s", f.embree_packet16_mrays_per_s);
     println!(
         "  (b) lightcuts pass         {:>8.2} Mrays/s ({} rays in {:.3} s)",
         f.lightcuts_mrays_per_s, f.lightcuts_shadow_rays, f.lightcuts_seconds
@@ -121,6 +124,7 @@ fn rays(args: &RaysArgs) -> Result<(), CliError> {
         f.exact_mrays_per_s, f.exact_shadow_rays, f.exact_seconds
     );
     println!("  (b) / (a, batch)           {:>8.2}", f.lightcuts_over_embree);
+    println!("  (b) / (a, packets of 8)    {:>8.2}", f.lightcuts_over_embree_packets);
     println!("  (c) / (a, batch)           {:>8.2}", f.exact_over_embree);
     Ok(())
 }

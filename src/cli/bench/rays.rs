@@ -9,7 +9,7 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 use crate::cli::progress::Progress;
-use crate::embree::ShadowRay;
+use crate::embree::{PacketWidth, ShadowRay};
 use crate::lightcut::CutSettings;
 use crate::render::session::Session;
 use crate::render::PassSettings;
@@ -26,6 +26,11 @@ pub struct RayFigures {
     pub recorded_rays: usize,
     pub embree_single_mrays_per_s: f64,
     pub embree_batch_mrays_per_s: f64,
+    /// The same rays in packets of 4, 8 and 16 (rtcOccluded4/8/16), in the
+    /// order the exact renderer casts them (one shading point's lights together).
+    pub embree_packet4_mrays_per_s: f64,
+    pub embree_packet8_mrays_per_s: f64,
+    pub embree_packet16_mrays_per_s: f64,
     pub lightcuts_shadow_rays: u64,
     pub lightcuts_seconds: f64,
     pub lightcuts_mrays_per_s: f64,
@@ -34,6 +39,9 @@ pub struct RayFigures {
     pub exact_mrays_per_s: f64,
     /// (b) / (a, batch): the share of Embree's raw rate the lightcuts pass keeps.
     pub lightcuts_over_embree: f64,
+    /// (b) / (a, packets of 8): the same against Embree's best rate here
+    /// (the cut traces its rays in packets of 8).
+    pub lightcuts_over_embree_packets: f64,
     /// (c) / (a, batch).
     pub exact_over_embree: f64,
     pub threads: usize,
@@ -93,6 +101,21 @@ pub fn measure(session: &Session<'_>, settings: &PassSettings, cut: CutSettings,
     });
     let batch_seconds = start.elapsed().as_secs_f64();
     assert_eq!(single, batch, "single and batch calls disagree on occlusion");
+    let packets = |width: PacketWidth| {
+        let start = Instant::now();
+        let blocked: usize = session.pool.install(|| {
+            rays.par_chunks(SHADOW_BATCH)
+                .map_init(Vec::new, |occluded, chunk| {
+                    embree.occluded_packets(chunk, occluded, width);
+                    occluded.iter().filter(|&&o| o).count()
+                })
+                .sum()
+        });
+        assert_eq!(blocked, single, "packets of {width:?} and single calls disagree on occlusion");
+        rate(rays.len(), start.elapsed().as_secs_f64())
+    };
+    let (packet4, packet8, packet16) =
+        (packets(PacketWidth::Four), packets(PacketWidth::Eight), packets(PacketWidth::Sixteen));
 
     let progress = Progress::for_stderr("lightcuts", quiet);
     let lightcuts = session.render(settings, Some(cut), &|event| progress.report(event));
@@ -105,6 +128,9 @@ pub fn measure(session: &Session<'_>, settings: &PassSettings, cut: CutSettings,
         recorded_rays: rays.len(),
         embree_single_mrays_per_s: rate(rays.len(), single_seconds),
         embree_batch_mrays_per_s: embree_batch,
+        embree_packet4_mrays_per_s: packet4,
+        embree_packet8_mrays_per_s: packet8,
+        embree_packet16_mrays_per_s: packet16,
         lightcuts_shadow_rays: lc_rays,
         lightcuts_seconds: lc_s,
         lightcuts_mrays_per_s: rate(lc_rays as usize, lc_s),
@@ -112,6 +138,7 @@ pub fn measure(session: &Session<'_>, settings: &PassSettings, cut: CutSettings,
         exact_seconds: ex_s,
         exact_mrays_per_s: rate(ex_rays as usize, ex_s),
         lightcuts_over_embree: rate(lc_rays as usize, lc_s) / embree_batch,
+        lightcuts_over_embree_packets: rate(lc_rays as usize, lc_s) / packet8,
         exact_over_embree: rate(ex_rays as usize, ex_s) / embree_batch,
         threads,
     }

@@ -10,7 +10,7 @@ use serde::Serialize;
 use crate::cli::process;
 use crate::embree::Device;
 use crate::light::{LightKind, TreeLight};
-use crate::light_tree::{greedy, ploc, LightTree};
+use crate::light_tree::{greedy, ploc, LightTree, LightTrees};
 use crate::lightcut::{evaluate, CutScratch, CutSettings};
 use crate::scene::material::{reflect, Albedo, Material};
 use crate::shading::SurfacePoint;
@@ -157,8 +157,8 @@ fn shading_points(material: &Material, count: usize) -> Vec<SurfacePoint<'_>> {
 pub fn average_cut(tree: &LightTree, points: &[SurfacePoint<'_>], embree: &crate::embree::Scene) -> f64 {
     let settings = CutSettings { error: 0.02, max_cut: 1_000_000 };
     let mut scratch = CutScratch::default();
-    let trees = std::slice::from_ref(tree);
-    let nodes: u64 = points.iter().map(|sp| evaluate(trees, sp, embree, &settings, &mut scratch).nodes).sum();
+    let trees = LightTrees::of(tree);
+    let nodes: u64 = points.iter().map(|sp| evaluate(&trees, sp, embree, &settings, &mut scratch).nodes).sum();
     nodes as f64 / points.len().max(1) as f64
 }
 

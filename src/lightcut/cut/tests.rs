@@ -77,7 +77,7 @@ fn at_shading_points(scene: &Scene, settings: CutSettings, mut check: impl FnMut
         let ray = camera.ray(rng.range_f32(0.0, 64.0), rng.range_f32(0.0, 48.0));
         let Some(hit) = geometry.embree.intersect(&ray) else { continue };
         let sp = geometry.surface(&ray, &hit);
-        let cut = evaluate(&trees.trees, &sp, &geometry.embree, &settings, &mut scratch);
+        let cut = evaluate(&trees, &sp, &geometry.embree, &settings, &mut scratch);
         let mut exact = LightBatch::new(&geometry.embree, &sp, &mut batch);
         lights.for_each(|light| exact.add(&light));
         check(cut.radiance, exact.finish().radiance, cut.error_bound);
