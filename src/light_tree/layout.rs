@@ -147,56 +147,71 @@ impl CutTree {
         };
         let Some(root) = tree.root else { return layout };
         let internal = tree.nodes.len();
-        layout.blocks.reserve_exact(internal + 1);
-        if oriented {
-            layout.cones.reserve_exact(internal + 1);
+        // Nodes are created after their children (`TreeBuilder::merge`), so
+        // passes in creation order see children first and passes in reverse
+        // creation order see parents first: every pass reads the node array
+        // in order, and only the block writes scatter.
+        let below_count = |below: &[u32], c: NodeRef| if c.is_leaf() { 0 } else { below[c.index()] };
+        // Internal nodes in each subtree.
+        let mut below = vec![0u32; internal];
+        for (n, node) in tree.nodes.iter().enumerate() {
+            below[n] = 1 + below_count(&below, node.children[0]) + below_count(&below, node.children[1]);
         }
-        // Depth-first numbering: an internal node's first child follows it.
-        // `index[n]` is the block index of internal node n of `tree`.
+        // Depth-first block indices: the first child right after its parent,
+        // the second after the first's subtree; the root's block is 1.
         let mut index = vec![0u32; internal];
-        let mut order = Vec::with_capacity(internal);
-        let mut stack = vec![root];
-        while let Some(node) = stack.pop() {
-            if node.is_leaf() {
-                continue;
-            }
-            index[node.index()] = order.len() as u32 + 1;
-            order.push(node);
-            let [first, second] = tree.node_children(node);
-            stack.push(second);
-            stack.push(first);
+        if !root.is_leaf() {
+            index[root.index()] = 1;
         }
-        let slot = |node: NodeRef| -> Slot {
+        for n in (0..internal).rev() {
+            let [a, b] = tree.nodes[n].children;
+            if !a.is_leaf() {
+                index[a.index()] = index[n] + 1;
+            }
+            if !b.is_leaf() {
+                index[b.index()] = index[n] + 1 + below_count(&below, a);
+            }
+        }
+        drop(below);
+        // Each internal node's representative's position and normal, found
+        // from its children's (no random reads of the leaf arrays).
+        let mut rep_position = vec![Vec3::ZERO; internal];
+        let mut rep_normal = vec![Vec3::ZERO; if oriented { internal } else { 0 }];
+        let slot = |node: NodeRef, rep_position: &[Vec3], rep_normal: &[Vec3]| -> Slot {
             let (lo, hi) = tree.node_bounds(node);
             let (centre, half) = centre_half(lo, hi);
             let representative = tree.node_representative(node);
             let cone = tree.node_cone(node);
             let exact = lo == hi && (!oriented || cone.half_angle == 0.0);
-            let child = if node.is_leaf() {
-                Child::leaf(node.index() as u32)
+            let (child, position, normal) = if node.is_leaf() {
+                (Child::leaf(node.index() as u32), lo, tree.light_normal(node.index()))
             } else {
-                Child::internal(index[node.index()], exact)
+                let n = node.index();
+                let normal = rep_normal.get(n).copied().unwrap_or(Vec3::ZERO);
+                (Child::internal(index[n], exact), rep_position[n], normal)
             };
-            Slot {
-                child,
-                centre,
-                half,
-                intensity: tree.node_intensity(node),
-                representative,
-                position: tree.leaves[representative as usize].point,
-                normal: tree.light_normal(representative as usize),
-                cone,
-            }
+            Slot { child, centre, half, intensity: tree.node_intensity(node), representative, position, normal, cone }
         };
-        layout.push([Some(slot(root)), None]);
-        for node in order {
-            let [a, b] = tree.node_children(node);
-            layout.push([Some(slot(a)), Some(slot(b))]);
+        layout.blocks = vec![Block::default(); internal + 1];
+        if oriented {
+            layout.cones = vec![ConeBlock::default(); internal + 1];
         }
+        for (n, node) in tree.nodes.iter().enumerate() {
+            let slots = node.children.map(|c| slot(c, &rep_position, &rep_normal));
+            let shared = if slots[0].representative == node.representative { &slots[0] } else { &slots[1] };
+            rep_position[n] = shared.position;
+            if oriented {
+                rep_normal[n] = shared.normal;
+            }
+            let [a, b] = slots;
+            layout.write(index[n] as usize, [Some(a), Some(b)]);
+        }
+        layout.write(0, [Some(slot(root, &rep_position, &rep_normal)), None]);
         layout
     }
 
-    fn push(&mut self, slots: [Option<Slot>; 2]) {
+    /// Writes block `b` (and its cone block) from two slots.
+    fn write(&mut self, b: usize, slots: [Option<Slot>; 2]) {
         let mut block = Block { child: [Child::EMPTY; 2], ..Block::default() };
         let mut cone = ConeBlock::default();
         for (k, slot) in slots.iter().enumerate() {
@@ -217,9 +232,9 @@ impl CutTree {
             cone.cos_half_angle[k] = cos;
             cone.sin_half_angle[k] = sin;
         }
-        self.blocks.push(block);
-        if self.kind == LightKind::Oriented {
-            self.cones.push(cone);
+        self.blocks[b] = block;
+        if let Some(c) = self.cones.get_mut(b) {
+            *c = cone;
         }
     }
 

@@ -188,7 +188,8 @@ fn print_build(f: &BuildFigure) {
     let per_light = f.growth_per_light.map_or(String::from("-"), |g| format!("{g:.2}"));
     let peak = f.peak_build_mib.map_or(String::from("n/a"), |m| format!("{m:.0} MiB"));
     println!(
-        "tree build  {:<11} {:<9} {:>9} lights  {:>8.3} s  growth {:>7} (per light {:>5})  peak {:>9}  {:>5.1} B/light",
+        "tree build  {:<11} {:<9} {:>9} lights  {:>8.3} s  growth {:>7} (per light {:>5})  peak {:>9}  {:>5.1} B/light  \
+         layout {:.3} s {:>5.1} B/light",
         f.kind,
         format!("{:?}", f.distribution).to_lowercase(),
         f.lights,
@@ -196,7 +197,9 @@ fn print_build(f: &BuildFigure) {
         growth,
         per_light,
         peak,
-        f.tree_bytes_per_light
+        f.tree_bytes_per_light,
+        f.layout_seconds,
+        f.layout_bytes_per_light
     );
 }
 

@@ -10,6 +10,7 @@ use serde::Serialize;
 use crate::cli::process;
 use crate::embree::Device;
 use crate::light::{LightKind, TreeLight};
+use crate::light_tree::layout::CutTree;
 use crate::light_tree::{greedy, ploc, LightTree, LightTrees};
 use crate::lightcut::{evaluate, CutScratch, CutSettings};
 use crate::scene::material::{reflect, Albedo, Material};
@@ -77,6 +78,10 @@ pub struct BuildFigure {
     /// resetting it, minus VmRSS before), in MiB; None where /proc is missing.
     pub peak_build_mib: Option<f64>,
     pub tree_bytes_per_light: f64,
+    /// The tree laid out for the cut (`light_tree::layout`): the time to lay
+    /// it out, and its bytes per light (what a render keeps).
+    pub layout_seconds: f64,
+    pub layout_bytes_per_light: f64,
     /// build time per light over the previous size's (1.0 = linear).
     pub growth_per_light: Option<f64>,
     /// build time over the previous size's.
@@ -111,6 +116,9 @@ pub fn measure_build(
     let tree = ploc::build(kind, lights, seed);
     let build_seconds = start.elapsed().as_secs_f64();
     let peak = process::peak_resident_mib();
+    let start = Instant::now();
+    let layout = CutTree::from_tree(&tree);
+    let layout_seconds = start.elapsed().as_secs_f64();
     let peak_build_mib = match (reset, before, peak) {
         (true, Some(b), Some(p)) => Some((p - b).max(0.0)),
         _ => None,
@@ -122,6 +130,8 @@ pub fn measure_build(
         build_seconds,
         peak_build_mib,
         tree_bytes_per_light: tree.memory_bytes() as f64 / lights.len().max(1) as f64,
+        layout_seconds,
+        layout_bytes_per_light: layout.memory_bytes() as f64 / lights.len().max(1) as f64,
         growth_per_light: None,
         growth: None,
     };
