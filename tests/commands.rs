@@ -15,21 +15,40 @@ fn sweep_writes_csv_svg_png_and_reuses_its_reference() {
         s(&out),
         "--errors",
         "0.01,0.1",
+        "--modes",
+        "bounded,stochastic",
+        "--spp",
+        "1,2",
         "--resolution",
         "32x24",
         "--quiet",
     ]);
     assert!(stdout.contains("threshold") && stdout.contains("speedup"), "{stdout}");
     let csv = std::fs::read_to_string(out.join("sweep.csv")).unwrap();
-    assert_eq!(csv.lines().count(), 3, "{csv}");
-    assert!(csv.starts_with("threshold,seconds,speedup"), "{csv}");
-    assert!(std::fs::read_to_string(out.join("sweep.svg")).unwrap().contains("<svg"));
-    assert!(png::Decoder::new(std::fs::File::open(out.join("sweep.png")).unwrap()).read_info().is_ok());
-    // The smaller threshold is no less accurate.
-    let rows: Vec<Vec<f64>> = csv.lines().skip(1).map(|l| l.split(',').map(|v| v.parse().unwrap()).collect()).collect();
-    assert!(rows[0][6] <= rows[1][6], "mean error at 1% {} vs 10% {}", rows[0][6], rows[1][6]);
+    assert_eq!(csv.lines().count(), 1 + 2 * 2 * 2, "two spp, two modes, two thresholds: {csv}");
+    assert!(csv.starts_with("mode,spp,threshold,seconds,speedup"), "{csv}");
+    for plot in ["sweep", "sweep-p99"] {
+        assert!(std::fs::read_to_string(out.join(format!("{plot}.svg"))).unwrap().contains("<svg"));
+        assert!(png::Decoder::new(std::fs::File::open(out.join(format!("{plot}.png"))).unwrap()).read_info().is_ok());
+    }
+    assert!(out.join("reference-spp1.exr").exists() && out.join("reference-spp2.exr").exists());
+    // The rows: mode, spp, then numbers. For the bounded mode at 1 spp the
+    // smaller threshold is no less accurate.
+    let rows: Vec<(String, Vec<f64>)> = csv
+        .lines()
+        .skip(1)
+        .map(|l| {
+            let mut fields = l.split(',');
+            let mode = fields.next().unwrap().to_string();
+            (mode, fields.map(|v| v.parse().unwrap()).collect())
+        })
+        .collect();
+    assert_eq!(rows[0].0, "bounded");
+    assert!(rows.iter().any(|r| r.0 == "stochastic" && r.1[0] == 2.0));
+    let mean = |r: &(String, Vec<f64>)| r.1[7];
+    assert!(mean(&rows[0]) <= mean(&rows[1]), "mean error at 1% {} vs 10% {}", mean(&rows[0]), mean(&rows[1]));
     // A second sweep with the same settings reuses the reference untouched.
-    let stamp = std::fs::metadata(out.join("reference.exr")).unwrap().modified().unwrap();
+    let stamp = std::fs::metadata(out.join("reference-spp1.exr")).unwrap().modified().unwrap();
     let json = lightcuts_ok(&[
         "sweep",
         s(&scene),
@@ -42,7 +61,7 @@ fn sweep_writes_csv_svg_png_and_reuses_its_reference() {
         "--quiet",
         "--json",
     ]);
-    assert_eq!(std::fs::metadata(out.join("reference.exr")).unwrap().modified().unwrap(), stamp);
+    assert_eq!(std::fs::metadata(out.join("reference-spp1.exr")).unwrap().modified().unwrap(), stamp);
     let rows: serde_json::Value = serde_json::from_str(&json).unwrap();
     assert_eq!(rows.as_array().unwrap().len(), 1);
     // Other settings render a new one.
@@ -59,7 +78,7 @@ fn sweep_writes_csv_svg_png_and_reuses_its_reference() {
         "3",
         "--quiet",
     ]);
-    assert_ne!(std::fs::metadata(out.join("reference.exr")).unwrap().modified().unwrap(), stamp);
+    assert_ne!(std::fs::metadata(out.join("reference-spp1.exr")).unwrap().modified().unwrap(), stamp);
 }
 
 #[test]
@@ -109,15 +128,15 @@ fn sweep_renders_a_new_reference_when_a_file_the_scene_reads_changes() {
     let sweep = || {
         lightcuts_ok(&["sweep", s(&scene), "--out", s(&out), "--errors", "0.05", "--resolution", "24x18", "--quiet"])
     };
-    let reference = || read_exr(&out.join("reference.exr")).unwrap().channels["R"].clone();
+    let reference = || read_exr(&out.join("reference-spp1.exr")).unwrap().channels["R"].clone();
     sweep();
-    let (first, stamp) = (reference(), std::fs::metadata(out.join("reference.exr")).unwrap().modified().unwrap());
+    let (first, stamp) = (reference(), std::fs::metadata(out.join("reference-spp1.exr")).unwrap().modified().unwrap());
     sweep();
-    assert_eq!(std::fs::metadata(out.join("reference.exr")).unwrap().modified().unwrap(), stamp, "reused");
+    assert_eq!(std::fs::metadata(out.join("reference-spp1.exr")).unwrap().modified().unwrap(), stamp, "reused");
     // Same scene file, darker texture: the old reference is stale.
     write_texture(&dir.path("floor.png"), 50);
     sweep();
     let second = reference();
-    assert_ne!(std::fs::metadata(out.join("reference.exr")).unwrap().modified().unwrap(), stamp, "re-rendered");
+    assert_ne!(std::fs::metadata(out.join("reference-spp1.exr")).unwrap().modified().unwrap(), stamp, "re-rendered");
     assert!(second.iter().sum::<f32>() < 0.5 * first.iter().sum::<f32>(), "the new reference sees the new texture");
 }

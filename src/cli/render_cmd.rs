@@ -6,10 +6,11 @@ use clap::Args;
 
 use super::progress::Progress;
 use super::{parse_pixel_bounds, parse_resolution, CliError};
+use crate::lightcut::stochastic::{STOCHASTIC_DEFAULTS, STOCHASTIC_FROM_SPP};
 use crate::lightcut::CutSettings;
 use crate::output::exr::{write_exr, ExrChannels, ExrMetadata};
 use crate::output::preview::write_png;
-use crate::render::session::{PassResult, Session};
+use crate::render::session::{Mode, PassResult, Session};
 use crate::render::{PassSettings, PixelBounds};
 use crate::scene::{check_resolution, Scene};
 
@@ -20,16 +21,11 @@ pub struct RenderArgs {
     /// Output OpenEXR file.
     #[arg(short, long, value_name = "OUT.exr")]
     pub output: PathBuf,
-    /// Reference mode: every light, one shadow ray each.
-    #[arg(long, conflicts_with_all = ["error", "max_cut"])]
-    pub exact: bool,
-    /// Lightcuts' relative error threshold (0.02 = 2%); 0 refines every
-    /// cluster, reproducing --exact when max-cut allows.
-    #[arg(long, default_value_t = 0.02)]
-    pub error: f64,
-    /// Largest cut per shading point, in nodes.
-    #[arg(long, default_value_t = 1000)]
-    pub max_cut: usize,
+    #[command(flatten)]
+    pub mode: ModeArgs,
+    /// Samples per pixel, overriding the scene's.
+    #[arg(long, value_name = "N")]
+    pub spp: Option<u32>,
     #[command(flatten)]
     pub pass: PassArgs,
     /// Write the beauty (R, G, B, A) as 16-bit half floats.
@@ -50,15 +46,66 @@ pub struct RenderArgs {
     pub stats: bool,
 }
 
+/// How direct light is computed. Without a mode flag, the mode that gave
+/// the smaller error for the time at the samples per pixel asked for (see
+/// [`default_mode`]).
+#[derive(Debug, Args)]
+pub struct ModeArgs {
+    /// Reference mode: every light, one shadow ray each.
+    #[arg(long, conflicts_with_all = ["bounded", "stochastic", "error", "max_cut"])]
+    pub exact: bool,
+    /// Lightcuts [LC05]: each cluster's error is bounded, its representative
+    /// fixed when the tree is built.
+    #[arg(long, conflicts_with = "stochastic")]
+    pub bounded: bool,
+    /// Stochastic lightcuts [SLC19]: each cut node's light is drawn per
+    /// sample, so the error falls with samples per pixel.
+    #[arg(long)]
+    pub stochastic: bool,
+    /// Relative error threshold: a cluster is split while its bound exceeds
+    /// this fraction of the point's total (bounded: of the estimate, default
+    /// 0.02; stochastic: of the summed bounds, default in `lightcut::stochastic`).
+    /// 0 splits every cluster, reproducing --exact (bounded) when max-cut allows.
+    #[arg(long)]
+    pub error: Option<f64>,
+    /// Largest cut per shading point, in nodes (bounded default 1000).
+    #[arg(long)]
+    pub max_cut: Option<usize>,
+}
+
+impl ModeArgs {
+    /// The mode these flags ask for, at `spp` samples per pixel.
+    pub fn mode(&self, spp: u32) -> Result<Mode, CliError> {
+        let stochastic = if self.exact {
+            return Ok(Mode::Exact);
+        } else if self.bounded || self.stochastic {
+            self.stochastic
+        } else {
+            matches!(default_mode(spp), Mode::Stochastic(_))
+        };
+        let defaults = if stochastic { STOCHASTIC_DEFAULTS } else { CutSettings::default() };
+        let cut = cut_settings(self.error.unwrap_or(defaults.error), self.max_cut.unwrap_or(defaults.max_cut))?;
+        Ok(if stochastic { Mode::Stochastic(cut) } else { Mode::Bounded(cut) })
+    }
+}
+
+/// The mode a render uses when no mode flag is given, at `spp` samples per
+/// pixel, with its default settings.
+#[must_use]
+pub fn default_mode(spp: u32) -> Mode {
+    if spp >= STOCHASTIC_FROM_SPP {
+        Mode::Stochastic(STOCHASTIC_DEFAULTS)
+    } else {
+        Mode::Bounded(CutSettings::default())
+    }
+}
+
 /// The options every rendering command shares (pbrt-style overrides).
 #[derive(Debug, Args)]
 pub struct PassArgs {
     /// Film size, overriding the scene's.
     #[arg(long, value_name = "WxH", value_parser = parse_resolution)]
     pub resolution: Option<(u32, u32)>,
-    /// Samples per pixel, overriding the scene's.
-    #[arg(long, value_name = "N")]
-    pub spp: Option<u32>,
     /// Seed of every random choice (sample positions, representatives, VPLs).
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
@@ -71,9 +118,10 @@ pub struct PassArgs {
 }
 
 impl PassArgs {
-    /// The pass these options describe for `scene`.
-    pub fn settings(&self, scene: &Scene) -> Result<PassSettings, CliError> {
-        pass_settings(scene, self.resolution, self.spp, self.seed, self.pixel_bounds)
+    /// The pass these options describe for `scene`, at `spp` samples per
+    /// pixel (None: the scene's).
+    pub fn settings(&self, scene: &Scene, spp: Option<u32>) -> Result<PassSettings, CliError> {
+        pass_settings(scene, self.resolution, spp, self.seed, self.pixel_bounds)
     }
 }
 
@@ -106,15 +154,6 @@ pub fn pass_settings(
     Ok(PassSettings { width, height, spp, seed, bounds })
 }
 
-/// The render mode as the EXR header and reports name it.
-#[must_use]
-pub fn render_mode(cut: Option<CutSettings>) -> String {
-    match cut {
-        Some(c) => format!("lightcuts error={} max_cut={}", c.error, c.max_cut),
-        None => "exact".to_string(),
-    }
-}
-
 /// The cut settings of a lightcuts render, validated.
 pub fn cut_settings(error: f64, max_cut: usize) -> Result<CutSettings, CliError> {
     if !(error.is_finite() && error >= 0.0) {
@@ -128,8 +167,8 @@ pub fn cut_settings(error: f64, max_cut: usize) -> Result<CutSettings, CliError>
 
 pub fn run(args: &RenderArgs) -> Result<(), CliError> {
     let scene = Scene::load(&args.scene)?;
-    let settings = args.pass.settings(&scene)?;
-    let cut = if args.exact { None } else { Some(cut_settings(args.error, args.max_cut)?) };
+    let settings = args.pass.settings(&scene, args.spp)?;
+    let mode = args.mode.mode(settings.spp)?;
     if !args.exposure.is_finite() {
         return Err(CliError::Usage { flag: "--exposure", message: format!("must be finite, got {}", args.exposure) });
     }
@@ -138,9 +177,10 @@ pub fn run(args: &RenderArgs) -> Result<(), CliError> {
     crate::embree::set_timing(args.stats);
     let cpu_before = super::process::cpu_seconds();
     let PassResult { film, stats, seconds, trees, tree_bytes, vpls, vpl_time, lights } =
-        session.render(&settings, cut, &|event| progress.report(event));
+        session.render(&settings, mode, &|event| progress.report(event));
     let cpu_seconds = super::process::cpu_seconds().zip(cpu_before).map(|(after, before)| after - before);
-    let mode = render_mode(cut);
+    let cut = mode.cut();
+    let mode = mode.describe();
 
     let meta = ExrMetadata {
         scene_file: scene.path.clone(),

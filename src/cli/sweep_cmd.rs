@@ -1,25 +1,54 @@
 //! `lightcuts sweep`: the speed/accuracy trade over a list of error
-//! thresholds, each measured against the exact render of the same scene and
-//! settings (rendered once, and reused from DIR when it matches).
+//! thresholds, for each cut mode (bounded, stochastic) and each number of
+//! samples per pixel, every render measured against the exact render of the
+//! same scene, settings, seed and samples per pixel (the camera samples are
+//! identical, so only the light estimate differs). Each reference is
+//! rendered once, and reused from DIR when it matches.
 
 use std::io::Write as _;
 use std::path::{Path, PathBuf};
 
-use clap::Args;
+use clap::{Args, ValueEnum};
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
 
 use super::progress::Progress;
-use super::render_cmd::{cut_settings, render_mode, PassArgs};
+use super::render_cmd::{cut_settings, PassArgs};
 use super::CliError;
+use crate::lightcut::stochastic::STOCHASTIC_DEFAULTS;
+use crate::lightcut::CutSettings;
 use crate::output::compare::compare_rgb;
 use crate::output::exr::{write_exr, ExrChannels, ExrMetadata};
 use crate::output::plot::{Plot, Series};
 use crate::output::read::read_exr;
 use crate::output::{write_atomically, OutputError};
-use crate::render::session::{PassResult, Session};
+use crate::render::session::{Mode, PassResult, Session};
 use crate::render::{Film, PassSettings};
 use crate::scene::Scene;
+
+/// A lightcut mode a sweep measures.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum SweepMode {
+    Bounded,
+    Stochastic,
+}
+
+impl SweepMode {
+    fn mode(self, cut: CutSettings) -> Mode {
+        match self {
+            Self::Bounded => Mode::Bounded(cut),
+            Self::Stochastic => Mode::Stochastic(cut),
+        }
+    }
+
+    fn name(self) -> &'static str {
+        match self {
+            Self::Bounded => "bounded",
+            Self::Stochastic => "stochastic",
+        }
+    }
+}
 
 #[derive(Debug, Args)]
 pub struct SweepArgs {
@@ -27,11 +56,19 @@ pub struct SweepArgs {
     /// Error thresholds, comma-separated.
     #[arg(long, value_delimiter = ',', default_values_t = [0.001, 0.005, 0.01, 0.02, 0.05, 0.1, 0.2])]
     pub errors: Vec<f64>,
-    /// Directory for the reference, the renders, sweep.csv, sweep.svg and sweep.png.
+    /// Cut modes, comma-separated.
+    #[arg(long, value_delimiter = ',', value_enum, default_values_t = [SweepMode::Bounded])]
+    pub modes: Vec<SweepMode>,
+    /// Samples per pixel, comma-separated (default: the scene's); each is
+    /// measured against the exact render at the same samples per pixel.
+    #[arg(long = "spp", value_name = "N,N,...", value_delimiter = ',')]
+    pub spps: Vec<u32>,
+    /// Directory for the references, the renders, sweep.csv and the plots.
     #[arg(long)]
     pub out: PathBuf,
-    #[arg(long, default_value_t = 1000)]
-    pub max_cut: usize,
+    /// Largest cut per shading point (default: each mode's).
+    #[arg(long)]
+    pub max_cut: Option<usize>,
     #[command(flatten)]
     pub pass: PassArgs,
     /// Print the rows as JSON instead of a table.
@@ -68,6 +105,8 @@ struct ReferenceRecord {
 
 #[derive(Debug, Clone, Serialize)]
 pub struct SweepRow {
+    pub mode: SweepMode,
+    pub spp: u32,
     pub threshold: f64,
     pub seconds: f64,
     pub speedup: f64,
@@ -115,7 +154,8 @@ fn metadata(scene: &Scene, settings: &PassSettings, mode: String, result: &PassR
     }
 }
 
-/// The exact reference: reused from `dir` when its record matches `key`.
+/// The exact reference at `key.spp` samples per pixel: reused from `dir`
+/// when its record matches `key`.
 fn reference(
     session: &Session<'_>,
     settings: &PassSettings,
@@ -123,7 +163,8 @@ fn reference(
     dir: &Path,
     quiet: bool,
 ) -> Result<(Vec<DVec3>, ReferenceRecord), CliError> {
-    let (exr_path, record_path) = (dir.join("reference.exr"), dir.join("reference.json"));
+    let name = format!("reference-spp{}", key.spp);
+    let (exr_path, record_path) = (dir.join(format!("{name}.exr")), dir.join(format!("{name}.json")));
     if let Ok(text) = std::fs::read_to_string(&record_path) {
         if let Ok(record) = serde_json::from_str::<ReferenceRecord>(&text) {
             if record.key == *key {
@@ -144,7 +185,7 @@ fn reference(
         }
     }
     let progress = Progress::for_stderr("exact", quiet);
-    let result = session.render(settings, None, &|event| progress.report(event));
+    let result = session.render(settings, Mode::Exact, &|event| progress.report(event));
     let meta = metadata(session.scene, settings, "exact".into(), &result);
     write_exr(&exr_path, &result.film, ExrChannels { half_beauty: false, lightcut_aovs: false }, &meta)?;
     let record =
@@ -158,95 +199,120 @@ fn reference(
 
 pub fn run(args: &SweepArgs) -> Result<(), CliError> {
     let scene = Scene::load(&args.scene)?;
-    let settings = args.pass.settings(&scene)?;
-    let cuts = args.errors.iter().map(|&e| cut_settings(e, args.max_cut)).collect::<Result<Vec<_>, _>>()?;
-    if cuts.is_empty() {
-        return Err(CliError::Usage { flag: "--errors", message: "give at least one threshold".into() });
+    if args.errors.is_empty() || args.modes.is_empty() {
+        return Err(CliError::Usage { flag: "--errors", message: "give at least one threshold and one mode".into() });
     }
+    let spps = if args.spps.is_empty() { vec![scene.film.spp] } else { args.spps.clone() };
     std::fs::create_dir_all(&args.out).map_err(OutputError::io(&args.out, "create the directory"))?;
-    let b = settings.bounds;
-    let key = ReferenceKey {
-        scene: std::fs::canonicalize(&scene.path).unwrap_or_else(|_| scene.path.clone()).display().to_string(),
-        inputs: scene
-            .inputs
-            .iter()
-            .map(|path| Ok((path.display().to_string(), hash_file(path)?)))
-            .collect::<Result<_, OutputError>>()?,
-        renderer: renderer_identity()?,
-        width: settings.width,
-        height: settings.height,
-        spp: settings.spp,
-        seed: settings.seed,
-        bounds: [b.x0, b.x1, b.y0, b.y1],
-    };
+    let inputs = scene
+        .inputs
+        .iter()
+        .map(|path| Ok((path.display().to_string(), hash_file(path)?)))
+        .collect::<Result<Vec<_>, OutputError>>()?;
+    let renderer = renderer_identity()?;
     let session = Session::try_new(&scene, args.pass.threads)?;
-    let (reference_rgb, record) = reference(&session, &settings, &key, &args.out, args.quiet)?;
-    let pixels = b.area().max(1) as f64;
     let mut rows = Vec::new();
-    for cut in cuts {
-        let progress = Progress::for_stderr(&format!("error {}", cut.error), args.quiet);
-        let result = session.render(&settings, Some(cut), &|event| progress.report(event));
-        let comparison =
-            compare_rgb(&rgb(&result.film), &reference_rgb, b.width() as usize, b.height() as usize).summary;
-        let path = args.out.join(format!("error-{}.exr", cut.error));
-        let meta = metadata(&scene, &settings, render_mode(Some(cut)), &result);
-        write_exr(&path, &result.film, ExrChannels { half_beauty: false, lightcut_aovs: true }, &meta)?;
-        let shading = &result.stats.shading;
-        rows.push(SweepRow {
-            threshold: cut.error,
-            seconds: result.seconds,
-            speedup: record.seconds / result.seconds.max(1e-9),
-            average_cut: shading.cut_nodes as f64 / shading.shading_points.max(1) as f64,
-            max_cut: shading.max_cut,
-            shadow_rays_per_pixel: shading.shadow_rays as f64 / pixels,
-            mean_relative_error: comparison.mean_relative_error,
-            p99_relative_error: comparison.p99_relative_error,
-            max_relative_error: comparison.max_relative_error,
-            fraction_above_2_percent: comparison.fraction_above_2_percent,
-        });
+    let mut references = Vec::new();
+    for &spp in &spps {
+        let settings = args.pass.settings(&scene, Some(spp))?;
+        let b = settings.bounds;
+        let key = ReferenceKey {
+            scene: std::fs::canonicalize(&scene.path).unwrap_or_else(|_| scene.path.clone()).display().to_string(),
+            inputs: inputs.clone(),
+            renderer: renderer.clone(),
+            width: settings.width,
+            height: settings.height,
+            spp: settings.spp,
+            seed: settings.seed,
+            bounds: [b.x0, b.x1, b.y0, b.y1],
+        };
+        let (reference_rgb, record) = reference(&session, &settings, &key, &args.out, args.quiet)?;
+        let pixels = b.area().max(1) as f64;
+        for &sweep_mode in &args.modes {
+            let defaults = match sweep_mode {
+                SweepMode::Bounded => CutSettings::default(),
+                SweepMode::Stochastic => STOCHASTIC_DEFAULTS,
+            };
+            for &error in &args.errors {
+                let cut = cut_settings(error, args.max_cut.unwrap_or(defaults.max_cut))?;
+                let mode = sweep_mode.mode(cut);
+                let progress =
+                    Progress::for_stderr(&format!("{} {spp} spp error {error}", sweep_mode.name()), args.quiet);
+                let result = session.render(&settings, mode, &|event| progress.report(event));
+                let comparison =
+                    compare_rgb(&rgb(&result.film), &reference_rgb, b.width() as usize, b.height() as usize).summary;
+                let path = args.out.join(format!("{}-spp{spp}-error-{error}.exr", sweep_mode.name()));
+                let meta = metadata(&scene, &settings, mode.describe(), &result);
+                write_exr(&path, &result.film, ExrChannels { half_beauty: false, lightcut_aovs: true }, &meta)?;
+                let shading = &result.stats.shading;
+                rows.push(SweepRow {
+                    mode: sweep_mode,
+                    spp,
+                    threshold: cut.error,
+                    seconds: result.seconds,
+                    speedup: record.seconds / result.seconds.max(1e-9),
+                    average_cut: shading.cut_nodes as f64 / shading.shading_points.max(1) as f64,
+                    max_cut: shading.max_cut,
+                    shadow_rays_per_pixel: shading.shadow_rays as f64 / pixels,
+                    mean_relative_error: comparison.mean_relative_error,
+                    p99_relative_error: comparison.p99_relative_error,
+                    max_relative_error: comparison.max_relative_error,
+                    fraction_above_2_percent: comparison.fraction_above_2_percent,
+                });
+            }
+        }
+        references.push((spp, record, pixels));
     }
     write_csv(&args.out.join("sweep.csv"), &rows)?;
-    let plot = plot(&scene, &rows, record.seconds);
-    plot.write_svg(&args.out.join("sweep.svg"))?;
-    plot.write_png(&args.out.join("sweep.png"))?;
+    for (statistic, file) in [(Statistic::Mean, "sweep"), (Statistic::P99, "sweep-p99")] {
+        let plot = plot(&scene, &rows, &references, statistic);
+        plot.write_svg(&args.out.join(format!("{file}.svg")))?;
+        plot.write_png(&args.out.join(format!("{file}.png")))?;
+    }
     if args.json {
         println!("{}", serde_json::to_string_pretty(&rows).expect("plain data serialises"));
-    } else {
+        return Ok(());
+    }
+    for (spp, record, pixels) in &references {
         println!(
-            "exact reference: {:.3} s, {:.1} shadow rays per pixel",
+            "exact reference at {spp} spp: {:.3} s, {:.1} shadow rays per pixel",
             record.seconds,
             record.shadow_rays as f64 / pixels
         );
-        println!(
-            "{:>9} {:>9} {:>8} {:>8} {:>7} {:>9} {:>9} {:>9} {:>9} {:>8}",
-            "threshold",
-            "time (s)",
-            "speedup",
-            "avg cut",
-            "max cut",
-            "rays/px",
-            "mean err",
-            "p99 err",
-            "max err",
-            "> 2%"
-        );
-        for r in &rows {
-            println!(
-                "{:>9} {:>9.3} {:>7.1}x {:>8.1} {:>7} {:>9.1} {:>8.3}% {:>8.2}% {:>8.2}% {:>7.2}%",
-                r.threshold,
-                r.seconds,
-                r.speedup,
-                r.average_cut,
-                r.max_cut,
-                r.shadow_rays_per_pixel,
-                100.0 * r.mean_relative_error,
-                100.0 * r.p99_relative_error,
-                100.0 * r.max_relative_error,
-                100.0 * r.fraction_above_2_percent
-            );
-        }
-        println!("wrote {}/sweep.csv, sweep.svg, sweep.png", args.out.display());
     }
+    println!(
+        "{:>10} {:>5} {:>9} {:>9} {:>8} {:>8} {:>7} {:>9} {:>9} {:>9} {:>9} {:>8}",
+        "mode",
+        "spp",
+        "threshold",
+        "time (s)",
+        "speedup",
+        "avg cut",
+        "max cut",
+        "rays/px",
+        "mean err",
+        "p99 err",
+        "max err",
+        "> 2%"
+    );
+    for r in &rows {
+        println!(
+            "{:>10} {:>5} {:>9} {:>9.3} {:>7.1}x {:>8.1} {:>7} {:>9.1} {:>8.3}% {:>8.2}% {:>8.2}% {:>7.2}%",
+            r.mode.name(),
+            r.spp,
+            r.threshold,
+            r.seconds,
+            r.speedup,
+            r.average_cut,
+            r.max_cut,
+            r.shadow_rays_per_pixel,
+            100.0 * r.mean_relative_error,
+            100.0 * r.p99_relative_error,
+            100.0 * r.max_relative_error,
+            100.0 * r.fraction_above_2_percent
+        );
+    }
+    println!("wrote {}/sweep.csv, sweep.svg, sweep.png, sweep-p99.svg, sweep-p99.png", args.out.display());
     Ok(())
 }
 
@@ -262,22 +328,51 @@ fn write_csv(path: &Path, rows: &[SweepRow]) -> Result<(), OutputError> {
     })
 }
 
-fn plot(scene: &Scene, rows: &[SweepRow], exact_seconds: f64) -> Plot {
+/// Which error statistic a plot shows.
+#[derive(Debug, Clone, Copy)]
+enum Statistic {
+    Mean,
+    P99,
+}
+
+/// Error against time, one series per (mode, spp): colour by samples per
+/// pixel, dashed for the stochastic mode; each point labelled with its
+/// threshold.
+fn plot(scene: &Scene, rows: &[SweepRow], references: &[(u32, ReferenceRecord, f64)], statistic: Statistic) -> Plot {
+    const COLOURS: [[u8; 3]; 6] =
+        [[200, 40, 40], [40, 80, 200], [30, 150, 60], [150, 60, 180], [220, 130, 0], [0, 0, 0]];
     let label = |t: f64| format!("{}%", 100.0 * t);
-    let series = |name: &str, colour, dashed, f: &dyn Fn(&SweepRow) -> f64| Series {
-        name: name.into(),
-        colour,
-        dashed,
-        points: rows.iter().map(|r| (r.seconds, 100.0 * f(r), label(r.threshold))).collect(),
+    let value = |r: &SweepRow| match statistic {
+        Statistic::Mean => r.mean_relative_error,
+        Statistic::P99 => r.p99_relative_error,
     };
+    let mut series = Vec::new();
+    for (i, (spp, record, _)) in references.iter().enumerate() {
+        for mode in [SweepMode::Bounded, SweepMode::Stochastic] {
+            let points: Vec<_> = rows
+                .iter()
+                .filter(|r| r.spp == *spp && r.mode == mode)
+                .map(|r| (r.seconds, 100.0 * value(r), label(r.threshold)))
+                .collect();
+            if !points.is_empty() {
+                series.push(Series {
+                    name: format!("{} {spp} spp (exact {:.1} s)", mode.name(), record.seconds),
+                    colour: COLOURS[i % COLOURS.len()],
+                    dashed: mode == SweepMode::Stochastic,
+                    points,
+                });
+            }
+        }
+    }
     let name = scene.path.file_stem().map_or_else(|| "scene".into(), |s| s.to_string_lossy().into_owned());
+    let what = match statistic {
+        Statistic::Mean => "mean",
+        Statistic::P99 => "99th percentile",
+    };
     Plot {
-        title: format!("{name}: lightcuts error against time (exact: {exact_seconds:.2} s)"),
+        title: format!("{name}: lightcuts' {what} relative error against time"),
         x_label: "render time (s)".into(),
-        y_label: "relative error (%)".into(),
-        series: vec![
-            series("mean", [200, 40, 40], false, &|r| r.mean_relative_error),
-            series("99th percentile", [40, 80, 200], true, &|r| r.p99_relative_error),
-        ],
+        y_label: format!("{what} relative error (%)"),
+        series,
     }
 }

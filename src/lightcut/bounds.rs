@@ -180,7 +180,15 @@ impl PointBounds {
     /// clamp is the one the exact evaluation applies, so the bound stays
     /// finite inside a box.
     #[inline(always)]
-    fn geometric(&self, c: &V3, h: &V3) -> f32x4 {
+    fn geometric(&self, c: &V3, h: &V3, estimate: bool) -> f32x4 {
+        if estimate {
+            // The stochastic walk's importance: 1 / the squared distance to
+            // the box's centre, no closer than the box's half-diagonal or
+            // the clamp (pbrt-v4's LightBounds::Importance does the like).
+            // Not a bound, only a weight: it is never 0.
+            let d = sub3(c, &self.p);
+            return f32x4::ONE / dot(&d, &d).fast_max(dot(h, h)).fast_max(self.min_distance_squared);
+        }
         let zero = f32x4::ZERO;
         let d = [
             ((c[0] - self.p[0]).abs() - h[0]).fast_max(zero),
@@ -200,13 +208,24 @@ impl PointBounds {
     #[must_use]
     #[inline(always)]
     pub fn pair(&self, kind: LightKind, block: &Block, cones: Option<&ConeBlock>) -> [f32; 2] {
+        let [b0, b1] = self.importance(kind, block, cones);
+        let exact = |k: usize| block.child[k].is_exact();
+        [if exact(0) { 0.0 } else { b0 }, if exact(1) { 0.0 } else { b1 }]
+    }
+
+    /// The same bound of both slots, exact ones included: an upper bound of
+    /// each slot's unoccluded contribution (normalised), 0 only where no
+    /// light of the slot can reach the point. The stochastic cut's
+    /// importance.
+    #[must_use]
+    #[inline(always)]
+    pub fn importance(&self, kind: LightKind, block: &Block, cones: Option<&ConeBlock>) -> [f32; 2] {
         let gather = |pairs: &[[f32; 2]; 3]| -> V3 { [lanes(pairs[0]), lanes(pairs[1]), lanes(pairs[2])] };
         let cone = cones.map(|c| (gather(&c.axis), lanes(c.cos_half_angle), lanes(c.sin_half_angle)));
         let [b0, b1, ..] = self
-            .lanes(kind, &gather(&block.centre), &gather(&block.half), &gather(&block.intensity), cone.as_ref())
+            .lanes(kind, &gather(&block.centre), &gather(&block.half), &gather(&block.intensity), cone.as_ref(), false)
             .to_array();
-        let exact = |k: usize| block.child[k].is_exact();
-        [if exact(0) { 0.0 } else { b0 }, if exact(1) { 0.0 } else { b1 }]
+        [b0, b1]
     }
 
     /// The bounds of the slots of two blocks of one tree at once, in the
@@ -214,6 +233,31 @@ impl PointBounds {
     #[must_use]
     #[inline(always)]
     pub fn quad(&self, kind: LightKind, blocks: [&Block; 2], cones: Option<[&ConeBlock; 2]>) -> [f32; 4] {
+        let bounds = self.quad_lanes(kind, blocks, cones, false);
+        let exact = |k: usize| blocks[k / 2].child[k % 2].is_exact();
+        [0, 1, 2, 3].map(|k| if exact(k) { 0.0 } else { bounds[k] })
+    }
+
+    /// The stochastic walk's weights of the slots of two blocks of one
+    /// tree, in the order (first's 0, first's 1, second's 0, second's 1):
+    /// like [`PointBounds::importance`], but with G estimated at the box's
+    /// centre (an estimate of the slot's contribution, not a bound). 0
+    /// exactly where the bound is 0: where no light of the slot can reach
+    /// the point.
+    #[must_use]
+    #[inline(always)]
+    pub fn importance_quad(&self, kind: LightKind, blocks: [&Block; 2], cones: Option<[&ConeBlock; 2]>) -> [f32; 4] {
+        self.quad_lanes(kind, blocks, cones, true)
+    }
+
+    #[inline(always)]
+    fn quad_lanes(
+        &self,
+        kind: LightKind,
+        blocks: [&Block; 2],
+        cones: Option<[&ConeBlock; 2]>,
+        estimate: bool,
+    ) -> [f32; 4] {
         let two = |a: [f32; 2], b: [f32; 2]| f32x4::new([a[0], a[1], b[0], b[1]]);
         let gather = |field: fn(&Block) -> &[[f32; 2]; 3]| -> V3 {
             let (a, b) = (field(blocks[0]), field(blocks[1]));
@@ -223,18 +267,33 @@ impl PointBounds {
             let axis = [two(a.axis[0], b.axis[0]), two(a.axis[1], b.axis[1]), two(a.axis[2], b.axis[2])];
             (axis, two(a.cos_half_angle, b.cos_half_angle), two(a.sin_half_angle, b.sin_half_angle))
         });
-        let bounds = self
-            .lanes(kind, &gather(|b| &b.centre), &gather(|b| &b.half), &gather(|b| &b.intensity), cone.as_ref())
-            .to_array();
-        let exact = |k: usize| blocks[k / 2].child[k % 2].is_exact();
-        [0, 1, 2, 3].map(|k| if exact(k) { 0.0 } else { bounds[k] })
+        self.lanes(
+            kind,
+            &gather(|b| &b.centre),
+            &gather(|b| &b.half),
+            &gather(|b| &b.intensity),
+            cone.as_ref(),
+            estimate,
+        )
+        .to_array()
     }
 
     /// The bounds of up to four clusters, one per lane: boxes (centre `c`,
     /// half-extent `h`), summed intensities, and for oriented lights the
     /// cones (axis, cos and sin of the half-angle).
     #[inline(always)]
-    fn lanes(&self, kind: LightKind, c: &V3, h: &V3, intensity: &V3, cone: Option<&(V3, f32x4, f32x4)>) -> f32x4 {
+    /// `estimate`: G is the walk's estimate instead of its bound (see
+    /// [`PointBounds::importance_quad`]).
+    #[allow(clippy::too_many_arguments)]
+    fn lanes(
+        &self,
+        kind: LightKind,
+        c: &V3,
+        h: &V3,
+        intensity: &V3,
+        cone: Option<&(V3, f32x4, f32x4)>,
+        estimate: bool,
+    ) -> f32x4 {
         let (cos_theta, weighted, geometric) = match kind {
             LightKind::Directional => {
                 let (cos_theta, weighted) = self.material(c, h, intensity);
@@ -243,7 +302,7 @@ impl PointBounds {
             LightKind::Omni | LightKind::Oriented => {
                 let to_box = sub3(c, &self.p);
                 let (cos_theta, weighted) = self.material(&to_box, h, intensity);
-                let mut geometric = self.geometric(c, h);
+                let mut geometric = self.geometric(c, h, estimate);
                 if let Some((axis, cos_beta, sin_beta)) = cone {
                     geometric *= self.emission(c, h, axis, *cos_beta, *sin_beta);
                 }

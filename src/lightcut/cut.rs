@@ -30,7 +30,7 @@ use super::bounds::PointBounds;
 use crate::embree::{PacketWidth, Scene as EmbreeScene, ShadowRay};
 use crate::light_tree::layout::{Child, CutTree};
 use crate::light_tree::LightTrees;
-use crate::shading::{BatchBuffers, Lanes, LightBatch, LightEvaluator, SurfacePoint};
+use crate::shading::{BatchBuffers, BatchResult, Lanes, LightBatch, LightEvaluator, SurfacePoint};
 use crate::util::color::luminance64;
 
 pub use crate::light_tree::EXHAUSTIVE_LIGHTS;
@@ -282,6 +282,23 @@ impl Cut<'_, '_> {
     }
 }
 
+/// Every light of the trees too small for a cut, one by one with the exact
+/// renderer's code (the same for both cut modes).
+pub(super) fn exhaustive(
+    trees: &LightTrees,
+    sp: &SurfacePoint<'_>,
+    embree: &EmbreeScene,
+    batch: &mut BatchBuffers,
+) -> BatchResult {
+    let mut exhaustive = LightBatch::new(embree, sp, batch);
+    for tree in &trees.trees {
+        for light in &tree.lights {
+            exhaustive.add(&light.light(tree.kind));
+        }
+    }
+    exhaustive.finish()
+}
+
 /// Direct light at `sp` from every tree, by a lightcut.
 pub fn evaluate(
     trees: &LightTrees,
@@ -292,13 +309,7 @@ pub fn evaluate(
 ) -> CutResult {
     // Small trees first, light by light with the exact renderer's code; their
     // sum is exact and counts in the total the threshold is relative to.
-    let mut exhaustive = LightBatch::new(embree, sp, &mut scratch.batch);
-    for tree in &trees.trees {
-        for light in &tree.lights {
-            exhaustive.add(&light.light(tree.kind));
-        }
-    }
-    let fixed = exhaustive.finish();
+    let fixed = exhaustive(trees, sp, embree, &mut scratch.batch);
     let mut result =
         CutResult { radiance: fixed.radiance, error_bound: 0.0, nodes: fixed.lights, shadow_rays: fixed.shadow_rays };
     if trees.trees.iter().all(|t| t.blocks.is_empty()) {

@@ -11,23 +11,35 @@ use glam::{DVec3, Vec3};
 
 use crate::light::Lights;
 use crate::light_tree::LightTrees;
-use crate::lightcut::{self, CutScratch, CutSettings};
+use crate::lightcut::{self, CutScratch, CutSettings, StochasticScratch};
 use crate::shading::{BatchBuffers, Geometry, LightBatch, SurfacePoint};
+use crate::util::sampling::Rng;
 
 /// How direct light is computed at each shading point.
 #[derive(Clone, Copy)]
 pub enum DirectLighting<'a> {
     /// Every light, one shadow ray each: the reference.
     Exact,
-    /// A lightcut through the scene's light trees.
+    /// A bounded lightcut ([LC05]) through the scene's light trees.
     Lightcuts { trees: &'a LightTrees, settings: CutSettings },
+    /// A stochastic lightcut ([SLC19]): lights drawn per sample.
+    StochasticLightcuts { trees: &'a LightTrees, settings: CutSettings },
 }
+
+/// The random stream of a camera sample's shading points: (seed, pixel x,
+/// pixel y, sample index), and the bounce is added per point.
+pub type SampleKey = [u64; 4];
+
+/// Keeps the stochastic cut's stream apart from the camera's jitter, which
+/// is keyed by the same sample.
+const STOCHASTIC_STREAM: u64 = 0x5107_c4a5;
 
 /// Reusable per-thread buffers (no allocation per shading point).
 #[derive(Default)]
 pub struct Scratch {
     batch: BatchBuffers,
     cut: CutScratch,
+    stochastic: StochasticScratch,
 }
 
 /// Buckets of the cut-size histogram: bucket k counts cuts of 2^k to
@@ -97,7 +109,7 @@ pub struct Integrator<'a> {
 impl Integrator<'_> {
     /// Radiance arriving at the camera along `ray` (camera paths bounce only
     /// off mirrors; every other surface is shaded by direct light).
-    pub fn trace(&self, mut ray: crate::embree::Ray, scratch: &mut Scratch) -> SampleResult {
+    pub fn trace(&self, mut ray: crate::embree::Ray, sample: SampleKey, scratch: &mut Scratch) -> SampleResult {
         let mut result = SampleResult { radiance: DVec3::ZERO, first_hit: None, stats: ShadingStats::default() };
         let mut throughput = DVec3::ONE;
         for depth in 0..=self.max_mirror_depth {
@@ -114,7 +126,7 @@ impl Integrator<'_> {
             }
             // Emitters are seen with their radiance (they reflect nothing).
             result.radiance += throughput * sp.emitted.as_dvec3();
-            let direct = self.direct_light(&sp, scratch, &mut result.stats);
+            let direct = self.direct_light(&sp, sample, depth, scratch, &mut result.stats);
             result.radiance += throughput * direct;
             if !sp.material.has_mirror() || depth == self.max_mirror_depth {
                 break;
@@ -125,7 +137,14 @@ impl Integrator<'_> {
         result
     }
 
-    fn direct_light(&self, sp: &SurfacePoint<'_>, scratch: &mut Scratch, stats: &mut ShadingStats) -> DVec3 {
+    fn direct_light(
+        &self,
+        sp: &SurfacePoint<'_>,
+        sample: SampleKey,
+        depth: u32,
+        scratch: &mut Scratch,
+        stats: &mut ShadingStats,
+    ) -> DVec3 {
         match self.direct {
             DirectLighting::Exact => {
                 // Every light, one shadow ray each, in batches; summed in
@@ -136,9 +155,16 @@ impl Integrator<'_> {
                 stats.record_point(found.lights, found.shadow_rays);
                 found.radiance
             }
-            DirectLighting::Lightcuts { trees, settings } => {
+            DirectLighting::Lightcuts { trees, settings } | DirectLighting::StochasticLightcuts { trees, settings } => {
                 let timed = crate::embree::timing().then(|| (Instant::now(), crate::embree::thread_timed_nanos()));
-                let found = lightcut::evaluate(trees, sp, &self.geometry.embree, &settings, &mut scratch.cut);
+                let embree = &self.geometry.embree;
+                let found = if let DirectLighting::Lightcuts { .. } = self.direct {
+                    lightcut::evaluate(trees, sp, embree, &settings, &mut scratch.cut)
+                } else {
+                    let [seed, x, y, s] = sample;
+                    let mut rng = Rng::from_key(&[seed, x, y, s, u64::from(depth), STOCHASTIC_STREAM]);
+                    lightcut::stochastic::evaluate(trees, sp, embree, &settings, &mut rng, &mut scratch.stochastic)
+                };
                 if let Some((start, embree_before)) = timed {
                     let embree = crate::embree::thread_timed_nanos() - embree_before;
                     stats.cut_nanos += (start.elapsed().as_nanos() as u64).saturating_sub(embree);

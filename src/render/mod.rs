@@ -134,7 +134,7 @@ fn render_tile(
             for s in 0..settings.spp {
                 let mut rng = Rng::from_key(&[settings.seed, u64::from(x), u64::from(y), u64::from(s)]);
                 let ray = camera.ray(x as f32 + rng.next_f32(), y as f32 + rng.next_f32());
-                let sample = integrator.trace(ray, scratch);
+                let sample = integrator.trace(ray, [settings.seed, u64::from(x), u64::from(y), u64::from(s)], scratch);
                 stats.camera_rays += 1;
                 radiance += sample.radiance;
                 pixel_stats.add(&sample.stats);

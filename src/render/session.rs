@@ -13,6 +13,38 @@ use crate::lightcut::CutSettings;
 use crate::scene::Scene;
 use crate::shading::{Geometry, GeometryError};
 
+/// How a pass computes direct light at each shading point.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Mode {
+    /// Every light, one shadow ray each.
+    Exact,
+    /// Lightcuts with representatives fixed when the tree is built ([LC05]).
+    Bounded(CutSettings),
+    /// Stochastic lightcuts: lights drawn per sample ([SLC19]).
+    Stochastic(CutSettings),
+}
+
+impl Mode {
+    /// The cut's settings, for the two lightcut modes.
+    #[must_use]
+    pub fn cut(&self) -> Option<CutSettings> {
+        match self {
+            Self::Exact => None,
+            Self::Bounded(c) | Self::Stochastic(c) => Some(*c),
+        }
+    }
+
+    /// The mode as the EXR header and the reports name it.
+    #[must_use]
+    pub fn describe(&self) -> String {
+        match self {
+            Self::Exact => "exact".into(),
+            Self::Bounded(c) => format!("lightcuts error={} max_cut={}", c.error, c.max_cut),
+            Self::Stochastic(c) => format!("stochastic lightcuts error={} max_cut={}", c.error, c.max_cut),
+        }
+    }
+}
+
 /// Failure to prepare a scene for rendering.
 #[derive(Debug, thiserror::Error)]
 pub enum SessionError {
@@ -66,14 +98,9 @@ impl<'s> Session<'s> {
         Ok(Self { scene, lights, pool, geometry })
     }
 
-    /// Renders one pass: exact when `cut` is None, else lightcuts (building
-    /// the light trees first, timed as part of the pass).
-    pub fn render(
-        &self,
-        settings: &PassSettings,
-        cut: Option<CutSettings>,
-        progress: &(dyn Fn(PassProgress) + Sync),
-    ) -> PassResult {
+    /// Renders one pass in `mode` (building the light trees first for the
+    /// lightcut modes, timed as part of the pass).
+    pub fn render(&self, settings: &PassSettings, mode: Mode, progress: &(dyn Fn(PassProgress) + Sync)) -> PassResult {
         let start = Instant::now();
         // Indirect light: VPLs for this seed, added to the scene's oriented lights.
         let (lights, vpls) = match self.scene.indirect {
@@ -87,9 +114,10 @@ impl<'s> Session<'s> {
             None => (std::borrow::Cow::Borrowed(&self.lights), 0),
         };
         let vpl_time = start.elapsed();
-        let trees = cut.map(|_| self.pool.install(|| LightTrees::build(&lights, settings.seed)));
-        let direct = match (&trees, cut) {
-            (Some(trees), Some(settings)) => DirectLighting::Lightcuts { trees, settings },
+        let trees = mode.cut().map(|_| self.pool.install(|| LightTrees::build(&lights, settings.seed)));
+        let direct = match (&trees, mode) {
+            (Some(trees), Mode::Bounded(settings)) => DirectLighting::Lightcuts { trees, settings },
+            (Some(trees), Mode::Stochastic(settings)) => DirectLighting::StochasticLightcuts { trees, settings },
             _ => DirectLighting::Exact,
         };
         let integrator = Integrator {
@@ -155,10 +183,10 @@ count = [16, 16]
 intensity = [1, 1, 1]
 "#;
 
-    fn pass(scene: &Scene, cut: Option<CutSettings>) -> crate::render::integrator::ShadingStats {
+    fn pass(scene: &Scene, mode: Mode) -> crate::render::integrator::ShadingStats {
         let session = Session::try_new(scene, 1).unwrap();
         let settings = PassSettings { width: 2, height: 2, spp: 1, seed: 0, bounds: PixelBounds::full(2, 2) };
-        let result = session.render(&settings, cut, &|_| {});
+        let result = session.render(&settings, mode, &|_| {});
         assert_eq!(result.stats.camera_rays, 4);
         result.stats.shading
     }
@@ -168,7 +196,7 @@ intensity = [1, 1, 1]
         // One more light under the floor: evaluated (it is in the cut) but
         // it contributes nothing, so it casts no shadow ray.
         let under = "[[lights]]\ntype = \"point\"\nposition = [0, -1, 0]\nintensity = [1, 1, 1]\n";
-        let stats = pass(&scene(&format!("{COINCIDENT}{under}")), None);
+        let stats = pass(&scene(&format!("{COINCIDENT}{under}")), Mode::Exact);
         assert_eq!(stats.shading_points, 4);
         assert_eq!(stats.cut_nodes, 4 * 257, "each point's cut is every light, once");
         assert_eq!(stats.max_cut, 257);
@@ -181,7 +209,7 @@ intensity = [1, 1, 1]
     #[test]
     fn lightcut_statistics_count_the_cut_and_its_rays() {
         // 256 lights at one point: the root alone is exact, one ray per point.
-        let stats = pass(&scene(COINCIDENT), Some(CutSettings::default()));
+        let stats = pass(&scene(COINCIDENT), Mode::Bounded(CutSettings::default()));
         assert_eq!(stats.shading_points, 4);
         assert_eq!(stats.cut_nodes, 4);
         assert_eq!(stats.max_cut, 1);

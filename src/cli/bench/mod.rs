@@ -30,10 +30,12 @@ pub enum Bench {
 #[derive(Debug, Args)]
 pub struct RaysArgs {
     pub scene: std::path::PathBuf,
-    #[arg(long, default_value_t = 0.02)]
-    pub error: f64,
-    #[arg(long, default_value_t = 1000)]
-    pub max_cut: usize,
+    /// The lightcut mode whose pass is measured (--exact is the pass (c)).
+    #[command(flatten)]
+    pub mode: super::render_cmd::ModeArgs,
+    /// Samples per pixel, overriding the scene's.
+    #[arg(long, value_name = "N")]
+    pub spp: Option<u32>,
     #[command(flatten)]
     pub pass: super::render_cmd::PassArgs,
     #[arg(long)]
@@ -100,10 +102,16 @@ pub fn run(args: &BenchArgs) -> Result<(), CliError> {
 
 fn rays(args: &RaysArgs) -> Result<(), CliError> {
     let scene = crate::scene::Scene::load(&args.scene)?;
-    let settings = args.pass.settings(&scene)?;
-    let cut = super::render_cmd::cut_settings(args.error, args.max_cut)?;
+    let settings = args.pass.settings(&scene, args.spp)?;
+    let mode = args.mode.mode(settings.spp)?;
+    if mode.cut().is_none() {
+        return Err(CliError::Usage {
+            flag: "--exact",
+            message: "bench rays measures a lightcut mode against the exact pass".into(),
+        });
+    }
     let session = crate::render::session::Session::try_new(&scene, args.pass.threads)?;
-    let f = rays::measure(&session, &settings, cut, args.quiet);
+    let f = rays::measure(&session, &settings, mode, args.quiet);
     if args.json {
         println!("{}", serde_json::to_string_pretty(&f).expect("plain data serialises"));
         return Ok(());

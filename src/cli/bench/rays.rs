@@ -10,8 +10,7 @@ use serde::Serialize;
 
 use crate::cli::progress::Progress;
 use crate::embree::{PacketWidth, ShadowRay};
-use crate::lightcut::CutSettings;
-use crate::render::session::Session;
+use crate::render::session::{Mode, Session};
 use crate::render::PassSettings;
 use crate::shading::direct::light_intensity;
 use crate::shading::{light_sample, SHADOW_BATCH};
@@ -76,7 +75,8 @@ fn record(session: &Session<'_>, settings: &PassSettings, stride: usize) -> Vec<
     })
 }
 
-pub fn measure(session: &Session<'_>, settings: &PassSettings, cut: CutSettings, quiet: bool) -> RayFigures {
+/// `mode`: the lightcut mode of the pass (b).
+pub fn measure(session: &Session<'_>, settings: &PassSettings, mode: Mode, quiet: bool) -> RayFigures {
     let threads = session.pool.current_num_threads();
     // Pixels to record so that about MAX_RECORDED rays are kept.
     let expected = settings.bounds.area() as f64 * session.lights.len().max(1) as f64;
@@ -118,9 +118,9 @@ pub fn measure(session: &Session<'_>, settings: &PassSettings, cut: CutSettings,
         (packets(PacketWidth::Four), packets(PacketWidth::Eight), packets(PacketWidth::Sixteen));
 
     let progress = Progress::for_stderr("lightcuts", quiet);
-    let lightcuts = session.render(settings, Some(cut), &|event| progress.report(event));
+    let lightcuts = session.render(settings, mode, &|event| progress.report(event));
     let progress = Progress::for_stderr("exact", quiet);
-    let exact = session.render(settings, None, &|event| progress.report(event));
+    let exact = session.render(settings, Mode::Exact, &|event| progress.report(event));
     let embree_batch = rate(rays.len(), batch_seconds);
     let (lc_rays, ex_rays) = (lightcuts.stats.shading.shadow_rays, exact.stats.shading.shadow_rays);
     let (lc_s, ex_s) = (lightcuts.stats.time.as_secs_f64(), exact.stats.time.as_secs_f64());

@@ -1,0 +1,349 @@
+//! Stochastic lightcuts ([SLC19] Yuksel, "Stochastic Lightcuts", HPG 2019;
+//! docs/stochastic-lightcuts.md has the mathematics): per sample, a cut is
+//! chosen from the bounds alone (no shadow ray), then each cut node's light
+//! is drawn by walking down its subtree, taking each child with probability
+//! proportional to its importance (its bound: an upper bound of its
+//! unoccluded contribution), and weighted by one over the path's
+//! probability. One shadow ray per cut node.
+//!
+//! Unbiased: the cut does not depend on the sample's random numbers, and a
+//! child's importance is 0 only when none of its lights can reach the point
+//! (every cosine bound, or the intensity, is 0), so every light that can
+//! contribute has a non-zero probability. E[estimate of node C] = sum over
+//! C's lights of M G V I. The error falls as 1 / sqrt(samples).
+//!
+//! Deterministic: every choice comes from the caller's random stream (the
+//! sample's), so images are bit-identical for any thread count and window.
+
+use std::collections::BinaryHeap;
+
+use glam::{DVec3, Vec3};
+
+use super::bounds::PointBounds;
+use super::cut::{exhaustive, CutResult, CutSettings};
+use crate::embree::{PacketWidth, Scene as EmbreeScene, ShadowRay};
+use crate::light_tree::layout::CutTree;
+use crate::light_tree::LightTrees;
+use crate::shading::{BatchBuffers, Lanes, LightEvaluator, SurfacePoint};
+use crate::util::color::luminance;
+use crate::util::sampling::Rng;
+
+/// The stochastic mode's default cut settings (chosen by measurement: see
+/// the README's "Stochastic lightcuts" section).
+pub const STOCHASTIC_DEFAULTS: CutSettings = CutSettings { error: 0.05, max_cut: 1000 };
+
+/// From this many samples per pixel on, a render without a mode flag is
+/// stochastic (measured: see the README).
+pub const STOCHASTIC_FROM_SPP: u32 = 16;
+
+/// One node of the cut being chosen: slot `slot` of block `block`.
+#[derive(Debug, Clone, Copy)]
+struct Node {
+    /// Normalised upper bound of the node's unoccluded contribution.
+    importance: f32,
+    block: u32,
+    slot: u8,
+    tree: u8,
+    in_cut: bool,
+}
+
+/// A light drawn for a cut node, waiting for its evaluation.
+#[derive(Debug, Clone, Copy)]
+struct Drawn {
+    /// The light's intensity over the probability of drawing it (W/sr, or
+    /// W/m^2 for directional lights): the estimate is M G V times this.
+    weight: DVec3,
+    block: u32,
+    slot: u8,
+    tree: u8,
+}
+
+/// Per-thread buffers reused across shading points.
+#[derive(Default)]
+pub struct StochasticScratch {
+    batch: BatchBuffers,
+    nodes: Vec<Node>,
+    heap: BinaryHeap<u64>,
+    walks: Vec<Walk>,
+    drawn: Vec<Drawn>,
+    values: Vec<DVec3>,
+    rays: Vec<ShadowRay>,
+    occluded: Vec<bool>,
+}
+
+/// How a walk down a subtree chooses between two children: the weights of
+/// the two slots of each of two blocks of a tree (non-negative; a child of
+/// weight 0 is never taken). The renderer passes
+/// [`PointBounds::importance_quad`]; tests pass deliberately wrong ones.
+pub type Importance<'f> = &'f dyn Fn(&CutTree, [usize; 2]) -> [[f32; 2]; 2];
+
+/// Direct light at `sp` from every tree, by a stochastic lightcut whose
+/// random choices come from `rng`. `settings.error` and `settings.max_cut`
+/// choose the cut: a node is split while its bound is above `error` times
+/// the cut's summed bounds and the cut has fewer than `max_cut` nodes.
+pub fn evaluate(
+    trees: &LightTrees,
+    sp: &SurfacePoint<'_>,
+    embree: &EmbreeScene,
+    settings: &CutSettings,
+    rng: &mut Rng,
+    scratch: &mut StochasticScratch,
+) -> CutResult {
+    let bounds = PointBounds::new(sp, trees.scale);
+    let importance = |tree: &CutTree, [a, b]: [usize; 2]| {
+        let cones = (!tree.cones.is_empty()).then(|| [&tree.cones[a], &tree.cones[b]]);
+        let [a0, a1, b0, b1] = bounds.importance_quad(tree.kind, [&tree.blocks[a], &tree.blocks[b]], cones);
+        [[a0, a1], [b0, b1]]
+    };
+    evaluate_with(trees, sp, embree, settings, rng, scratch, &bounds, &importance)
+}
+
+/// [`evaluate`] with the walks' importance given (for tests of bias).
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn evaluate_with(
+    trees: &LightTrees,
+    sp: &SurfacePoint<'_>,
+    embree: &EmbreeScene,
+    settings: &CutSettings,
+    rng: &mut Rng,
+    scratch: &mut StochasticScratch,
+    bounds: &PointBounds,
+    importance: Importance<'_>,
+) -> CutResult {
+    let fixed = exhaustive(trees, sp, embree, &mut scratch.batch);
+    let mut result =
+        CutResult { radiance: fixed.radiance, error_bound: 0.0, nodes: fixed.lights, shadow_rays: fixed.shadow_rays };
+    if trees.trees.iter().all(|t| t.blocks.is_empty()) {
+        return result;
+    }
+    let cut_nodes = choose_cut(trees, settings, bounds, scratch);
+    result.nodes += cut_nodes as u64;
+
+    // Draw one light per cut node: all walks step down together, level by
+    // level, so that their reads of the tree overlap in memory.
+    scratch.drawn.clear();
+    scratch.walks.clear();
+    for node in scratch.nodes.iter().filter(|n| n.in_cut) {
+        let tree = &trees.trees[node.tree as usize];
+        let child = tree.blocks[node.block as usize].child[node.slot as usize];
+        if child.is_exact() {
+            // An exact node is its own representative with probability 1
+            // (all its lights have the same M G V).
+            let intensity = slot_intensity(tree, node.block as usize, node.slot as usize);
+            scratch.drawn.push(Drawn {
+                weight: intensity.as_dvec3(),
+                block: node.block,
+                slot: node.slot,
+                tree: node.tree,
+            });
+        } else {
+            // Each walk draws from its own stream, split off the sample's.
+            let stream = Rng::from_key(&[rng.next_u64()]);
+            scratch.walks.push(Walk { below: child.index() as u32, probability: 1.0, stream, tree: node.tree });
+        }
+    }
+    while !scratch.walks.is_empty() {
+        // Touch every walk's next block first: the reads miss the cache
+        // together instead of one after another.
+        // (A block is two cache lines: one read in each.)
+        let touched = scratch.walks.iter().fold(0u32, |t, w| {
+            let block = &trees.trees[w.tree as usize].blocks[w.below as usize];
+            t ^ block.centre[0][0].to_bits() ^ block.representative[0]
+        });
+        std::hint::black_box(touched);
+        // Two walks of one tree step together: their four children's
+        // weights in one evaluation.
+        let mut k = 0;
+        while k < scratch.walks.len() {
+            let paired = k + 1 < scratch.walks.len() && scratch.walks[k + 1].tree == scratch.walks[k].tree;
+            let tree = &trees.trees[scratch.walks[k].tree as usize];
+            let blocks = [k, if paired { k + 1 } else { k }].map(|i| scratch.walks[i].below as usize);
+            let weights = importance(tree, blocks);
+            let count = if paired { 2 } else { 1 };
+            let mut ended = 0;
+            // Later walks first, so that removing one does not move the other.
+            for i in (0..count).rev() {
+                match step(tree, &mut scratch.walks[k + i], weights[i]) {
+                    Step::Down => continue,
+                    Step::Drawn(drawn) => scratch.drawn.push(drawn),
+                    Step::Nothing => {}
+                }
+                scratch.walks.remove(k + i);
+                ended += 1;
+            }
+            k += count - ended;
+        }
+    }
+    // Group the draws by tree (the walks finish in any order).
+    scratch.drawn.sort_by_key(|d| d.tree);
+    // Evaluate them four at a time, trace their shadow rays in packets.
+    let evaluator = LightEvaluator::new(sp);
+    scratch.values.clear();
+    scratch.rays.clear();
+    let mut unshadowed = DVec3::ZERO;
+    for group in scratch.drawn.chunk_by(|a, b| a.tree == b.tree) {
+        let tree = &trees.trees[group[0].tree as usize];
+        for quad in group.chunks(4) {
+            let mut lanes = Lanes::default();
+            for d in quad {
+                let light = tree.representative(d.block as usize, d.slot as usize);
+                lanes.push(light.point, light.normal);
+            }
+            for (d, found) in quad.iter().zip(evaluator.terms(tree.kind, &lanes)) {
+                let value = found.term * d.weight;
+                if value == DVec3::ZERO {
+                    continue;
+                }
+                match found.ray {
+                    Some(ray) => {
+                        scratch.rays.push(ray);
+                        scratch.values.push(value);
+                    }
+                    None => unshadowed += value,
+                }
+            }
+        }
+    }
+    embree.occluded_packets(&scratch.rays, &mut scratch.occluded, PacketWidth::Sixteen);
+    result.shadow_rays += scratch.rays.len() as u64;
+    let mut radiance = fixed.radiance + unshadowed;
+    for (value, &occluded) in scratch.values.iter().zip(&scratch.occluded) {
+        if !occluded {
+            radiance += *value;
+        }
+    }
+    result.radiance = radiance;
+    result
+}
+
+/// The heap key of a node: its bound's bits above the complement of its
+/// index (largest bound first, ties to the earlier node).
+fn key(bound: f32, node: usize) -> u64 {
+    (u64::from(bound.to_bits()) << 32) | u64::from(!(node as u32))
+}
+
+/// Chooses the cut from the bounds alone, into `scratch.nodes` (those with
+/// `in_cut`): from the roots, split the node with the largest error bound
+/// while that bound exceeds `error` times the cut's summed importance and
+/// the cut is smaller than `max_cut`. Returns the cut's size.
+fn choose_cut(
+    trees: &LightTrees,
+    settings: &CutSettings,
+    bounds: &PointBounds,
+    scratch: &mut StochasticScratch,
+) -> usize {
+    scratch.nodes.clear();
+    scratch.heap.clear();
+    // The cut's summed importance and size.
+    let mut total = 0.0f64;
+    let mut size = 0usize;
+    for (i, tree) in trees.trees.iter().enumerate() {
+        if !tree.blocks.is_empty() {
+            (total, size) = add_slots(trees, bounds, scratch, i as u8, 0, &[0], (total, size));
+        }
+    }
+    while size < settings.max_cut {
+        let Some(&top) = scratch.heap.peek() else { break };
+        let bound = f32::from_bits((top >> 32) as u32);
+        if f64::from(bound) <= settings.error * total {
+            break;
+        }
+        scratch.heap.pop();
+        let node = &mut scratch.nodes[!(top as u32) as usize];
+        node.in_cut = false;
+        let (tree, b, k) = (node.tree, node.block as usize, node.slot as usize);
+        let (total_after, size_after) = (total - f64::from(node.importance), size - 1);
+        let child = trees.trees[tree as usize].blocks[b].child[k];
+        (total, size) = add_slots(trees, bounds, scratch, tree, child.index(), &[0, 1], (total_after, size_after));
+    }
+    size
+}
+
+/// Adds slots `slots` of block `b` of tree `tree` to the cut; returns the
+/// cut's summed importance and size after.
+fn add_slots(
+    trees: &LightTrees,
+    bounds: &PointBounds,
+    scratch: &mut StochasticScratch,
+    tree: u8,
+    b: usize,
+    slots: &[usize],
+    (mut total, mut size): (f64, usize),
+) -> (f64, usize) {
+    let t = &trees.trees[tree as usize];
+    let block = &t.blocks[b];
+    let importance = bounds.importance(t.kind, block, t.cones.get(b));
+    for &k in slots {
+        let index = scratch.nodes.len();
+        scratch.nodes.push(Node { importance: importance[k], block: b as u32, slot: k as u8, tree, in_cut: true });
+        total += f64::from(importance[k]);
+        size += 1;
+        // An exact node (a leaf, or coincident lights) is never split.
+        if !block.child[k].is_exact() && importance[k] > 0.0 {
+            scratch.heap.push(key(importance[k], index));
+        }
+    }
+    (total, size)
+}
+
+/// A walk down a cut node's subtree, drawing one of its lights.
+#[derive(Debug, Clone)]
+struct Walk {
+    /// The block holding the children of the node the walk is at.
+    below: u32,
+    /// The probability of the path so far.
+    probability: f64,
+    stream: Rng,
+    tree: u8,
+}
+
+enum Step {
+    /// The walk moved down a level.
+    Down,
+    /// The walk reached an exact node: its light, weighted.
+    Drawn(Drawn),
+    /// No light below can reach the point.
+    Nothing,
+}
+
+/// One step of a walk: takes child k with probability w_k / (w_0 + w_1),
+/// the weights of the block the walk is at.
+fn step(tree: &CutTree, walk: &mut Walk, weights: [f32; 2]) -> Step {
+    let b = walk.below as usize;
+    let [w0, w1] = finite_weights(tree, b, weights);
+    let sum = f64::from(w0) + f64::from(w1);
+    if sum <= 0.0 {
+        return Step::Nothing;
+    }
+    // The probability of child 0 is exactly p0 (u is uniform on a 2^-53
+    // grid): child 1's is 1 - p0, whatever w1 / sum rounds to. No branch on
+    // the random number: it would be mispredicted half of the time.
+    let p0 = f64::from(w0) / sum;
+    let k = usize::from(walk.stream.next_f64() >= p0);
+    walk.probability *= [p0, 1.0 - p0][k];
+    let child = tree.blocks[b].child[k];
+    if child.is_exact() {
+        let weight = slot_intensity(tree, b, k).as_dvec3() / walk.probability;
+        return Step::Drawn(Drawn { weight, block: b as u32, slot: k as u8, tree: walk.tree });
+    }
+    walk.below = child.index() as u32;
+    Step::Down
+}
+
+/// The weights, or the slots' intensities' luminance where a weight is not
+/// finite (a box with the point inside and a clamp too small for f32): both
+/// children of a reachable node then stay possible.
+fn finite_weights(tree: &CutTree, b: usize, weights: [f32; 2]) -> [f32; 2] {
+    if weights.iter().all(|x| x.is_finite()) {
+        return weights;
+    }
+    [0, 1].map(|k| luminance(slot_intensity(tree, b, k)).max(0.0))
+}
+
+fn slot_intensity(tree: &CutTree, b: usize, k: usize) -> Vec3 {
+    let block = &tree.blocks[b];
+    Vec3::new(block.intensity[0][k], block.intensity[1][k], block.intensity[2][k])
+}
+
+#[cfg(test)]
+mod tests;

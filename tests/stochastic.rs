@@ -1,0 +1,143 @@
+//! The stochastic lightcut mode, run as the real binary: deterministic for
+//! any thread count and window, exact where the lights coincide, every light
+//! kind with VPLs and mirrors, and an error that falls with samples.
+
+mod common;
+use common::*;
+
+fn mean_error(test: &std::path::Path, reference: &std::path::Path) -> f64 {
+    let out = lightcuts_ok(&["compare", s(test), s(reference), "--json"]);
+    let c: serde_json::Value = serde_json::from_str(&out).unwrap();
+    c["mean_relative_error"].as_f64().unwrap()
+}
+
+#[test]
+fn stochastic_images_are_identical_for_any_thread_count_and_window() {
+    let dir = TempDir::new("st-threads");
+    let scene = dir.write("s.toml", &small_scene(16));
+    let (a, b, w) = (dir.path("a.exr"), dir.path("b.exr"), dir.path("w.exr"));
+    let args = ["--stochastic", "--spp", "2", "--quiet"];
+    lightcuts_ok(&[&["render", s(&scene), "-o", s(&a), "--threads", "1"][..], &args].concat());
+    lightcuts_ok(&[&["render", s(&scene), "-o", s(&b), "--threads", "2"][..], &args].concat());
+    lightcuts_ok(&[&["render", s(&scene), "-o", s(&w), "--pixel-bounds", "5,50,9,40"][..], &args].concat());
+    let (a, b, w) = (read_exr(&a).unwrap(), read_exr(&b).unwrap(), read_exr(&w).unwrap());
+    assert_eq!(a.attributes["lightcuts:renderMode"], "stochastic lightcuts error=0.05 max_cut=1000");
+    for name in a.channels.keys() {
+        let (x, y) = (&a.channels[name], &b.channels[name]);
+        assert!(x.iter().zip(y).all(|(p, q)| p.to_bits() == q.to_bits()), "{name}: 1 vs 2 threads");
+        for yy in 0..31 {
+            for xx in 0..45 {
+                assert_eq!(
+                    x[(yy + 9) * 96 + xx + 5].to_bits(),
+                    w.channels[name][yy * 45 + xx].to_bits(),
+                    "{name} window"
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn the_error_falls_with_samples_per_pixel() {
+    let dir = TempDir::new("st-spp");
+    // 24 x 24 = 576 lights: the cut runs.
+    let scene = dir.write("s.toml", &small_scene(24));
+    let mut errors = Vec::new();
+    for spp in ["1", "16"] {
+        let (st, exact) = (dir.path(&format!("st{spp}.exr")), dir.path(&format!("exact{spp}.exr")));
+        let common = ["--spp", spp, "--resolution", "48x36", "--quiet"];
+        lightcuts_ok(&[&["render", s(&scene), "-o", s(&st), "--stochastic"][..], &common].concat());
+        lightcuts_ok(&[&["render", s(&scene), "-o", s(&exact), "--exact"][..], &common].concat());
+        errors.push(mean_error(&st, &exact));
+    }
+    // 16 times the samples: the error should fall about 4 times (noise, not bias).
+    assert!(errors[1] < 0.5 * errors[0], "mean error at 1 and 16 spp: {errors:?}");
+}
+
+/// 300 coincident lights at the centre of a sphere seen from inside: the
+/// cut's root is exact, so the stochastic estimate is the known answer too.
+#[test]
+fn known_answer_holds_in_stochastic_mode() {
+    let dir = TempDir::new("st-known");
+    let scene = dir.write(
+        "inside.toml",
+        r#"
+[film]
+width = 16
+height = 12
+[camera]
+eye = [0.2, 0.1, 0]
+look_at = [1, 0, 0.4]
+fov_y = 60
+[materials.inner]
+albedo = [0.5, 0.5, 0.5]
+[[shapes]]
+type = "sphere"
+center = [0, 0, 0]
+radius = 2
+segments = 512
+material = "inner"
+[[lights]]
+type = "grid"
+corner = [0, 0, 0]
+u = [0, 0, 0]
+v = [0, 0, 0]
+count = [20, 15]
+intensity = [0.01, 0.02, 0.03]
+"#,
+    );
+    let out = dir.path("o.exr");
+    lightcuts_ok(&["render", s(&scene), "-o", s(&out), "--stochastic", "--spp", "3", "--quiet"]);
+    let image = read_exr(&out).unwrap();
+    for (c, name) in ["R", "G", "B"].iter().enumerate() {
+        let expected = 0.5 / std::f32::consts::PI * 300.0 * 0.01 * (c as f32 + 1.0) / 4.0;
+        for &v in image.channel(&out, name).unwrap() {
+            assert!((v - expected).abs() <= 1e-3 * expected, "{name}: {v} vs {expected}");
+        }
+    }
+}
+
+/// Oriented (an area light and VPLs), directional (the sun's disc and the
+/// environment) and omni lights at once, with a mirror and a window: close
+/// to the exact render at the same samples, every value finite.
+#[test]
+fn every_light_kind_with_vpls_and_mirrors() {
+    let dir = TempDir::new("st-kinds");
+    let text = small_scene(15).replace(
+        "[[lights]]",
+        r#"[[lights]]
+type = "area"
+corner = [-1, 2.5, -1]
+u = [2, 0, 0]
+v = [0, 0, 2]
+radiance = [2, 2, 2]
+samples = 400
+
+[[lights]]
+type = "sun"
+direction = [0.4, 1, 0.2]
+irradiance = [1.5, 1.4, 1.2]
+angular_radius = 5
+samples = 300
+
+[environment]
+radiance = [0.1, 0.12, 0.15]
+samples = 300
+
+[indirect]
+paths = 400
+bounces = 1
+
+[[lights]]"#,
+    );
+    let scene = dir.write("all.toml", &text);
+    let (st, exact) = (dir.path("st.exr"), dir.path("exact.exr"));
+    let common = ["--spp", "8", "--pixel-bounds", "10,90,10,60", "--quiet"];
+    let out = lightcuts_ok(&[&["render", s(&scene), "-o", s(&st), "--stochastic"][..], &common].concat());
+    assert!(out.contains("oriented") && out.contains("virtual point lights"), "{out}");
+    lightcuts_ok(&[&["render", s(&scene), "-o", s(&exact), "--exact"][..], &common].concat());
+    let image = read_exr(&st).unwrap();
+    assert!(image.channels.values().flatten().all(|v| v.is_finite()));
+    let error = mean_error(&st, &exact);
+    assert!(error > 0.0 && error < 0.05, "mean relative error {error}");
+}
