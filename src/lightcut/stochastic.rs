@@ -34,7 +34,7 @@ pub const STOCHASTIC_DEFAULTS: CutSettings = CutSettings { error: 0.05, max_cut:
 
 /// From this many samples per pixel on, a render without a mode flag is
 /// stochastic (measured: see the README).
-pub const STOCHASTIC_FROM_SPP: u32 = 16;
+pub const STOCHASTIC_FROM_SPP: u32 = 64;
 
 /// One node of the cut being chosen: slot `slot` of block `block`.
 #[derive(Debug, Clone, Copy)]
