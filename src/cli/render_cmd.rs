@@ -202,11 +202,12 @@ pub fn run(args: &RenderArgs) -> Result<(), CliError> {
     println!("lightcuts {} (Embree {major}.{minor}.{patch})", env!("CARGO_PKG_VERSION"));
     println!("  scene            {}", scene.path.display());
     println!(
-        "  lights           {} (omni {}, oriented {}, directional {})",
+        "  lights           {} (omni {}, oriented {}, directional {}, spot {})",
         lights.iter().sum::<usize>(),
         lights[0],
         lights[1],
-        lights[2]
+        lights[2],
+        lights[3]
     );
     if vpls > 0 {
         println!("  indirect         {vpls} virtual point lights traced in {:.3} s", vpl_time.as_secs_f64());

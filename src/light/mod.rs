@@ -20,11 +20,20 @@ pub enum LightKind {
     Oriented,
     /// Lights at infinity from one direction (environment map samples, sun).
     Directional,
+    /// Spot lights: a point light shining into a cone with a smooth edge.
+    Spot,
 }
 
 impl LightKind {
     /// Every kind, in the order the renderer visits them.
-    pub const ALL: [Self; 3] = [Self::Omni, Self::Oriented, Self::Directional];
+    pub const ALL: [Self; 4] = [Self::Omni, Self::Oriented, Self::Directional, Self::Spot];
+
+    /// Whether the kind's lights have a direction of emission (oriented
+    /// lights' normals, spots' axes), so that their trees carry cones.
+    #[must_use]
+    pub fn has_cone(self) -> bool {
+        matches!(self, Self::Oriented | Self::Spot)
+    }
 
     #[must_use]
     pub fn name(self) -> &'static str {
@@ -32,6 +41,7 @@ impl LightKind {
             Self::Omni => "omni",
             Self::Oriented => "oriented",
             Self::Directional => "directional",
+            Self::Spot => "spot",
         }
     }
 }
@@ -65,12 +75,38 @@ pub struct DirectionalLight {
     pub irradiance: Vec3,
 }
 
+/// A spot light (KHR_lights_punctual's): intensity `intensity` (W/sr)
+/// along unit `direction`, scaled at angle theta from it by t^2 with
+/// t = clamp((cos theta - cos_outer) / (cos_inner - cos_outer), 0, 1).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SpotLight {
+    pub position: Vec3,
+    /// Unit direction the spot shines towards.
+    pub direction: Vec3,
+    pub intensity: Vec3,
+    /// Cosines of the inner and outer cone half-angles (cos_inner > cos_outer).
+    pub cos_inner: f32,
+    pub cos_outer: f32,
+}
+
+impl SpotLight {
+    /// The smooth falloff at cos theta from the axis (KHR_lights_punctual's
+    /// recommended formula; the difference of cosines at least 0.001).
+    #[must_use]
+    pub fn falloff(cos_theta: f32, cos_inner: f32, cos_outer: f32) -> f32 {
+        let scale = 1.0 / (cos_inner - cos_outer).max(0.001);
+        let t = ((cos_theta - cos_outer) * scale).clamp(0.0, 1.0);
+        t * t
+    }
+}
+
 /// One light of any kind.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Light {
     Omni(OmniLight),
     Oriented(OrientedLight),
     Directional(DirectionalLight),
+    Spot(SpotLight),
 }
 
 impl Light {
@@ -80,6 +116,7 @@ impl Light {
             Self::Omni(_) => LightKind::Omni,
             Self::Oriented(_) => LightKind::Oriented,
             Self::Directional(_) => LightKind::Directional,
+            Self::Spot(_) => LightKind::Spot,
         }
     }
 }
@@ -92,8 +129,11 @@ pub struct TreeLight {
     pub point: Vec3,
     /// Unit normal of an oriented light; zero for the other kinds.
     pub normal: Vec3,
-    /// W/sr (omni, oriented), or a directional light's irradiance in W/m^2.
+    /// W/sr (omni, oriented, spot), or a directional light's irradiance in W/m^2.
     pub intensity: Vec3,
+    /// A spot's cosines of its inner and outer cone half-angles; (0, 0)
+    /// for the other kinds. (A spot's `normal` is its direction.)
+    pub spread: [f32; 2],
 }
 
 impl TreeLight {
@@ -101,9 +141,19 @@ impl TreeLight {
     #[must_use]
     pub fn of(light: &Light) -> Self {
         match *light {
-            Light::Omni(l) => Self { point: l.position, normal: Vec3::ZERO, intensity: l.intensity },
-            Light::Oriented(l) => Self { point: l.position, normal: l.normal, intensity: l.intensity },
-            Light::Directional(l) => Self { point: l.direction, normal: Vec3::ZERO, intensity: l.irradiance },
+            Light::Omni(l) => Self { point: l.position, normal: Vec3::ZERO, intensity: l.intensity, spread: [0.0; 2] },
+            Light::Oriented(l) => {
+                Self { point: l.position, normal: l.normal, intensity: l.intensity, spread: [0.0; 2] }
+            }
+            Light::Directional(l) => {
+                Self { point: l.direction, normal: Vec3::ZERO, intensity: l.irradiance, spread: [0.0; 2] }
+            }
+            Light::Spot(l) => Self {
+                point: l.position,
+                normal: l.direction,
+                intensity: l.intensity,
+                spread: [l.cos_inner, l.cos_outer],
+            },
         }
     }
 
@@ -118,6 +168,13 @@ impl TreeLight {
             LightKind::Directional => {
                 Light::Directional(DirectionalLight { direction: self.point, irradiance: self.intensity })
             }
+            LightKind::Spot => Light::Spot(SpotLight {
+                position: self.point,
+                direction: self.normal,
+                intensity: self.intensity,
+                cos_inner: self.spread[0],
+                cos_outer: self.spread[1],
+            }),
         }
     }
 }
@@ -128,6 +185,7 @@ pub struct Lights {
     pub omni: Vec<OmniLight>,
     pub oriented: Vec<OrientedLight>,
     pub directional: Vec<DirectionalLight>,
+    pub spot: Vec<SpotLight>,
 }
 
 impl Lights {
@@ -140,6 +198,15 @@ impl Lights {
         for source in &scene.lights {
             match *source {
                 LightSource::Point { position, intensity } => lights.omni.push(OmniLight { position, intensity }),
+                LightSource::Spot { position, direction, intensity, inner_angle_degrees, outer_angle_degrees } => {
+                    lights.spot.push(SpotLight {
+                        position,
+                        direction: direction.normalize(),
+                        intensity,
+                        cos_inner: inner_angle_degrees.to_radians().cos(),
+                        cos_outer: outer_angle_degrees.to_radians().cos(),
+                    });
+                }
                 LightSource::Grid { corner, u, v, count, intensity } => {
                     for j in 0..count[1] {
                         for k in 0..count[0] {
@@ -188,7 +255,7 @@ impl Lights {
 
     #[must_use]
     pub fn len(&self) -> usize {
-        self.omni.len() + self.oriented.len() + self.directional.len()
+        self.omni.len() + self.oriented.len() + self.directional.len() + self.spot.len()
     }
 
     #[must_use]
@@ -203,11 +270,12 @@ impl Lights {
             LightKind::Omni => self.omni.len(),
             LightKind::Oriented => self.oriented.len(),
             LightKind::Directional => self.directional.len(),
+            LightKind::Spot => self.spot.len(),
         }
     }
 
-    /// Calls `f` for every light, omni then oriented then directional, each
-    /// in order. Three plain loops: after inlining, each loop's `Light`
+    /// Calls `f` for every light, omni, oriented, directional, then spot,
+    /// each in order. Three plain loops: after inlining, each loop's `Light`
     /// variant is known, so the exact renderer's hot path does not branch
     /// on the kind per light.
     pub fn for_each(&self, mut f: impl FnMut(Light)) {
@@ -220,6 +288,9 @@ impl Lights {
         for l in &self.directional {
             f(Light::Directional(*l));
         }
+        for l in &self.spot {
+            f(Light::Spot(*l));
+        }
     }
 
     /// The lights of one kind as tree leaves, in order.
@@ -229,6 +300,7 @@ impl Lights {
             LightKind::Omni => self.omni.iter().map(|l| TreeLight::of(&Light::Omni(*l))).collect(),
             LightKind::Oriented => self.oriented.iter().map(|l| TreeLight::of(&Light::Oriented(*l))).collect(),
             LightKind::Directional => self.directional.iter().map(|l| TreeLight::of(&Light::Directional(*l))).collect(),
+            LightKind::Spot => self.spot.iter().map(|l| TreeLight::of(&Light::Spot(*l))).collect(),
         }
     }
 }
@@ -294,6 +366,13 @@ samples = 7
             Light::Omni(OmniLight { position: Vec3::X, intensity: Vec3::ONE }),
             Light::Oriented(OrientedLight { position: Vec3::Y, normal: Vec3::Z, intensity: Vec3::ONE }),
             Light::Directional(DirectionalLight { direction: Vec3::Z, irradiance: Vec3::ONE }),
+            Light::Spot(SpotLight {
+                position: Vec3::X,
+                direction: Vec3::NEG_Y,
+                intensity: Vec3::ONE,
+                cos_inner: 0.9,
+                cos_outer: 0.8,
+            }),
         ];
         for light in lights {
             assert_eq!(TreeLight::of(&light).light(light.kind()), light);

@@ -93,6 +93,23 @@ pub struct ConeBlock {
     pub sin_half_angle: [f32; 2],
 }
 
+/// What spot lights add to a block: the representative's cosines of its
+/// inner and outer angles, and the widest outer angle below the slot (its
+/// smallest cosine), which bounds where the cluster can shine. 24 bytes.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct SpotBlock {
+    pub cos_inner: [f32; 2],
+    pub cos_outer: [f32; 2],
+    pub min_cos_outer: [f32; 2],
+}
+
+/// A block's cone data: its cone block, and a spot tree's spot block.
+#[derive(Debug, Clone, Copy)]
+pub struct Cones<'a> {
+    pub cone: &'a ConeBlock,
+    pub spot: Option<&'a SpotBlock>,
+}
+
 /// A tree in the cut's layout. `blocks[0]` holds the root in slot 0 (and
 /// `Child::EMPTY` in slot 1); `blocks[k]` for k >= 1 holds the children of
 /// the internal node whose index is k. Oriented trees have a `cones` entry
@@ -103,6 +120,8 @@ pub struct CutTree {
     pub kind: LightKind,
     pub blocks: Vec<Block>,
     pub cones: Vec<ConeBlock>,
+    /// Spot trees: a `spots` entry beside every block.
+    pub spots: Vec<SpotBlock>,
     /// The lights of a tree evaluated light by light (empty otherwise).
     pub lights: Vec<TreeLight>,
     light_count: usize,
@@ -118,6 +137,9 @@ struct Slot {
     position: Vec3,
     normal: Vec3,
     cone: Cone,
+    /// The representative's spread (spots), and the smallest outer cosine below.
+    spread: [f32; 2],
+    min_cos_outer: f32,
 }
 
 /// Centre and half-extent of [lo, hi] such that [c - h, c + h] contains
@@ -137,11 +159,13 @@ impl CutTree {
     /// intensities are unchanged: only where they are stored changes.
     #[must_use]
     pub fn from_tree(tree: &LightTree) -> Self {
-        let oriented = tree.kind == LightKind::Oriented;
+        let oriented = tree.kind.has_cone();
+        let spot = tree.kind == LightKind::Spot;
         let mut layout = Self {
             kind: tree.kind,
             blocks: Vec::new(),
             cones: Vec::new(),
+            spots: Vec::new(),
             lights: Vec::new(),
             light_count: tree.light_count(),
         };
@@ -177,36 +201,49 @@ impl CutTree {
         // from its children's (no random reads of the leaf arrays).
         let mut rep_position = vec![Vec3::ZERO; internal];
         let mut rep_normal = vec![Vec3::ZERO; if oriented { internal } else { 0 }];
-        let slot = |node: NodeRef, rep_position: &[Vec3], rep_normal: &[Vec3]| -> Slot {
+        // Spots: the representative's spread and the smallest outer cosine.
+        let mut rep_spread = vec![([0.0f32; 2], 0.0f32); if spot { internal } else { 0 }];
+        let slot = |node: NodeRef, rep_position: &[Vec3], rep_normal: &[Vec3], rep_spread: &[([f32; 2], f32)]| {
             let (lo, hi) = tree.node_bounds(node);
             let (centre, half) = centre_half(lo, hi);
             let representative = tree.node_representative(node);
             let cone = tree.node_cone(node);
-            let exact = lo == hi && (!oriented || cone.half_angle == 0.0);
-            let (child, position, normal) = if node.is_leaf() {
-                (Child::leaf(node.index() as u32), lo, tree.light_normal(node.index()))
+            // Coincident spots may differ in their cones' angles: only a
+            // single spot is exact.
+            let exact = lo == hi && (!oriented || cone.half_angle == 0.0) && !spot;
+            let (child, position, normal, (spread, min_cos_outer)) = if node.is_leaf() {
+                let spread = tree.light_spread.get(node.index()).copied().unwrap_or([0.0; 2]);
+                (Child::leaf(node.index() as u32), lo, tree.light_normal(node.index()), (spread, spread[1]))
             } else {
                 let n = node.index();
                 let normal = rep_normal.get(n).copied().unwrap_or(Vec3::ZERO);
-                (Child::internal(index[n], exact), rep_position[n], normal)
+                let spread = rep_spread.get(n).copied().unwrap_or(([0.0; 2], 0.0));
+                (Child::internal(index[n], exact), rep_position[n], normal, spread)
             };
-            Slot { child, centre, half, intensity: tree.node_intensity(node), representative, position, normal, cone }
+            let intensity = tree.node_intensity(node);
+            Slot { child, centre, half, intensity, representative, position, normal, cone, spread, min_cos_outer }
         };
         layout.blocks = vec![Block::default(); internal + 1];
         if oriented {
             layout.cones = vec![ConeBlock::default(); internal + 1];
         }
+        if spot {
+            layout.spots = vec![SpotBlock::default(); internal + 1];
+        }
         for (n, node) in tree.nodes.iter().enumerate() {
-            let slots = node.children.map(|c| slot(c, &rep_position, &rep_normal));
+            let slots = node.children.map(|c| slot(c, &rep_position, &rep_normal, &rep_spread));
             let shared = if slots[0].representative == node.representative { &slots[0] } else { &slots[1] };
             rep_position[n] = shared.position;
             if oriented {
                 rep_normal[n] = shared.normal;
             }
+            if spot {
+                rep_spread[n] = (shared.spread, slots[0].min_cos_outer.min(slots[1].min_cos_outer));
+            }
             let [a, b] = slots;
             layout.write(index[n] as usize, [Some(a), Some(b)]);
         }
-        layout.write(0, [Some(slot(root, &rep_position, &rep_normal)), None]);
+        layout.write(0, [Some(slot(root, &rep_position, &rep_normal, &rep_spread)), None]);
         layout
     }
 
@@ -214,6 +251,7 @@ impl CutTree {
     fn write(&mut self, b: usize, slots: [Option<Slot>; 2]) {
         let mut block = Block { child: [Child::EMPTY; 2], ..Block::default() };
         let mut cone = ConeBlock::default();
+        let mut spot = SpotBlock::default();
         for (k, slot) in slots.iter().enumerate() {
             let Some(s) = slot else { continue };
             for axis in 0..3 {
@@ -226,6 +264,9 @@ impl CutTree {
             }
             block.representative[k] = s.representative;
             block.child[k] = s.child;
+            spot.cos_inner[k] = s.spread[0];
+            spot.cos_outer[k] = s.spread[1];
+            spot.min_cos_outer[k] = s.min_cos_outer;
             let (sin, cos) = s.cone.half_angle.sin_cos();
             // A zero angle is exactly (1, 0): coincident normals stay exact.
             let (sin, cos) = if s.cone.half_angle == 0.0 { (0.0, 1.0) } else { (sin, cos) };
@@ -236,13 +277,23 @@ impl CutTree {
         if let Some(c) = self.cones.get_mut(b) {
             *c = cone;
         }
+        if let Some(sb) = self.spots.get_mut(b) {
+            *sb = spot;
+        }
+    }
+
+    /// Block `b`'s cone data, for the kinds with cones.
+    #[must_use]
+    #[inline]
+    pub fn cones_of(&self, b: usize) -> Option<Cones<'_>> {
+        self.cones.get(b).map(|cone| Cones { cone, spot: self.spots.get(b) })
     }
 
     /// A tree too small for a cut to pay: its lights, in order.
     #[must_use]
     pub fn exhaustive(kind: LightKind, lights: Vec<TreeLight>) -> Self {
         let light_count = lights.len();
-        Self { kind, blocks: Vec::new(), cones: Vec::new(), lights, light_count }
+        Self { kind, blocks: Vec::new(), cones: Vec::new(), spots: Vec::new(), lights, light_count }
     }
 
     #[must_use]
@@ -260,7 +311,8 @@ impl CutTree {
             None => Vec3::ZERO,
         };
         let intensity = Vec3::new(block.intensity[0][k], block.intensity[1][k], block.intensity[2][k]);
-        TreeLight { point, normal, intensity }
+        let spread = self.spots.get(b).map_or([0.0; 2], |s| [s.cos_inner[k], s.cos_outer[k]]);
+        TreeLight { point, normal, intensity, spread }
     }
 
     /// Heap bytes of the layout.
@@ -268,6 +320,7 @@ impl CutTree {
     pub fn memory_bytes(&self) -> usize {
         self.blocks.capacity() * std::mem::size_of::<Block>()
             + self.cones.capacity() * std::mem::size_of::<ConeBlock>()
+            + self.spots.capacity() * std::mem::size_of::<SpotBlock>()
             + self.lights.capacity() * std::mem::size_of::<TreeLight>()
     }
 }
@@ -285,7 +338,8 @@ mod tests {
                 let p = Vec3::new(rng.range_f32(-5.0, 5.0), rng.range_f32(0.0, 3.0), rng.range_f32(-5.0, 5.0));
                 let normal = Vec3::new(rng.range_f32(-1.0, 1.0), -1.0, rng.range_f32(-1.0, 1.0)).normalize();
                 let point = if kind == LightKind::Directional { -normal } else { p };
-                TreeLight { point, normal, intensity: Vec3::new(1.0, rng.next_f32(), 0.5) }
+                let spread = if kind == LightKind::Spot { [0.9, 0.5 + 0.3 * rng.next_f32()] } else { [0.0; 2] };
+                TreeLight { point, normal, intensity: Vec3::new(1.0, rng.next_f32(), 0.5), spread }
             })
             .collect()
     }
@@ -325,7 +379,8 @@ mod tests {
                 let tree = ploc::build(kind, &lights(kind, n), 7);
                 let layout = CutTree::from_tree(&tree);
                 assert_eq!(layout.blocks.len(), n, "{kind:?}: the root's block plus one per internal node");
-                assert_eq!(layout.cones.len(), if kind == LightKind::Oriented { n } else { 0 });
+                assert_eq!(layout.cones.len(), if kind.has_cone() { n } else { 0 });
+                assert_eq!(layout.spots.len(), if kind == LightKind::Spot { n } else { 0 });
                 assert_eq!(layout.blocks[0].child[1], Child::EMPTY);
                 let mut seen = vec![0; n];
                 check(&tree, &layout, 0, 0, tree.root.unwrap(), &mut seen);
@@ -342,7 +397,7 @@ mod tests {
 
     #[test]
     fn coincident_lights_are_one_exact_slot_and_boxes_are_widened_only_when_they_have_extent() {
-        let same = vec![TreeLight { point: Vec3::ONE, normal: Vec3::Y, intensity: Vec3::ONE }; 300];
+        let same = vec![TreeLight { point: Vec3::ONE, normal: Vec3::Y, intensity: Vec3::ONE, spread: [0.0; 2] }; 300];
         let layout = CutTree::from_tree(&ploc::build(LightKind::Oriented, &same, 1));
         assert!(layout.blocks[0].child[0].is_exact());
         assert_eq!(layout.blocks[0].half, [[0.0; 2]; 3]);

@@ -87,6 +87,8 @@ pub struct LightTree {
     pub leaves: Vec<Leaf>,
     /// Oriented only: each light's unit normal.
     pub light_normal: Vec<Vec3>,
+    /// Spot trees only: each light's cosines of its inner and outer angles.
+    pub light_spread: Vec<[f32; 2]>,
     /// Internal nodes (n - 1 of them for n lights).
     pub nodes: Vec<Node>,
     /// Oriented only: each internal node's cone of normals.
@@ -110,7 +112,9 @@ impl LightTree {
     #[must_use]
     pub fn light(&self, i: usize) -> Light {
         let leaf = &self.leaves[i];
-        TreeLight { point: leaf.point, normal: self.light_normal(i), intensity: leaf.intensity }.light(self.kind)
+        let spread = self.light_spread.get(i).copied().unwrap_or([0.0; 2]);
+        TreeLight { point: leaf.point, normal: self.light_normal(i), intensity: leaf.intensity, spread }
+            .light(self.kind)
     }
 
     #[must_use]
@@ -138,7 +142,7 @@ impl LightTree {
     /// zero-angle cone (their bounds and metric ignore it).
     #[must_use]
     pub fn node_cone(&self, node: NodeRef) -> Cone {
-        if self.kind != LightKind::Oriented {
+        if !self.kind.has_cone() {
             Cone::of_direction(Vec3::Z)
         } else if node.is_leaf() {
             Cone::of_direction(self.light_normal[node.index()])
@@ -169,7 +173,11 @@ impl LightTree {
         fn bytes<T>(v: &Vec<T>) -> usize {
             v.capacity() * std::mem::size_of::<T>()
         }
-        bytes(&self.leaves) + bytes(&self.light_normal) + bytes(&self.nodes) + bytes(&self.cones)
+        bytes(&self.leaves)
+            + bytes(&self.light_normal)
+            + bytes(&self.light_spread)
+            + bytes(&self.nodes)
+            + bytes(&self.cones)
     }
 
     /// Sum of [LC05]'s cluster size over internal nodes: the quantity the
@@ -256,7 +264,7 @@ impl LightTrees {
 
 /// The metric's constants for a set of light positions.
 fn metric_for(kind: LightKind, positions: impl Iterator<Item = Vec3>) -> Metric {
-    let c_squared = if kind == LightKind::Oriented {
+    let c_squared = if kind.has_cone() {
         let (lo, hi) = positions.fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), p| (lo.min(p), hi.max(p)));
         (hi - lo).as_dvec3().length_squared()
     } else {
@@ -277,7 +285,7 @@ impl TreeBuilder {
     fn new(kind: LightKind, lights: &[TreeLight], seed: u64) -> Self {
         let n = lights.len();
         let metric = metric_for(kind, lights.iter().map(|l| l.point));
-        let oriented = kind == LightKind::Oriented;
+        let oriented = kind.has_cone();
         let tree = LightTree {
             kind,
             leaves: lights.iter().map(|l| Leaf { point: l.point, intensity: l.intensity }).collect(),
@@ -286,6 +294,7 @@ impl TreeBuilder {
             } else {
                 Vec::new()
             },
+            light_spread: if kind == LightKind::Spot { lights.iter().map(|l| l.spread).collect() } else { Vec::new() },
             nodes: Vec::with_capacity(n.saturating_sub(1)),
             cones: Vec::with_capacity(if oriented { n.saturating_sub(1) } else { 0 }),
             root: None,
@@ -322,7 +331,7 @@ impl TreeBuilder {
         let merged = Cluster {
             min: a.min.min(b.min),
             max: a.max.max(b.max),
-            cone: if self.metric.kind == LightKind::Oriented { a.cone.union(b.cone) } else { a.cone },
+            cone: if self.metric.kind.has_cone() { a.cone.union(b.cone) } else { a.cone },
             intensity: a.intensity + b.intensity,
             weight: a.weight + b.weight,
             node,
@@ -334,7 +343,7 @@ impl TreeBuilder {
             representative,
             children: [a.node, b.node],
         });
-        if self.metric.kind == LightKind::Oriented {
+        if self.metric.kind.has_cone() {
             self.tree.cones.push(merged.cone);
         }
         merged

@@ -118,7 +118,7 @@ pub fn build_with_radius(kind: LightKind, lights: &[TreeLight], seed: u64, radiu
     let order = morton_order(&builder.tree.leaves);
     let mut work = Working {
         clusters: order.iter().map(|&i| Slim::of(&builder.leaf_cluster(i as usize))).collect(),
-        cones: if kind == LightKind::Oriented {
+        cones: if kind.has_cone() {
             order.iter().map(|&i| builder.leaf_cluster(i as usize).cone).collect()
         } else {
             Vec::new()
@@ -178,7 +178,7 @@ fn pair_size(metric: &Metric, clusters: &[Slim], cones: &[Cone], i: usize, j: us
     let (ci, cj) = (&clusters[i], &clusters[j]);
     let diagonal = ci.max.max(cj.max) - ci.min.min(cj.min);
     let weight = ci.weight + cj.weight;
-    let size = if metric.kind == LightKind::Oriented {
+    let size = if metric.kind.has_cone() {
         let angular = 1.0 - f64::from(cones[i].union_half_angle(cones[j]).cos());
         (f64::from(weight) * (diagonal.as_dvec3().length_squared() + metric.c_squared * angular * angular)) as f32
     } else {

@@ -21,12 +21,17 @@ fn random_lights(seed: u64, n: usize, kind: LightKind, clustered: bool) -> Vec<T
                 position = normal;
             }
             let intensity = Vec3::new(rng.range_f32(0.0, 2.0), rng.range_f32(0.0, 2.0), rng.range_f32(0.0, 2.0));
-            TreeLight { point: position, normal, intensity }
+            TreeLight {
+                point: position,
+                normal,
+                intensity,
+                spread: if kind == LightKind::Spot { [0.95, 0.7] } else { [0.0; 2] },
+            }
         })
         .collect()
 }
 
-const KINDS: [LightKind; 3] = [LightKind::Omni, LightKind::Oriented, LightKind::Directional];
+const KINDS: [LightKind; 4] = LightKind::ALL;
 
 /// Walks the tree checking every structural property; returns the lights
 /// below each node visited.
@@ -61,7 +66,7 @@ fn check_node(tree: &LightTree, node: NodeRef, seen: &mut [u32]) -> Vec<u32> {
         assert!(lo.cmple(clo).all() && hi.cmpge(chi).all(), "box does not contain a child's box");
     }
     // The cone contains every normal below.
-    if tree.kind == LightKind::Oriented {
+    if tree.kind.has_cone() {
         let cone = tree.node_cone(node);
         for &l in &below {
             assert!(cone.contains(tree.light_normal[l as usize]), "cone misses light {l}'s normal");
@@ -101,12 +106,18 @@ fn degenerate_light_sets_build_valid_trees() {
     for kind in KINDS {
         // Coincident lights, zero-intensity lights, and both together.
         let coincident: Vec<TreeLight> = (0..500)
-            .map(|i| TreeLight { point: Vec3::ONE, normal: Vec3::Y, intensity: Vec3::splat(i as f32 % 3.0) })
+            .map(|i| TreeLight {
+                point: Vec3::ONE,
+                normal: Vec3::Y,
+                intensity: Vec3::splat(i as f32 % 3.0),
+                spread: [0.0; 2],
+            })
             .collect();
         let dark: Vec<TreeLight> =
             random_lights(21, 400, kind, false).into_iter().map(|l| TreeLight { intensity: Vec3::ZERO, ..l }).collect();
-        let both: Vec<TreeLight> =
-            (0..300).map(|_| TreeLight { point: Vec3::ZERO, normal: Vec3::Y, intensity: Vec3::ZERO }).collect();
+        let both: Vec<TreeLight> = (0..300)
+            .map(|_| TreeLight { point: Vec3::ZERO, normal: Vec3::Y, intensity: Vec3::ZERO, spread: [0.0; 2] })
+            .collect();
         for lights in [&coincident, &dark, &both] {
             check_tree(&ploc::build(kind, lights, 5), lights);
             check_tree(&greedy::build(kind, &lights[..100], 5), &lights[..100]);
@@ -142,6 +153,7 @@ fn representatives_are_chosen_in_proportion_to_intensity() {
             point: Vec3::new(i as f32 * 3.0, 0.0, 0.0),
             normal: Vec3::Y,
             intensity: Vec3::splat(i as f32 + 1.0),
+            spread: [0.0; 2],
         })
         .collect();
     let runs = 40_000;
@@ -188,8 +200,9 @@ fn depth(tree: &LightTree, node: NodeRef) -> usize {
 fn coincident_lights_build_a_shallow_tree_not_a_chain() {
     // All pair sizes are 0: ties must not make every cluster pick the same
     // neighbour (one merge per pass, a chain of depth n).
-    let lights: Vec<TreeLight> =
-        (0..100_000).map(|_| TreeLight { point: Vec3::ONE, normal: Vec3::Y, intensity: Vec3::ONE }).collect();
+    let lights: Vec<TreeLight> = (0..100_000)
+        .map(|_| TreeLight { point: Vec3::ONE, normal: Vec3::Y, intensity: Vec3::ONE, spread: [0.0; 2] })
+        .collect();
     let tree = ploc::build(LightKind::Omni, &lights, 1);
     let d = depth(&tree, tree.root.unwrap());
     assert!(d <= 64, "depth {d} for 100,000 coincident lights");

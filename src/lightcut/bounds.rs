@@ -17,7 +17,7 @@ use glam::Vec3;
 use wide::{f32x4, CmpEq, CmpGe, CmpGt};
 
 use crate::light::LightKind;
-use crate::light_tree::layout::{Block, ConeBlock};
+use crate::light_tree::layout::{Block, Cones};
 use crate::scene::material::phong_normalisation;
 use crate::shading::SurfacePoint;
 
@@ -36,6 +36,10 @@ const PRODUCT_SLACK: f32 = 1.0 + 1.0 / 1_048_576.0;
 const LUMINANCE: Vec3 = Vec3::new(0.2126, 0.7152, 0.0722);
 
 type V3 = [f32x4; 3];
+
+/// Per lane: a cone's axis, cos and sin of its half-angle, and for spots
+/// the cutoff (see `PointBounds::emission`).
+type ConeLanes = (V3, f32x4, f32x4, Option<f32x4>);
 
 fn splat3(v: Vec3) -> V3 {
     [f32x4::splat(v.x), f32x4::splat(v.y), f32x4::splat(v.z)]
@@ -207,7 +211,7 @@ impl PointBounds {
     /// point; never NaN.
     #[must_use]
     #[inline(always)]
-    pub fn pair(&self, kind: LightKind, block: &Block, cones: Option<&ConeBlock>) -> [f32; 2] {
+    pub fn pair(&self, kind: LightKind, block: &Block, cones: Option<Cones<'_>>) -> [f32; 2] {
         let [b0, b1] = self.importance(kind, block, cones);
         let exact = |k: usize| block.child[k].is_exact();
         [if exact(0) { 0.0 } else { b0 }, if exact(1) { 0.0 } else { b1 }]
@@ -219,9 +223,12 @@ impl PointBounds {
     /// importance.
     #[must_use]
     #[inline(always)]
-    pub fn importance(&self, kind: LightKind, block: &Block, cones: Option<&ConeBlock>) -> [f32; 2] {
+    pub fn importance(&self, kind: LightKind, block: &Block, cones: Option<Cones<'_>>) -> [f32; 2] {
         let gather = |pairs: &[[f32; 2]; 3]| -> V3 { [lanes(pairs[0]), lanes(pairs[1]), lanes(pairs[2])] };
-        let cone = cones.map(|c| (gather(&c.axis), lanes(c.cos_half_angle), lanes(c.sin_half_angle)));
+        let cone = cones.map(|Cones { cone: c, spot }| {
+            let cutoff = spot.map(|s| lanes(s.min_cos_outer));
+            (gather(&c.axis), lanes(c.cos_half_angle), lanes(c.sin_half_angle), cutoff)
+        });
         let [b0, b1, ..] = self
             .lanes(kind, &gather(&block.centre), &gather(&block.half), &gather(&block.intensity), cone.as_ref(), false)
             .to_array();
@@ -232,7 +239,7 @@ impl PointBounds {
     /// order (first's 0, first's 1, second's 0, second's 1).
     #[must_use]
     #[inline(always)]
-    pub fn quad(&self, kind: LightKind, blocks: [&Block; 2], cones: Option<[&ConeBlock; 2]>) -> [f32; 4] {
+    pub fn quad(&self, kind: LightKind, blocks: [&Block; 2], cones: Option<[Cones<'_>; 2]>) -> [f32; 4] {
         let bounds = self.quad_lanes(kind, blocks, cones, false);
         let exact = |k: usize| blocks[k / 2].child[k % 2].is_exact();
         [0, 1, 2, 3].map(|k| if exact(k) { 0.0 } else { bounds[k] })
@@ -246,7 +253,7 @@ impl PointBounds {
     /// the point.
     #[must_use]
     #[inline(always)]
-    pub fn importance_quad(&self, kind: LightKind, blocks: [&Block; 2], cones: Option<[&ConeBlock; 2]>) -> [f32; 4] {
+    pub fn importance_quad(&self, kind: LightKind, blocks: [&Block; 2], cones: Option<[Cones<'_>; 2]>) -> [f32; 4] {
         self.quad_lanes(kind, blocks, cones, true)
     }
 
@@ -255,7 +262,7 @@ impl PointBounds {
         &self,
         kind: LightKind,
         blocks: [&Block; 2],
-        cones: Option<[&ConeBlock; 2]>,
+        cones: Option<[Cones<'_>; 2]>,
         estimate: bool,
     ) -> [f32; 4] {
         let two = |a: [f32; 2], b: [f32; 2]| f32x4::new([a[0], a[1], b[0], b[1]]);
@@ -264,8 +271,10 @@ impl PointBounds {
             [two(a[0], b[0]), two(a[1], b[1]), two(a[2], b[2])]
         };
         let cone = cones.map(|[a, b]| {
+            let cutoff = a.spot.zip(b.spot).map(|(x, y)| two(x.min_cos_outer, y.min_cos_outer));
+            let (a, b) = (a.cone, b.cone);
             let axis = [two(a.axis[0], b.axis[0]), two(a.axis[1], b.axis[1]), two(a.axis[2], b.axis[2])];
-            (axis, two(a.cos_half_angle, b.cos_half_angle), two(a.sin_half_angle, b.sin_half_angle))
+            (axis, two(a.cos_half_angle, b.cos_half_angle), two(a.sin_half_angle, b.sin_half_angle), cutoff)
         });
         self.lanes(
             kind,
@@ -291,7 +300,7 @@ impl PointBounds {
         c: &V3,
         h: &V3,
         intensity: &V3,
-        cone: Option<&(V3, f32x4, f32x4)>,
+        cone: Option<&ConeLanes>,
         estimate: bool,
     ) -> f32x4 {
         let (cos_theta, weighted, geometric) = match kind {
@@ -299,12 +308,12 @@ impl PointBounds {
                 let (cos_theta, weighted) = self.material(c, h, intensity);
                 (cos_theta, weighted, f32x4::ONE)
             }
-            LightKind::Omni | LightKind::Oriented => {
+            LightKind::Omni | LightKind::Oriented | LightKind::Spot => {
                 let to_box = sub3(c, &self.p);
                 let (cos_theta, weighted) = self.material(&to_box, h, intensity);
                 let mut geometric = self.geometric(c, h, estimate);
-                if let Some((axis, cos_beta, sin_beta)) = cone {
-                    geometric *= self.emission(c, h, axis, *cos_beta, *sin_beta);
+                if let Some((axis, cos_beta, sin_beta, cutoff)) = cone {
+                    geometric *= self.emission(c, h, axis, *cos_beta, *sin_beta, *cutoff);
                 }
                 (cos_theta, weighted, geometric)
             }
@@ -326,13 +335,20 @@ impl PointBounds {
     /// cos phi <= cos(max(theta_min - beta, 0)) = 1 when theta_min <= beta,
     /// else cos theta cos beta + sin theta sin beta.
     #[inline(always)]
-    fn emission(&self, c: &V3, h: &V3, axis: &V3, cos_beta: f32x4, sin_beta: f32x4) -> f32x4 {
+    /// Spots (`cutoff`: the smallest cosine of an outer angle in the
+    /// cluster): no light shines at the point when theta_min - beta is
+    /// beyond the widest outer angle; otherwise the falloff is at most 1.
+    fn emission(&self, c: &V3, h: &V3, axis: &V3, cos_beta: f32x4, sin_beta: f32x4, cutoff: Option<f32x4>) -> f32x4 {
         let from_box = sub3(&self.p, c);
         let cos_theta = Frame::around(*axis).cos_bound(&from_box, h);
         let sin_theta = (f32x4::ONE - cos_theta * cos_theta).fast_max(f32x4::ZERO).sqrt();
         let widened = cos_theta * cos_beta + sin_theta * sin_beta;
         let widened = (widened * f32x4::splat(1.0 + COS_SLACK) + f32x4::splat(COS_SLACK)).fast_min(f32x4::ONE);
-        cos_theta.cmp_ge(cos_beta).blend(f32x4::ONE, widened.fast_max(f32x4::ZERO))
+        let widened = cos_theta.cmp_ge(cos_beta).blend(f32x4::ONE, widened);
+        match cutoff {
+            Some(cutoff) => widened.cmp_gt(cutoff).blend(f32x4::ONE, f32x4::ZERO),
+            None => widened.fast_max(f32x4::ZERO),
+        }
     }
 }
 

@@ -156,7 +156,7 @@ impl Cut<'_, '_> {
     /// other child waits in `fresh` for its representative's evaluation.
     fn add_children(&mut self, tree: u8, b: usize, parent: Option<(u32, DVec3)>) {
         let t = &self.trees[tree as usize];
-        let bounds = self.bounds.pair(t.kind, &t.blocks[b], t.cones.get(b));
+        let bounds = self.bounds.pair(t.kind, &t.blocks[b], t.cones_of(b));
         self.add_slots(tree, b, bounds, parent);
     }
 
@@ -165,7 +165,7 @@ impl Cut<'_, '_> {
     fn add_children_of_two(&mut self, tree: u8, parents: [&Entry; 2]) {
         let t = &self.trees[tree as usize];
         let [b0, b1] = parents.map(|p| p.child.index());
-        let cones = (!t.cones.is_empty()).then(|| [&t.cones[b0], &t.cones[b1]]);
+        let cones = t.cones_of(b0).zip(t.cones_of(b1)).map(|(x, y)| [x, y]);
         let [a0, a1, c0, c1] = self.bounds.quad(t.kind, [&t.blocks[b0], &t.blocks[b1]], cones);
         self.add_slots(tree, b0, [a0, a1], Some((parents[0].representative, parents[0].unit)));
         self.add_slots(tree, b1, [c0, c1], Some((parents[1].representative, parents[1].unit)));
@@ -243,7 +243,7 @@ impl Cut<'_, '_> {
                 let mut lanes = Lanes::default();
                 for f in quad {
                     let light = tree.representative(f.block as usize, f.slot as usize);
-                    lanes.push(light.point, light.normal);
+                    lanes.push(&light);
                 }
                 let terms = self.evaluator.terms(tree.kind, &lanes);
                 for (f, found) in quad.iter().zip(terms) {

@@ -91,7 +91,7 @@ pub fn evaluate(
 ) -> CutResult {
     let bounds = PointBounds::new(sp, trees.scale);
     let importance = |tree: &CutTree, [a, b]: [usize; 2]| {
-        let cones = (!tree.cones.is_empty()).then(|| [&tree.cones[a], &tree.cones[b]]);
+        let cones = tree.cones_of(a).zip(tree.cones_of(b)).map(|(x, y)| [x, y]);
         let [a0, a1, b0, b1] = bounds.importance_quad(tree.kind, [&tree.blocks[a], &tree.blocks[b]], cones);
         [[a0, a1], [b0, b1]]
     };
@@ -187,7 +187,7 @@ pub(crate) fn evaluate_with(
             let mut lanes = Lanes::default();
             for d in quad {
                 let light = tree.representative(d.block as usize, d.slot as usize);
-                lanes.push(light.point, light.normal);
+                lanes.push(&light);
             }
             for (d, found) in quad.iter().zip(evaluator.terms(tree.kind, &lanes)) {
                 let value = found.term * d.weight;
@@ -272,7 +272,7 @@ fn add_slots(
 ) -> (f64, usize) {
     let t = &trees.trees[tree as usize];
     let block = &t.blocks[b];
-    let importance = bounds.importance(t.kind, block, t.cones.get(b));
+    let importance = bounds.importance(t.kind, block, t.cones_of(b));
     for &k in slots {
         let index = scratch.nodes.len();
         scratch.nodes.push(Node { importance: importance[k], block: b as u32, slot: k as u8, tree, in_cut: true });

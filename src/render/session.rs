@@ -83,8 +83,8 @@ pub struct PassResult {
     /// Virtual point lights traced for indirect light, and the time it took.
     pub vpls: usize,
     pub vpl_time: Duration,
-    /// Lights of the pass, by kind (the scene's plus the VPLs): omni, oriented, directional.
-    pub lights: [usize; 3],
+    /// Lights of the pass, by kind (the scene's plus the VPLs): omni, oriented, directional, spot.
+    pub lights: [usize; 4],
 }
 
 impl<'s> Session<'s> {
@@ -136,7 +136,7 @@ impl<'s> Session<'s> {
             ),
             None => (Vec::new(), 0),
         };
-        let counts = [lights.omni.len(), lights.oriented.len(), lights.directional.len()];
+        let counts = [lights.omni.len(), lights.oriented.len(), lights.directional.len(), lights.spot.len()];
         PassResult { film, stats, seconds, trees: tree_list, tree_bytes, vpls, vpl_time, lights: counts }
     }
 }

@@ -20,7 +20,7 @@ use glam::Vec3;
 use rayon::prelude::*;
 
 use crate::embree::Ray;
-use crate::light::{Light, Lights, OrientedLight};
+use crate::light::{Light, Lights, OrientedLight, SpotLight};
 use crate::scene::IndirectSettings;
 use crate::shading::Geometry;
 use crate::util::color::luminance;
@@ -39,6 +39,14 @@ enum Source {
     /// From infinity along -direction, through a disc covering the scene.
     Directional {
         direction: Vec3,
+    },
+    /// A spot: directions uniform in its outer cone, each path's power then
+    /// scaled by the spot's falloff in its direction.
+    Spot {
+        position: Vec3,
+        direction: Vec3,
+        cos_inner: f32,
+        cos_outer: f32,
     },
 }
 
@@ -76,6 +84,16 @@ pub fn trace(geometry: &Geometry<'_>, lights: &Lights, settings: IndirectSetting
             Light::Directional(l) => {
                 (Source::Directional { direction: l.direction }, PI * radius * radius * l.irradiance)
             }
+            // At most I times the outer cone's solid angle (the falloff is at most 1).
+            Light::Spot(l) => (
+                Source::Spot {
+                    position: l.position,
+                    direction: l.direction,
+                    cos_inner: l.cos_inner,
+                    cos_outer: l.cos_outer,
+                },
+                2.0 * PI * (1.0 - l.cos_outer) * l.intensity,
+            ),
         });
     });
     let total: f64 = sources.iter().map(|s| f64::from(luminance(s.1))).sum();
@@ -101,6 +119,17 @@ pub fn trace(geometry: &Geometry<'_>, lights: &Lights, settings: IndirectSetting
                 Source::Omni { position } => (position, uniform_direction(rng.next_f32(), rng.next_f32())),
                 Source::Oriented { position, normal } => {
                     (position + normal * eps, cosine_direction(normal, rng.next_f32(), rng.next_f32()))
+                }
+                Source::Spot { position, direction, cos_inner, cos_outer } => {
+                    // Uniform in the cone's solid angle: the path carries the
+                    // power the falloff lets through in its direction.
+                    let cos_theta = 1.0 - rng.next_f32() * (1.0 - cos_outer);
+                    let sin_theta = (1.0 - cos_theta * cos_theta).max(0.0).sqrt();
+                    let phi = 2.0 * PI * rng.next_f32();
+                    let (t, b) = direction.any_orthonormal_pair();
+                    let d = direction * cos_theta + t * (sin_theta * phi.cos()) + b * (sin_theta * phi.sin());
+                    power *= SpotLight::falloff(cos_theta, cos_inner, cos_outer);
+                    (position, d.normalize())
                 }
                 Source::Directional { direction } => {
                     // A uniform point on the disc facing the light, outside the scene.

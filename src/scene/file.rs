@@ -181,6 +181,26 @@ pub struct PointSpec {
     pub intensity: [f32; 3],
 }
 
+/// A spot light: intensity in W/sr along `direction`, with the smooth
+/// falloff of KHR_lights_punctual between the inner and outer half-angles.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SpotSpec {
+    pub position: [f32; 3],
+    pub direction: [f32; 3],
+    pub intensity: [f32; 3],
+    /// Degrees from the axis where the falloff begins.
+    #[serde(default)]
+    pub inner_angle: f32,
+    /// Degrees from the axis where the light ends (at most 90).
+    #[serde(default = "spot_outer")]
+    pub outer_angle: f32,
+}
+
+fn spot_outer() -> f32 {
+    45.0
+}
+
 /// count[0] x count[1] point lights spread evenly over the parallelogram
 /// corner + s u + t v, each with `intensity` W/sr.
 #[derive(Debug, Clone, Deserialize)]
@@ -244,6 +264,7 @@ fn sun_samples() -> u32 {
 #[derive(Debug, Clone)]
 pub enum LightSpec {
     Point(PointSpec),
+    Spot(SpotSpec),
     Grid(GridSpec),
     Area(AreaSpec),
     AreaMesh(AreaMeshSpec),
@@ -331,11 +352,16 @@ impl LightSpec {
         let (kind, rest) = tagged(value)?;
         match kind.as_str() {
             "point" => fields(rest).map(Self::Point),
+            "spot" => fields(rest).map(Self::Spot),
             "grid" => fields(rest).map(Self::Grid),
             "area" => fields(rest).map(Self::Area),
             "area_mesh" => fields(rest).map(Self::AreaMesh),
             "sun" => fields(rest).map(Self::Sun),
-            _ => Err(SpecError::UnknownType { what: "light", kind, expected: "point, grid, area, area_mesh or sun" }),
+            _ => Err(SpecError::UnknownType {
+                what: "light",
+                kind,
+                expected: "point, spot, grid, area, area_mesh or sun",
+            }),
         }
     }
 }

@@ -53,6 +53,9 @@ pub struct Film {
 pub enum LightSource {
     /// One omni light of `intensity` W/sr.
     Point { position: Vec3, intensity: Vec3 },
+    /// A spot light of `intensity` W/sr along `direction` (any length),
+    /// falling off smoothly from the inner to the outer cone half-angle.
+    Spot { position: Vec3, direction: Vec3, intensity: Vec3, inner_angle_degrees: f32, outer_angle_degrees: f32 },
     /// count[0] x count[1] omni lights of `intensity` W/sr each, at the cell
     /// centres of the parallelogram corner + s u + t v.
     Grid { corner: Vec3, u: Vec3, v: Vec3, count: [u32; 2], intensity: Vec3 },
@@ -286,6 +289,29 @@ impl Scene {
                     let intensity = v.non_negative_rgb(*intensity, &field("intensity"))?;
                     lights.push(LightSource::Point { position, intensity });
                 }
+                LightSpec::Spot(file::SpotSpec { position, direction, intensity, inner_angle, outer_angle }) => {
+                    let position = v.point(*position, &field("position"))?;
+                    let direction = v.point(*direction, &field("direction"))?;
+                    v.check(direction.length() > 0.0, &field("direction"), || "must not be zero".into())?;
+                    let intensity = v.non_negative_rgb(*intensity, &field("intensity"))?;
+                    v.check(
+                        outer_angle.is_finite() && *outer_angle > 0.0 && *outer_angle <= 90.0,
+                        &field("outer_angle"),
+                        || format!("must be above 0 and at most 90 degrees, got {outer_angle}"),
+                    )?;
+                    v.check(
+                        inner_angle.is_finite() && *inner_angle >= 0.0 && inner_angle < outer_angle,
+                        &field("inner_angle"),
+                        || format!("must be at least 0 and below outer_angle ({outer_angle}), got {inner_angle}"),
+                    )?;
+                    lights.push(LightSource::Spot {
+                        position,
+                        direction,
+                        intensity,
+                        inner_angle_degrees: *inner_angle,
+                        outer_angle_degrees: *outer_angle,
+                    });
+                }
                 LightSpec::Grid(GridSpec { corner, u, v: edge_v, count, intensity }) => {
                     let c = v.point(*corner, &field("corner"))?;
                     let (u, w) = (v.point(*u, &field("u"))?, v.point(*edge_v, &field("v"))?);
@@ -443,7 +469,7 @@ impl Scene {
             .lights
             .iter()
             .map(|source| match *source {
-                LightSource::Point { .. } => 1,
+                LightSource::Point { .. } | LightSource::Spot { .. } => 1,
                 LightSource::Grid { count, .. } => u64::from(count[0]) * u64::from(count[1]),
                 LightSource::Area { samples, .. } | LightSource::Sun { samples, .. } => u64::from(samples),
             })

@@ -17,7 +17,7 @@ use wide::{f32x4, CmpEq, CmpLe};
 
 use super::surface::SurfacePoint;
 use crate::embree::{PacketWidth, Ray, Scene as EmbreeScene, ShadowRay};
-use crate::light::{Light, LightKind};
+use crate::light::{Light, LightKind, SpotLight, TreeLight};
 use crate::scene::material::phong_normalisation;
 
 /// Shadow rays handed to Embree per call: large enough to amortise the FFI
@@ -30,25 +30,31 @@ pub const SHADOW_BATCH: usize = 256;
 pub const SHADOW_PACKET: PacketWidth = PacketWidth::Sixteen;
 
 /// Up to four lights of one kind, one per lane: `point` is the position of
-/// an omni or oriented light, the unit direction towards a directional one;
-/// `normal` is used by oriented lights only. Lanes past `count` are ignored.
+/// an omni, oriented or spot light, the unit direction towards a
+/// directional one; `normal` is an oriented light's normal or a spot's
+/// direction; `spread` a spot's cosines of its inner and outer angles.
+/// Lanes past `count` are ignored.
 #[derive(Debug, Clone, Copy, Default)]
 pub struct Lanes {
     pub point: [[f32; 4]; 3],
     pub normal: [[f32; 4]; 3],
+    pub spread: [[f32; 4]; 2],
     pub count: usize,
 }
 
 impl Lanes {
-    /// Puts a light in the next lane; false when all four are taken.
-    pub fn push(&mut self, point: Vec3, normal: Vec3) -> bool {
+    /// Puts a light (a tree leaf's data) in the next lane; false when all
+    /// four are taken.
+    pub fn push(&mut self, light: &crate::light::TreeLight) -> bool {
         if self.count == 4 {
             return false;
         }
         for axis in 0..3 {
-            self.point[axis][self.count] = point[axis];
-            self.normal[axis][self.count] = normal[axis];
+            self.point[axis][self.count] = light.point[axis];
+            self.normal[axis][self.count] = light.normal[axis];
         }
+        self.spread[0][self.count] = light.spread[0];
+        self.spread[1][self.count] = light.spread[1];
         self.count += 1;
         true
     }
@@ -153,10 +159,17 @@ impl<'a, 'p> LightEvaluator<'a, 'p> {
         let s = d2.sqrt();
         let wi = [d[0] / s, d[1] / s, d[2] / s];
         let m = self.material(&wi);
-        // The cosine at an oriented light: its normal against -wi.
-        let emitted = (kind == LightKind::Oriented).then(|| {
+        // The cosine at an oriented light: its normal against -wi; a spot's
+        // falloff at the cosine between its direction and -wi.
+        let emitted = kind.has_cone().then(|| {
             let normal = [f32x4::new(lanes.normal[0]), f32x4::new(lanes.normal[1]), f32x4::new(lanes.normal[2])];
-            dot(&normal, &[-wi[0], -wi[1], -wi[2]]).fast_max(f32x4::ZERO).to_array()
+            let cosine = dot(&normal, &[-wi[0], -wi[1], -wi[2]]);
+            if kind == LightKind::Spot {
+                let cosine = cosine.to_array();
+                std::array::from_fn(|k| SpotLight::falloff(cosine[k], lanes.spread[0][k], lanes.spread[1][k]))
+            } else {
+                cosine.fast_max(f32x4::ZERO).to_array()
+            }
         });
         // The shadow ray from the lifted origin, stopping epsilon short of the light.
         let direction = [point[0] - self.origin[0], point[1] - self.origin[1], point[2] - self.origin[2]];
@@ -196,15 +209,7 @@ pub fn light_intensity(light: &Light) -> Vec3 {
         Light::Omni(l) => l.intensity,
         Light::Oriented(l) => l.intensity,
         Light::Directional(l) => l.irradiance,
-    }
-}
-
-/// A light's point and normal, as [`Lanes`] holds them.
-fn point_and_normal(light: &Light) -> (Vec3, Vec3) {
-    match *light {
-        Light::Omni(l) => (l.position, Vec3::ZERO),
-        Light::Oriented(l) => (l.position, l.normal),
-        Light::Directional(l) => (l.direction, Vec3::ZERO),
+        Light::Spot(l) => l.intensity,
     }
 }
 
@@ -221,8 +226,7 @@ pub fn light_term(light: &Light, sp: &SurfacePoint<'_>) -> DVec3 {
 #[must_use]
 pub fn light_sample(light: &Light, sp: &SurfacePoint<'_>, intensity: Vec3) -> Option<(DVec3, Option<ShadowRay>)> {
     let mut lanes = Lanes::default();
-    let (point, normal) = point_and_normal(light);
-    lanes.push(point, normal);
+    lanes.push(&TreeLight::of(light));
     let [found, ..] = LightEvaluator::new(sp).terms(light.kind(), &lanes);
     let value = found.term * intensity.as_dvec3();
     (value != DVec3::ZERO).then_some((value, found.ray))
@@ -282,9 +286,8 @@ impl<'a, 'p> LightBatch<'a, 'p> {
             self.evaluate();
             self.kind = light.kind();
         }
-        let (point, normal) = point_and_normal(light);
         self.intensities[self.lanes.count] = light_intensity(light);
-        self.lanes.push(point, normal);
+        self.lanes.push(&TreeLight::of(light));
     }
 
     /// Evaluates the lights waiting in the lanes.

@@ -49,6 +49,7 @@ pub enum KindArg {
     Omni,
     Oriented,
     Directional,
+    Spot,
 }
 
 impl From<KindArg> for LightKind {
@@ -57,6 +58,7 @@ impl From<KindArg> for LightKind {
             KindArg::Omni => Self::Omni,
             KindArg::Oriented => Self::Oriented,
             KindArg::Directional => Self::Directional,
+            KindArg::Spot => Self::Spot,
         }
     }
 }

@@ -52,16 +52,23 @@ pub fn random_lights(kind: LightKind, n: usize, distribution: Distribution, seed
             let intensity =
                 Vec3::splat(rng.range_f32(0.5, 1.5)) * Vec3::new(1.0, rng.range_f32(0.8, 1.0), rng.range_f32(0.6, 1.0));
             match kind {
-                LightKind::Omni => TreeLight { point: position, normal: Vec3::ZERO, intensity },
-                LightKind::Oriented => {
+                LightKind::Omni => TreeLight { point: position, normal: Vec3::ZERO, intensity, spread: [0.0; 2] },
+                LightKind::Oriented | LightKind::Spot => {
                     if direction.y > 0.0 {
                         direction.y = -direction.y;
                     }
-                    TreeLight { point: position, normal: direction, intensity }
+                    // Spots: outer half-angles of 20 to 60 degrees, inner 80% of them.
+                    let spread = if kind == LightKind::Spot {
+                        let outer = rng.range_f32(20.0, 60.0).to_radians();
+                        [(0.8 * outer).cos(), outer.cos()]
+                    } else {
+                        [0.0; 2]
+                    };
+                    TreeLight { point: position, normal: direction, intensity, spread }
                 }
                 LightKind::Directional => {
                     direction.y = direction.y.abs();
-                    TreeLight { point: direction, normal: Vec3::ZERO, intensity }
+                    TreeLight { point: direction, normal: Vec3::ZERO, intensity, spread: [0.0; 2] }
                 }
             }
         })

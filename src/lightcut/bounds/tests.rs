@@ -5,7 +5,7 @@ use glam::DVec3;
 
 use super::*;
 use crate::light::TreeLight;
-use crate::light_tree::layout::{centre_half, Child};
+use crate::light_tree::layout::{centre_half, Child, ConeBlock, SpotBlock};
 use crate::light_tree::Cone;
 use crate::scene::material::{reflect, Albedo, Material};
 use crate::shading::light_term;
@@ -14,12 +14,14 @@ use crate::util::sampling::Rng;
 /// The bound of one cluster (box [lo, hi], cone of normals, summed
 /// intensity) at `sp`, by the cut's own code: the cluster in slot `slot` of
 /// a block whose other slot is a leaf, with no normalisation (scale 1).
+#[allow(clippy::too_many_arguments)]
 fn cluster_bound(
     kind: LightKind,
     sp: &SurfacePoint<'_>,
     lo: Vec3,
     hi: Vec3,
     cone: Cone,
+    min_cos_outer: f32,
     intensity: Vec3,
     slot: usize,
 ) -> f32 {
@@ -37,14 +39,18 @@ fn cluster_bound(
     }
     cones.cos_half_angle[slot] = if cone.half_angle == 0.0 { 1.0 } else { cos };
     cones.sin_half_angle[slot] = if cone.half_angle == 0.0 { 0.0 } else { sin };
-    let cones = (kind == LightKind::Oriented).then_some(&cones);
+    let mut spots = SpotBlock::default();
+    spots.min_cos_outer[slot] = min_cos_outer;
+    let spot = (kind == LightKind::Spot).then_some(&spots);
+    let cones = kind.has_cone().then_some(Cones { cone: &cones, spot });
     PointBounds::new(sp, 1.0).pair(kind, &block, cones)[slot]
 }
 
 /// M * G per unit intensity of a light of `kind` at `point` (a direction
-/// for a directional light) with `normal` (oriented lights).
-fn term(kind: LightKind, sp: &SurfacePoint<'_>, point: Vec3, normal: Vec3) -> DVec3 {
-    light_term(&TreeLight { point, normal, intensity: Vec3::ONE }.light(kind), sp)
+/// for a directional light) with `normal` (oriented lights; a spot's
+/// direction) and `spread` (a spot's inner and outer cosines).
+fn term(kind: LightKind, sp: &SurfacePoint<'_>, point: Vec3, normal: Vec3, spread: [f32; 2]) -> DVec3 {
+    light_term(&TreeLight { point, normal, intensity: Vec3::ONE, spread }.light(kind), sp)
 }
 
 fn unit(rng: &mut Rng) -> Vec3 {
@@ -155,7 +161,7 @@ fn check_random_cluster(rng: &mut Rng, kind: LightKind) {
     };
     let spread = [0.0, 0.01, 0.5, 3.0][rng.below(4) as usize];
     let base_normal = unit(rng);
-    let lights: Vec<(Vec3, Vec3)> = (0..count)
+    let lights: Vec<(Vec3, Vec3, [f32; 2])> = (0..count)
         .map(|_| {
             let position = match kind {
                 LightKind::Directional => (base_normal + spread * unit(rng)).normalize_or(base_normal),
@@ -166,21 +172,25 @@ fn check_random_cluster(rng: &mut Rng, kind: LightKind) {
                 }
             };
             let normal = if rng.next_f32() < 0.5 { (base_normal + 0.4 * unit(rng)).normalize() } else { unit(rng) };
-            (position, normal)
+            // Spots: outer half-angles from 1 to 90 degrees, inner below them.
+            let outer = rng.range_f32(1.0, 90.0).to_radians();
+            let spread = [(outer * rng.next_f32()).cos(), outer.cos()];
+            (position, normal, spread)
         })
         .collect();
     let (lo, hi) = lights.iter().fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), l| (lo.min(l.0), hi.max(l.0)));
     let cone = lights.iter().skip(1).fold(Cone::of_direction(lights[0].1), |c, l| c.union(Cone::of_direction(l.1)));
+    let min_cos_outer = lights.iter().map(|l| l.2[1]).fold(1.0f32, f32::min);
     let slot = rng.below(2) as usize;
     // Channel by channel: the luminance bound against a unit intensity in
     // channel c bounds that channel's M * G, weighted by its luminance weight.
     for (c, weight) in [0.2126, 0.7152, 0.0722].into_iter().enumerate() {
         let mut intensity = Vec3::ZERO;
         intensity[c] = 1.0;
-        let bound = cluster_bound(kind, &sp, lo, hi, cone, intensity, slot);
+        let bound = cluster_bound(kind, &sp, lo, hi, cone, min_cos_outer, intensity, slot);
         assert!(bound.is_finite(), "bound {bound} not finite");
-        for (position, normal) in &lights {
-            let value = weight * term(kind, &sp, *position, *normal)[c];
+        for (position, normal, spread) in &lights {
+            let value = weight * term(kind, &sp, *position, *normal, *spread)[c];
             assert!(
                 value <= f64::from(bound) * (1.0 + 1e-6),
                 "{kind:?}: channel {c}'s light term {value} exceeds bound {bound} at p={} n={} lights={lights:?}",
@@ -208,6 +218,14 @@ fn oriented_bounds_hold_at_random_points() {
 }
 
 #[test]
+fn spot_bounds_hold_at_random_points() {
+    let mut rng = Rng::seeded(13);
+    for _ in 0..20_000 {
+        check_random_cluster(&mut rng, LightKind::Spot);
+    }
+}
+
+#[test]
 fn directional_bounds_hold_at_random_points() {
     let mut rng = Rng::seeded(12);
     for _ in 0..20_000 {
@@ -228,10 +246,10 @@ fn a_point_inside_the_box_gets_a_finite_bound_above_every_light() {
     let mut rng = Rng::seeded(3);
     let sp = surface(&mut rng, &m);
     let (lo, hi) = (sp.p - Vec3::ONE, sp.p + Vec3::ONE);
-    let b = cluster_bound(LightKind::Omni, &sp, lo, hi, Cone::of_direction(Vec3::Y), Vec3::ONE, 0);
+    let b = cluster_bound(LightKind::Omni, &sp, lo, hi, Cone::of_direction(Vec3::Y), 0.0, Vec3::ONE, 0);
     assert!(b.is_finite() && b > 0.0);
     // A light on top of the point along the normal, at the clamp distance.
-    let near = term(LightKind::Omni, &sp, sp.p + sp.n * 1e-9, Vec3::ZERO);
+    let near = term(LightKind::Omni, &sp, sp.p + sp.n * 1e-9, Vec3::ZERO, [0.0; 2]);
     let luminance = 0.2126 * near.x + 0.7152 * near.y + 0.0722 * near.z;
     assert!(luminance <= f64::from(b) && near.is_finite());
 }
