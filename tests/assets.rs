@@ -9,7 +9,7 @@ use std::process::Command;
 use lightcuts::scene::Scene;
 
 /// Extensions of the files `Scene::load` reads as scenes.
-const SCENE_EXTENSIONS: [&str; 2] = ["toml", "json"];
+const SCENE_EXTENSIONS: [&str; 4] = ["toml", "json", "gltf", "glb"];
 
 fn scene_files(dir: &Path, found: &mut Vec<PathBuf>) {
     let mut entries: Vec<PathBuf> = std::fs::read_dir(dir)

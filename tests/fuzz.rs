@@ -1,4 +1,6 @@
-//! A seeded mutation fuzzer for the scene parser and the OBJ loader.
+//! A seeded mutation fuzzer for the scene parser, the OBJ loader and the
+//! glTF loader (a small glTF with every kind of light, as JSON with an
+//! embedded buffer and as GLB).
 //!
 //! Each iteration mutates a valid scene (or OBJ) with byte flips, deletions,
 //! duplications and splices of a dictionary of troublesome tokens, loads it
@@ -9,6 +11,8 @@
 //! The suite runs 300 iterations of each. For a long run (10 minutes by
 //! default; LIGHTCUTS_FUZZ_ITERATIONS and LIGHTCUTS_FUZZ_SEED also apply):
 //!   LIGHTCUTS_FUZZ_SECONDS=600 cargo test --release --test fuzz -- --ignored --nocapture
+
+mod common;
 
 use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::path::Path;
@@ -240,6 +244,8 @@ fn fuzz(iterations: u64, seed: u64, deadline: Option<std::time::Instant>) -> (u6
     let scene_path = dir.join("scene.toml");
     let mut rng = Rng::seeded(seed);
     let (mut loaded, mut rejected) = (0, 0);
+    let (gltf_text, glb) = small_gltf();
+    let (mut gltf_loaded, mut gltf_rejected) = (0u64, 0u64);
     for i in 0..iterations {
         if deadline.is_some_and(|d| std::time::Instant::now() >= d) {
             break;
@@ -264,6 +270,29 @@ fn fuzz(iterations: u64, seed: u64, deadline: Option<std::time::Instant>) -> (u6
             Ok(false) => rejected += 1,
             Err(_) => panic!("iteration {i}: panic on scene input:\n{}", String::from_utf8_lossy(&input)),
         }
+        // glTF mutants: the JSON text and the GLB bytes.
+        for (name, valid) in [("fuzz.gltf", &gltf_text), ("fuzz.glb", &glb)] {
+            let input = mutate(&mut rng, valid);
+            let path = dir.join(name);
+            std::fs::write(&path, &input).unwrap();
+            let outcome = catch_unwind(AssertUnwindSafe(|| match Scene::load(&path) {
+                Ok(scene) => {
+                    render_small(&scene);
+                    true
+                }
+                Err(e) => {
+                    let m = e.to_string();
+                    assert!(m.contains(name), "error names no file: {m}");
+                    assert!(!m.contains('\n'), "multi-line error: {m}");
+                    false
+                }
+            }));
+            match outcome {
+                Ok(true) => gltf_loaded += 1,
+                Ok(false) => gltf_rejected += 1,
+                Err(_) => panic!("iteration {i}: panic on {name}:\n{}", String::from_utf8_lossy(&input)),
+            }
+        }
         // OBJ mutants.
         let obj = mutate(&mut rng, OBJ.as_bytes());
         let obj_path = dir.join("fuzz.obj");
@@ -272,7 +301,33 @@ fn fuzz(iterations: u64, seed: u64, deadline: Option<std::time::Instant>) -> (u6
             panic!("iteration {i}: panic on OBJ input:\n{}", String::from_utf8_lossy(&obj));
         }
     }
+    assert!(
+        iterations < 100 || (gltf_loaded > 10 && gltf_rejected > 10),
+        "glTF mutants: {gltf_loaded} loaded, {gltf_rejected} rejected"
+    );
     (loaded, rejected)
+}
+
+/// The glTF the fuzzer mutates: a floor, a point light, a spot, a sun, an
+/// emissive double-sided panel and a camera (JSON text, and as GLB).
+fn small_gltf() -> (Vec<u8>, Vec<u8>) {
+    use serde_json::json;
+    let mut g = common::gltf::floor_and_point_light();
+    let spot = g
+        .light(json!({ "type": "spot", "intensity": 500.0, "spot": { "innerConeAngle": 0.2, "outerConeAngle": 0.6 } }));
+    g.node(json!({ "translation": [1.0, 2.0, 0.0], "rotation": [-0.6, 0.0, 0.0, 0.8], "extensions": { "KHR_lights_punctual": { "light": spot } } }), true);
+    let sun = g.light(json!({ "type": "directional", "intensity": 100.0 }));
+    g.node(
+        json!({ "rotation": [-0.5, 0.0, 0.0, 0.866], "extensions": { "KHR_lights_punctual": { "light": sun } } }),
+        true,
+    );
+    let panel = g.material(json!({ "emissiveFactor": [1.0, 1.0, 1.0], "doubleSided": true }));
+    let quad = g.quad([-0.5, 1.5, -0.5], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0], Some(panel));
+    g.node(json!({ "mesh": quad, "scale": [1.0, 1.0, 1.0] }), true);
+    g.json["scenes"][0]["nodes"] = json!([0, 1, 2, 3, 4, 5]);
+    // A small film for the in-process renders.
+    g.json["cameras"][0]["perspective"]["aspectRatio"] = json!(1.33);
+    (g.embedded().into_bytes(), g.glb())
 }
 
 #[test]

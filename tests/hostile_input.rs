@@ -322,3 +322,122 @@ material = "grey"
     assert!(!out.exists(), "an output appeared under the output name");
     assert!(dir.files().iter().all(|f| !f.contains("big.exr")), "{:?}", dir.files());
 }
+
+/// glTF files broken in every way the loader must survive: each is one
+/// line naming the file and the JSON location, exit 1, no output.
+#[test]
+fn hostile_gltf_files() {
+    use common::gltf::{floor_and_point_light, GltfBuilder};
+    use serde_json::json;
+    let dir = setup("gltf");
+    let good = floor_and_point_light();
+    let text = good.embedded();
+    let glb = good.glb();
+    rejects(&dir, "truncated.gltf", &text.as_bytes()[..text.len() / 2], &["truncated.gltf", "line"]);
+    rejects(&dir, "garbage.gltf", b"\x00\x01\x02 not json", &["garbage.gltf", "not a readable glTF"]);
+    rejects(&dir, "truncated.glb", &glb[..40], &["truncated.glb", "GLB"]);
+    rejects(&dir, "garbage.glb", b"glTF\x02\x00\x00\x00\xff\xff\xff\xffJSON", &["garbage.glb", "GLB"]);
+    let mutated = |f: &dyn Fn(&mut GltfBuilder)| {
+        let mut g = floor_and_point_light();
+        f(&mut g);
+        g.embedded().into_bytes()
+    };
+    let case = |name: &str, f: &dyn Fn(&mut GltfBuilder), expect: &[&str]| {
+        let mut expect = expect.to_vec();
+        expect.push(name);
+        rejects(&dir, name, &mutated(f), &expect);
+    };
+    case(
+        "overrun.gltf",
+        &|g| g.json["accessors"][0]["count"] = json!(1000),
+        &["accessors[0]", "meshes[0].primitives[0].attributes.POSITION", "overrun"],
+    );
+    case("absurd.gltf", &|g| g.json["accessors"][0]["count"] = json!(1u64 << 40), &["accessors[0].count"]);
+    case(
+        "offset.gltf",
+        &|g| g.json["bufferViews"][0]["byteOffset"] = json!(1u64 << 33),
+        &["bufferViews[0]", "past the end"],
+    );
+    case("stride.gltf", &|g| g.json["bufferViews"][0]["byteStride"] = json!(4), &["bufferViews[0].byteStride"]);
+    case(
+        "index.gltf",
+        &|g| {
+            let m = g.mesh(&[[0.0; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]], Some(&[0, 1, 7]), None, None, None, None);
+            g.node(json!({ "mesh": m }), true);
+        },
+        &["meshes[1].primitives[0].indices", "past the 3 vertices"],
+    );
+    case(
+        "nan.gltf",
+        &|g| {
+            let m = g.mesh(&[[f32::NAN, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]], None, None, None, None, None);
+            g.node(json!({ "mesh": m }), true);
+        },
+        &["meshes[1].primitives[0].attributes.POSITION", "vertex 0"],
+    );
+    case(
+        "huge.gltf",
+        &|g| g.json["nodes"][0]["scale"] = json!([1e38, 1e38, 1e38]),
+        &["meshes[0].primitives[0].attributes.POSITION", "vertex 0"],
+    );
+    case("far.gltf", &|g| g.json["nodes"][0]["translation"] = json!([1e20, 0, 0]), &["nodes[0]", "outside"]);
+    case(
+        "matrix.gltf",
+        &|g| g.json["nodes"][0]["matrix"] = json!([1e38, 0, 0, 0, 0, 1e38, 0, 0, 0, 0, 1e38, 0, 1e38, 1e38, 1e38, 1]),
+        &["nodes[0]"],
+    );
+    case("cycle.gltf", &|g| g.json["nodes"][0]["children"] = json!([0]), &["nodes[0]"]);
+    case(
+        "draco.gltf",
+        &|g| g.json["extensionsRequired"] = json!(["KHR_draco_mesh_compression"]),
+        &["extensionsRequired[0]", "KHR_draco_mesh_compression", "does not implement"],
+    );
+    case(
+        "light.gltf",
+        &|g| g.json["nodes"][1]["extensions"]["KHR_lights_punctual"]["light"] = json!(9),
+        &["nodes[1]", "light"],
+    );
+    case(
+        "intensity.gltf",
+        &|g| g.json["extensions"]["KHR_lights_punctual"]["lights"][0]["intensity"] = json!(-5.0),
+        &["extensions.KHR_lights_punctual.lights[0].intensity"],
+    );
+    case(
+        "cone.gltf",
+        &|g| {
+            g.json["extensions"]["KHR_lights_punctual"]["lights"][0] =
+                json!({ "type": "spot", "intensity": 1.0, "spot": { "innerConeAngle": 0.9, "outerConeAngle": 0.5 } })
+        },
+        &["lights[0].spot.innerConeAngle"],
+    );
+    let bad_base64 = floor_and_point_light().embedded().replace(";base64,", ";base64,!!");
+    rejects(&dir, "base64.gltf", bad_base64.as_bytes(), &["base64.gltf", "buffers[0].uri", "base64"]);
+    case(
+        "image.gltf",
+        &|g| {
+            g.json["images"] = json!([{ "uri": "nope.png" }]);
+            g.json["textures"] = json!([{ "source": 0 }]);
+            g.json["materials"][0]["pbrMetallicRoughness"]["baseColorTexture"] = json!({ "index": 0 });
+        },
+        &["nope.png", "images[0].uri"],
+    );
+    std::fs::write(dir.path("junk.png"), b"junk").unwrap();
+    case(
+        "junk_image.gltf",
+        &|g| {
+            g.json["images"] = json!([{ "uri": "junk.png" }]);
+            g.json["textures"] = json!([{ "source": 0 }]);
+            g.json["materials"][0]["pbrMetallicRoughness"]["baseColorTexture"] = json!({ "index": 0 });
+        },
+        &["junk.png", "images[0]", "not a PNG or JPEG"],
+    );
+    // A missing .bin beside the .gltf.
+    let path = floor_and_point_light().write_separate(&dir.path(""), "room");
+    std::fs::remove_file(dir.path("room.bin")).unwrap();
+    let text = std::fs::read(&path).unwrap();
+    rejects(&dir, "room.gltf", &text, &["room.bin", "buffers[0].uri"]);
+    // A camera named on the command line that the file lacks.
+    let scene = dir.write("cams.gltf", &floor_and_point_light().embedded());
+    let stderr = lightcuts_fails(&["render", s(&scene), "--camera", "nope", "-o", s(&dir.path("out.exr"))]);
+    assert!(stderr.contains("cams.gltf") && stderr.contains("no camera named 'nope'"), "{stderr}");
+}

@@ -24,10 +24,15 @@ pub struct CompareArgs {
     /// Write the absolute difference (R, G, B) and relative error as an EXR.
     #[arg(long, value_name = "DIFF.exr")]
     pub diff_exr: Option<PathBuf>,
+    /// Also compare the mean luminance of N x N-pixel blocks, skipping
+    /// blocks across silhouettes (found from a Z channel): the comparison
+    /// that suits a noisy reference such as a path tracer's.
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=4096))]
+    pub blocks: Option<u32>,
 }
 
 pub fn run(args: &CompareArgs) -> Result<(), CliError> {
-    let result = compare_files(&args.test, &args.reference)?;
+    let result = compare_files(&args.test, &args.reference, args.blocks.map(|b| b as usize))?;
     if let Some(path) = &args.diff {
         let rgb: Vec<u8> = result.relative.iter().flat_map(|&e| heat(e)).collect();
         write_rgb_png(path, result.width as u32, result.height as u32, &rgb)?;
@@ -56,4 +61,17 @@ fn print_comparison(c: &Comparison, json: bool) {
     println!("pixels above 5%        {:.4}%", 100.0 * c.fraction_above_5_percent);
     println!("RMSE                   {:.6e}", c.rmse);
     println!("relative MSE           {:.6e}", c.relative_mse);
+    println!(
+        "mean luminance         {:.6} vs {:.6} (ratio {:.4})",
+        c.mean_luminance,
+        c.reference_mean_luminance,
+        c.mean_luminance / c.reference_mean_luminance.max(f64::MIN_POSITIVE)
+    );
+    if let Some(b) = &c.blocks {
+        println!("{0}x{0} blocks            {1} compared, {2} skipped (silhouettes)", b.size, b.blocks, b.skipped);
+        println!("  mean relative error  {:.4}%", 100.0 * b.mean_relative_error);
+        println!("  median               {:.4}%", 100.0 * b.median_relative_error);
+        println!("  95th percentile      {:.4}%", 100.0 * b.p95_relative_error);
+        println!("  maximum              {:.4}%", 100.0 * b.max_relative_error);
+    }
 }

@@ -115,9 +115,23 @@ pub struct PassArgs {
     /// Render only this half-open window of the full frame, in pixels.
     #[arg(long, value_name = "x0,x1,y0,y1", value_parser = parse_pixel_bounds)]
     pub pixel_bounds: Option<[u32; 4]>,
+    /// Render through the glTF camera of this name (the scene's first camera
+    /// otherwise; overrides a TOML's [camera]).
+    #[arg(long, value_name = "NAME")]
+    pub camera: Option<String>,
 }
 
 impl PassArgs {
+    /// Loads the scene (through `--camera` when given) and prints its
+    /// warnings, one line each.
+    pub fn load(&self, path: &std::path::Path) -> Result<Scene, CliError> {
+        let scene = Scene::load_with_camera(path, self.camera.as_deref())?;
+        for warning in &scene.warnings {
+            eprintln!("warning: {warning}");
+        }
+        Ok(scene)
+    }
+
     /// The pass these options describe for `scene`, at `spp` samples per
     /// pixel (None: the scene's).
     pub fn settings(&self, scene: &Scene, spp: Option<u32>) -> Result<PassSettings, CliError> {
@@ -166,7 +180,7 @@ pub fn cut_settings(error: f64, max_cut: usize) -> Result<CutSettings, CliError>
 }
 
 pub fn run(args: &RenderArgs) -> Result<(), CliError> {
-    let scene = Scene::load(&args.scene)?;
+    let scene = args.pass.load(&args.scene)?;
     let settings = args.pass.settings(&scene, args.spp)?;
     let mode = args.mode.mode(settings.spp)?;
     if !args.exposure.is_finite() {

@@ -94,6 +94,9 @@ struct ReferenceKey {
     spp: u32,
     seed: u64,
     bounds: [u32; 4],
+    /// The glTF camera asked for by name (--camera).
+    #[serde(default)]
+    camera: Option<String>,
 }
 
 #[derive(Debug, Clone, Serialize, Deserialize)]
@@ -198,7 +201,7 @@ fn reference(
 }
 
 pub fn run(args: &SweepArgs) -> Result<(), CliError> {
-    let scene = Scene::load(&args.scene)?;
+    let scene = args.pass.load(&args.scene)?;
     if args.errors.is_empty() || args.modes.is_empty() {
         return Err(CliError::Usage { flag: "--errors", message: "give at least one threshold and one mode".into() });
     }
@@ -225,6 +228,7 @@ pub fn run(args: &SweepArgs) -> Result<(), CliError> {
             spp: settings.spp,
             seed: settings.seed,
             bounds: [b.x0, b.x1, b.y0, b.y1],
+            camera: args.pass.camera.clone(),
         };
         let (reference_rgb, record) = reference(&session, &settings, &key, &args.out, args.quiet)?;
         let pixels = b.area().max(1) as f64;

@@ -217,20 +217,22 @@ impl Lights {
                         }
                     }
                 }
-                LightSource::Area { mesh, radiance, samples, seed } => {
+                LightSource::Area { mesh, radiance, samples, seed, both_sides } => {
                     let mesh = &scene.meshes[mesh];
                     let triangles: Vec<emitters::EmitterTriangle> = mesh
                         .triangles
                         .iter()
                         .map(|t| emitters::EmitterTriangle { p: t.map(|i| mesh.positions[i as usize]) })
                         .collect();
-                    lights.oriented.extend(emitters::sample_area_light(
-                        &triangles,
-                        radiance,
-                        samples as usize,
-                        0.0,
-                        seed,
-                    ));
+                    let front = emitters::sample_area_light(&triangles, radiance, samples as usize, 0.0, seed);
+                    // The back: the same points, facing the other way.
+                    let back: Vec<_> = if both_sides {
+                        front.iter().map(|l| OrientedLight { normal: -l.normal, ..*l }).collect()
+                    } else {
+                        Vec::new()
+                    };
+                    lights.oriented.extend(front);
+                    lights.oriented.extend(back);
                 }
                 LightSource::Sun { direction, irradiance, angular_radius_degrees, samples, seed } => {
                     lights.directional.extend(emitters::sample_sun(

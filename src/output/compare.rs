@@ -34,6 +34,85 @@ pub struct Comparison {
     pub rmse: f64,
     /// Mean of (L_test - L_ref)^2 / (L_ref^2 + floor^2).
     pub relative_mse: f64,
+    /// Mean luminance of the test image and of the reference, W/(m^2 sr).
+    pub mean_luminance: f64,
+    pub reference_mean_luminance: f64,
+    /// Block averages compared (`compare --blocks`), when asked for.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub blocks: Option<BlockComparison>,
+}
+
+/// Relative error of the mean luminance of `size` x `size`-pixel blocks:
+/// what a comparison with a noisy reference (a path tracer's) can measure,
+/// since averaging a block averages its noise away. Blocks across a
+/// silhouette (neighbouring pixels more than 10% apart in depth, or a pixel
+/// that sees no surface) are skipped: there the two renderers' pixel
+/// filters, not their lighting, decide the values.
+#[derive(Debug, Clone, Serialize)]
+pub struct BlockComparison {
+    pub size: usize,
+    /// Blocks compared, and blocks skipped as silhouettes (or without a depth channel, none).
+    pub blocks: usize,
+    pub skipped: usize,
+    pub mean_relative_error: f64,
+    pub median_relative_error: f64,
+    pub p95_relative_error: f64,
+    pub max_relative_error: f64,
+}
+
+/// Whether depth `z` (the Z channel: 0 where the camera ray hit nothing) is a surface.
+fn is_surface(z: f32) -> bool {
+    z.is_finite() && z > 0.0
+}
+
+/// Compares the block averages of two luminance images (see
+/// [`BlockComparison`]); `depth` from whichever image has a Z channel.
+#[must_use]
+pub fn compare_blocks(
+    test: &[f64],
+    reference: &[f64],
+    depth: Option<&[f32]>,
+    width: usize,
+    height: usize,
+    size: usize,
+) -> BlockComparison {
+    let size = size.max(1);
+    let mut errors = Vec::new();
+    let mut skipped = 0;
+    for by in 0..height / size {
+        for bx in 0..width / size {
+            let pixels = || (0..size).flat_map(move |y| (0..size).map(move |x| (bx * size + x, by * size + y)));
+            let silhouette = depth.is_some_and(|z| {
+                let at = |x: usize, y: usize| z[y * width + x];
+                pixels().any(|(x, y)| {
+                    let here = at(x, y);
+                    let jump = |other: f32| !is_surface(other) || (other - here).abs() > 0.1 * here.min(other);
+                    !is_surface(here)
+                        || (x + 1 < (bx + 1) * size && jump(at(x + 1, y)))
+                        || (y + 1 < (by + 1) * size && jump(at(x, y + 1)))
+                })
+            });
+            if silhouette {
+                skipped += 1;
+                continue;
+            }
+            let mean = |image: &[f64]| pixels().map(|(x, y)| image[y * width + x]).sum::<f64>() / (size * size) as f64;
+            let (t, r) = (mean(test), mean(reference));
+            errors.push((t - r).abs() / r.max(f64::MIN_POSITIVE));
+        }
+    }
+    let mut sorted = errors.clone();
+    sorted.sort_by(f64::total_cmp);
+    let quantile = |q: f64| sorted.get(((q * (sorted.len() as f64 - 1.0)).round()) as usize).copied().unwrap_or(0.0);
+    BlockComparison {
+        size,
+        blocks: errors.len(),
+        skipped,
+        mean_relative_error: errors.iter().sum::<f64>() / errors.len().max(1) as f64,
+        median_relative_error: quantile(0.5),
+        p95_relative_error: quantile(0.95),
+        max_relative_error: sorted.last().copied().unwrap_or(0.0),
+    }
 }
 
 /// Per-pixel relative errors and the summary.
@@ -51,7 +130,9 @@ fn luminances(image: &ExrImage, path: &Path) -> Result<Vec<DVec3>, OutputError> 
     Ok(r.iter().zip(g).zip(b).map(|((&r, &g), &b)| DVec3::new(f64::from(r), f64::from(g), f64::from(b))).collect())
 }
 
-pub fn compare_files(test: &Path, reference: &Path) -> Result<ComparisonResult, OutputError> {
+/// Compares two EXRs' R, G and B; with `blocks`, also their block averages
+/// (silhouettes found from the Z channel of the test image, else of the reference).
+pub fn compare_files(test: &Path, reference: &Path, blocks: Option<usize>) -> Result<ComparisonResult, OutputError> {
     let (t, r) = (read_exr(test)?, read_exr(reference)?);
     let window = |i: &ExrImage| [i64::from(i.x0), i64::from(i.y0), i.width as i64, i.height as i64];
     if window(&t) != window(&r) {
@@ -62,7 +143,16 @@ pub fn compare_files(test: &Path, reference: &Path) -> Result<ComparisonResult, 
             reference_window: window(&r),
         });
     }
-    Ok(compare_rgb(&luminances(&t, test)?, &luminances(&r, reference)?, t.width, t.height))
+    let mut result = compare_rgb(&luminances(&t, test)?, &luminances(&r, reference)?, t.width, t.height);
+    if let Some(size) = blocks {
+        let depth = t.channel(test, "Z").or_else(|_| r.channel(reference, "Z")).ok();
+        let lum = |i: &ExrImage, p: &Path| -> Result<Vec<f64>, OutputError> {
+            Ok(luminances(i, p)?.into_iter().map(luminance64).collect())
+        };
+        result.summary.blocks =
+            Some(compare_blocks(&lum(&t, test)?, &lum(&r, reference)?, depth, t.width, t.height, size));
+    }
+    Ok(result)
 }
 
 /// Compares two RGB images of the same size.
@@ -95,6 +185,9 @@ pub fn compare_rgb(test: &[DVec3], reference: &[DVec3], width: usize, height: us
         fraction_above_5_percent: above(0.05),
         rmse: (squared / n as f64).sqrt(),
         relative_mse,
+        mean_luminance: lt.iter().sum::<f64>() / n as f64,
+        reference_mean_luminance: mean_ref,
+        blocks: None,
     };
     let difference = test.iter().zip(reference).map(|(a, b)| (*a - *b).abs()).collect();
     ComparisonResult { summary, relative, width, height, difference }

@@ -6,11 +6,16 @@ use std::collections::BTreeMap;
 
 use serde::Deserialize;
 
-#[derive(Debug, Clone, Deserialize)]
+#[derive(Debug, Clone, Default, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct SceneFile {
-    pub film: FilmSpec,
-    pub camera: CameraSpec,
+    /// Required unless a glTF file is imported (then 640 pixels wide at its
+    /// camera's aspect ratio, 1 sample per pixel).
+    pub film: Option<FilmSpec>,
+    /// Required unless an imported glTF file has a camera.
+    pub camera: Option<CameraSpec>,
+    /// A glTF 2.0 file whose meshes, materials, lights and cameras join the scene.
+    pub gltf: Option<GltfSpec>,
     #[serde(default)]
     pub materials: BTreeMap<String, MaterialSpec>,
     /// Each a table with a `type`; parsed into [`ShapeSpec`] by
@@ -27,6 +32,41 @@ pub struct SceneFile {
     pub environment: Option<EnvironmentSpec>,
     /// Indirect light by instant radiosity.
     pub indirect: Option<IndirectSpec>,
+}
+
+/// `[gltf]`: what to import from a glTF 2.0 file, and how.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct GltfSpec {
+    /// The `.gltf` or `.glb` file, relative to the scene file.
+    pub file: String,
+    /// The camera (by its glTF name) to render through; the first in the
+    /// node hierarchy when absent.
+    pub camera: Option<String>,
+    /// Luminous efficacy dividing KHR_lights_punctual's photometric units
+    /// (candela, lux) into radiometric ones (W/sr, W/m^2): 683 lm/W, as
+    /// Blender's exporter and importer use in their "Standard" mode.
+    #[serde(default = "lumens_per_watt")]
+    pub lumens_per_watt: f32,
+    /// Oriented lights each emissive mesh primitive becomes.
+    #[serde(default = "emitter_samples")]
+    pub emitter_samples: u32,
+}
+
+fn lumens_per_watt() -> f32 {
+    683.0
+}
+
+fn emitter_samples() -> u32 {
+    256
+}
+
+impl GltfSpec {
+    /// Importing `file` with every default.
+    #[must_use]
+    pub fn file(file: String) -> Self {
+        Self { file, camera: None, lumens_per_watt: lumens_per_watt(), emitter_samples: emitter_samples() }
+    }
 }
 
 #[derive(Debug, Clone, Deserialize)]

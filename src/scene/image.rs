@@ -25,6 +25,12 @@ pub enum ImageError {
     /// The PNG decoder rejected the file (not a PNG, truncated, corrupt).
     #[error("not a readable PNG: {0}")]
     Png(#[source] png::DecodingError),
+    /// The JPEG decoder rejected the file (truncated, corrupt, unsupported).
+    #[error("not a readable JPEG: {0}")]
+    Jpeg(#[source] jpeg_decoder::Error),
+    /// Neither PNG nor JPEG.
+    #[error("not a PNG or JPEG image")]
+    UnknownFormat,
     /// The EXR reader rejected the file (not an EXR, truncated, no R, G and B).
     #[error("cannot read EXR: {0}")]
     Exr(#[source] exr::error::Error),
@@ -40,7 +46,47 @@ pub enum ImageError {
 /// its sRGB values to linear.
 pub fn read_srgb_png(path: &Path) -> Result<RgbImage, ImageError> {
     let file = std::fs::File::open(path).map_err(ImageError::Open)?;
-    let mut decoder = png::Decoder::new(std::io::BufReader::new(file));
+    decode_png(std::io::BufReader::new(file))
+}
+
+/// Decodes an in-memory PNG or JPEG (told apart by their signatures) from
+/// sRGB to linear.
+pub fn decode_srgb(bytes: &[u8]) -> Result<RgbImage, ImageError> {
+    if bytes.starts_with(b"\x89PNG") {
+        decode_png(std::io::Cursor::new(bytes))
+    } else if bytes.starts_with(&[0xff, 0xd8]) {
+        decode_jpeg(bytes)
+    } else {
+        Err(ImageError::UnknownFormat)
+    }
+}
+
+fn decode_jpeg(bytes: &[u8]) -> Result<RgbImage, ImageError> {
+    let mut decoder = jpeg_decoder::Decoder::new(std::io::Cursor::new(bytes));
+    // Refuse absurd headers before allocating for them (64 MiB of pixels).
+    decoder.set_max_decoding_buffer_size(64 << 20);
+    let pixels = decoder.decode().map_err(ImageError::Jpeg)?;
+    let info = decoder.info().ok_or(ImageError::Empty)?;
+    let (width, height) = (usize::from(info.width), usize::from(info.height));
+    let channels = match info.pixel_format {
+        jpeg_decoder::PixelFormat::L8 => 1,
+        jpeg_decoder::PixelFormat::RGB24 => 3,
+        jpeg_decoder::PixelFormat::L16 | jpeg_decoder::PixelFormat::CMYK32 => return Err(ImageError::UnknownFormat),
+    };
+    if width * height == 0 || pixels.len() < width * height * channels {
+        return Err(ImageError::Empty);
+    }
+    let texels = (0..width * height)
+        .map(|p| {
+            let c = |k: usize| srgb_to_linear(f32::from(pixels[p * channels + k.min(channels - 1)]) / 255.0);
+            Vec3::new(c(0), c(1), c(2))
+        })
+        .collect();
+    Ok(RgbImage { width, height, texels })
+}
+
+fn decode_png(reader: impl std::io::Read) -> Result<RgbImage, ImageError> {
+    let mut decoder = png::Decoder::new(reader);
     // Expand palettes and low bit depths to 8 bits; keep 16-bit as is.
     decoder.set_transformations(png::Transformations::EXPAND);
     let mut reader = decoder.read_info().map_err(ImageError::Png)?;

@@ -4,17 +4,18 @@
 
 use std::f32::consts::PI;
 
-use glam::{Vec2, Vec3};
+use glam::{Affine2, Vec2, Vec3};
 
 use super::texture::Texture;
 
 #[derive(Debug, Clone)]
 pub enum Albedo {
     Constant(Vec3),
-    /// Index into `Scene::textures`, and uv repeats.
+    /// Index into `Scene::textures`, and the map from the mesh's uv to the
+    /// texture's (repeats, and for glTF its v axis and KHR_texture_transform).
     Texture {
         texture: usize,
-        scale: Vec2,
+        transform: Affine2,
     },
 }
 
@@ -30,6 +31,9 @@ pub struct Material {
     pub mirror: Vec3,
     /// Emitted radiance from the front side, W/(m^2 sr) (area-light emitters).
     pub emission: Vec3,
+    /// Whether `emission` leaves the back side too (glTF's double-sided
+    /// emissive materials, as Cycles renders them).
+    pub emits_both_sides: bool,
 }
 
 impl Material {
@@ -38,7 +42,7 @@ impl Material {
     pub fn albedo_at(&self, uv: Vec2, textures: &[Texture]) -> Vec3 {
         match &self.albedo {
             Albedo::Constant(c) => *c,
-            Albedo::Texture { texture, scale } => textures[*texture].lookup(uv * *scale),
+            Albedo::Texture { texture, transform } => textures[*texture].lookup(transform.transform_point2(uv)),
         }
     }
 

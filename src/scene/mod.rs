@@ -8,6 +8,7 @@ pub mod camera;
 pub mod environment;
 pub mod error;
 pub mod file;
+pub mod gltf;
 pub mod image;
 pub mod material;
 pub mod mesh;
@@ -16,7 +17,7 @@ pub mod texture;
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
-use glam::{Vec2, Vec3};
+use glam::{Affine2, Vec2, Vec3};
 
 pub use camera::Camera;
 pub use environment::{Environment, EnvironmentMap};
@@ -60,8 +61,9 @@ pub enum LightSource {
     /// centres of the parallelogram corner + s u + t v.
     Grid { corner: Vec3, u: Vec3, v: Vec3, count: [u32; 2], intensity: Vec3 },
     /// An area emitter: the mesh `meshes[mesh]` (visible, emitting `radiance`
-    /// W/(m^2 sr) from the side its winding faces) as `samples` oriented lights.
-    Area { mesh: usize, radiance: Vec3, samples: u32, seed: u64 },
+    /// W/(m^2 sr) from the side its winding faces, and from the other too when
+    /// `both_sides`) as `samples` oriented lights per side.
+    Area { mesh: usize, radiance: Vec3, samples: u32, seed: u64, both_sides: bool },
     /// The sun: `irradiance` W/m^2 from `direction` (towards the sun, any length),
     /// as `samples` directional lights over a disc of `angular_radius_degrees`.
     Sun { direction: Vec3, irradiance: Vec3, angular_radius_degrees: f32, samples: u32, seed: u64 },
@@ -91,6 +93,29 @@ pub struct Scene {
     /// environment map. What a fresh clone must contain to render it, and
     /// what a cached reference render depends on.
     pub inputs: Vec<PathBuf>,
+    /// What the scene asks for that is rendered otherwise (a glTF alpha
+    /// mask drawn opaque, a skin in its bind pose), one line each with the
+    /// file and location: the commands print them.
+    pub warnings: Vec<String>,
+}
+
+/// Film width of a glTF file rendered without a TOML, pixels.
+pub const DEFAULT_GLTF_WIDTH: u32 = 640;
+
+/// Checks a camera (`field` names it in messages).
+fn check_camera(v: &Validator<'_>, cam: &file::CameraSpec, field: &str) -> Result<(), SceneError> {
+    let f = |name: &str| format!("{field}.{name}");
+    let eye = v.point(cam.eye, &f("eye"))?;
+    let look_at = v.point(cam.look_at, &f("look_at"))?;
+    let up = v.point(cam.up, &f("up"))?;
+    v.check(cam.fov_y.is_finite() && cam.fov_y > 0.0 && cam.fov_y < 180.0, &f("fov_y"), || {
+        format!("must be between 0 and 180 degrees (exclusive), got {}", cam.fov_y)
+    })?;
+    let forward = look_at - eye;
+    v.check(forward.length() > 0.0, &f("look_at"), || "must differ from the eye".into())?;
+    v.check(forward.normalize().cross(up).length() > 1e-6, &f("up"), || {
+        "must not be parallel to the viewing direction".into()
+    })
 }
 
 /// Instant-radiosity settings of a scene.
@@ -123,6 +148,7 @@ fn add_emitter(
         exponent: 0.0,
         mirror: Vec3::ZERO,
         emission: radiance,
+        emits_both_sides: false,
     });
     meshes.push(mesh);
     meshes.len() - 1
@@ -132,14 +158,53 @@ impl Scene {
     /// Reads, parses and validates a scene file (`.json` as JSON, anything
     /// else as TOML).
     pub fn load(path: &Path) -> Result<Self, SceneError> {
-        let text = std::fs::read(path).map_err(|e| SceneError::new(path, "file", format!("cannot read scene: {e}")))?;
-        let text = String::from_utf8(text).map_err(|e| {
-            SceneError::new(path, format!("byte {}", e.utf8_error().valid_up_to()), "the scene file is not UTF-8 text")
-        })?;
-        let is_json = path.extension().is_some_and(|e| e.eq_ignore_ascii_case("json"));
-        let spec = if is_json { parse_json(path, &text)? } else { parse_toml(path, &text)? };
+        Self::load_with_camera(path, None)
+    }
+
+    /// [`Scene::load`], rendering through the glTF camera named `camera`
+    /// (the `--camera` option) instead of the scene's default one. A `.gltf`
+    /// or `.glb` file is a scene by itself: the import of `[gltf]` with
+    /// every default.
+    pub fn load_with_camera(path: &Path, camera: Option<&str>) -> Result<Self, SceneError> {
+        let extension = |x: &str| path.extension().is_some_and(|e| e.eq_ignore_ascii_case(x));
+        let mut spec = if extension("gltf") || extension("glb") {
+            let file = path.file_name().map_or_else(String::new, |f| f.to_string_lossy().into_owned());
+            SceneFile { gltf: Some(file::GltfSpec::file(file)), ..SceneFile::default() }
+        } else {
+            let text =
+                std::fs::read(path).map_err(|e| SceneError::new(path, "file", format!("cannot read scene: {e}")))?;
+            let text = String::from_utf8(text).map_err(|e| {
+                SceneError::new(
+                    path,
+                    format!("byte {}", e.utf8_error().valid_up_to()),
+                    "the scene file is not UTF-8 text",
+                )
+            })?;
+            if extension("json") {
+                parse_json(path, &text)?
+            } else {
+                parse_toml(path, &text)?
+            }
+        };
+        if let Some(name) = camera {
+            let Some(gltf) = spec.gltf.as_mut() else {
+                return Err(SceneError::new(
+                    path,
+                    "--camera",
+                    "picks a glTF camera, but the scene imports no glTF file",
+                ));
+            };
+            gltf.camera = Some(name.to_string());
+            // The TOML's own camera would win over the one asked for.
+            spec.camera = None;
+        }
+        let imports_itself =
+            spec.gltf.as_ref().is_some_and(|g| path.file_name() == Some(std::ffi::OsStr::new(&g.file)))
+                && (extension("gltf") || extension("glb"));
         let mut scene = Self::from_spec(path, spec)?;
-        scene.inputs.insert(0, path.to_path_buf());
+        if !imports_itself {
+            scene.inputs.insert(0, path.to_path_buf());
+        }
         Ok(scene)
     }
 
@@ -149,24 +214,21 @@ impl Scene {
         let v = Validator { file: path };
         let base = path.parent().unwrap_or(Path::new("."));
 
-        let film = Film { width: spec.film.width, height: spec.film.height, spp: spec.film.spp };
-        v.check(film.width >= 1, "film.width", || "must be at least 1".into())?;
-        v.check(film.height >= 1, "film.height", || "must be at least 1".into())?;
-        v.check(film.spp >= 1, "film.spp", || "must be at least 1".into())?;
-        check_resolution(path, "film", film.width, film.height)?;
-
-        let cam = &spec.camera;
-        let eye = v.point(cam.eye, "camera.eye")?;
-        let look_at = v.point(cam.look_at, "camera.look_at")?;
-        let up = v.point(cam.up, "camera.up")?;
-        v.check(cam.fov_y.is_finite() && cam.fov_y > 0.0 && cam.fov_y < 180.0, "camera.fov_y", || {
-            format!("must be between 0 and 180 degrees (exclusive), got {}", cam.fov_y)
-        })?;
-        let forward = look_at - eye;
-        v.check(forward.length() > 0.0, "camera.look_at", || "must differ from camera.eye".into())?;
-        v.check(forward.normalize().cross(up).length() > 1e-6, "camera.up", || {
-            "must not be parallel to the viewing direction".into()
-        })?;
+        if spec.gltf.is_none() {
+            v.check(spec.film.is_some(), "film", || "missing: give [film] (or import a glTF file with [gltf])".into())?;
+            v.check(spec.camera.is_some(), "camera", || {
+                "missing: give [camera] (or import a glTF file with a camera, with [gltf])".into()
+            })?;
+        }
+        if let Some(f) = &spec.film {
+            v.check(f.width >= 1, "film.width", || "must be at least 1".into())?;
+            v.check(f.height >= 1, "film.height", || "must be at least 1".into())?;
+            v.check(f.spp >= 1, "film.spp", || "must be at least 1".into())?;
+            check_resolution(path, "film", f.width, f.height)?;
+        }
+        if let Some(cam) = &spec.camera {
+            check_camera(&v, cam, "camera")?;
+        }
 
         let mut inputs = Vec::new();
         let mut textures = Vec::new();
@@ -190,7 +252,7 @@ impl Scene {
                     let image = image::read_srgb_png(&texture_path)
                         .map_err(|e| SceneError::new(&texture_path, field("texture"), e.to_string()))?;
                     textures.push(Texture::from_image(image));
-                    Albedo::Texture { texture: textures.len() - 1, scale }
+                    Albedo::Texture { texture: textures.len() - 1, transform: Affine2::from_scale(scale) }
                 }
             };
             let specular = v.unit_rgb(m.specular, &field("specular"))?;
@@ -206,6 +268,7 @@ impl Scene {
                 exponent: m.exponent,
                 mirror,
                 emission: Vec3::ZERO,
+                emits_both_sides: false,
             });
         }
 
@@ -338,7 +401,13 @@ impl Scene {
                     let radiance = v.non_negative_rgb(*radiance, &field("radiance"))?;
                     v.sample_count(*samples, &field("samples"))?;
                     let mesh = add_emitter(&mut meshes, &mut materials, Mesh::quad(c, u, w, 0), radiance, i as u64);
-                    lights.push(LightSource::Area { mesh, radiance, samples: *samples, seed: i as u64 });
+                    lights.push(LightSource::Area {
+                        mesh,
+                        radiance,
+                        samples: *samples,
+                        seed: i as u64,
+                        both_sides: false,
+                    });
                 }
                 LightSpec::AreaMesh(AreaMeshSpec { file, scale, translate, radiance, samples }) => {
                     v.check(scale.is_finite() && *scale > 0.0, &field("scale"), || {
@@ -360,7 +429,13 @@ impl Scene {
                         ));
                     }
                     let mesh = add_emitter(&mut meshes, &mut materials, mesh, radiance, i as u64);
-                    lights.push(LightSource::Area { mesh, radiance, samples: *samples, seed: i as u64 });
+                    lights.push(LightSource::Area {
+                        mesh,
+                        radiance,
+                        samples: *samples,
+                        seed: i as u64,
+                        both_sides: false,
+                    });
                 }
                 LightSpec::Sun(SunSpec { direction, irradiance, angular_radius, samples }) => {
                     let d = v.point(*direction, &field("direction"))?;
@@ -382,6 +457,42 @@ impl Scene {
                 }
             }
         }
+
+        let mut warnings = Vec::new();
+        let gltf_camera = match &spec.gltf {
+            None => None,
+            Some(g) => {
+                let parts = gltf::Parts {
+                    meshes: &mut meshes,
+                    materials: &mut materials,
+                    textures: &mut textures,
+                    lights: &mut lights,
+                    inputs: &mut inputs,
+                    warnings: &mut warnings,
+                };
+                gltf::import(path, base, g, spec.camera.is_none(), parts)?
+            }
+        };
+        let (camera_spec, aspect_ratio) = match (&spec.camera, gltf_camera) {
+            (Some(c), _) => (c.clone(), None),
+            (None, Some(c)) => {
+                let file = spec.gltf.as_ref().map_or("", |g| g.file.as_str());
+                check_camera(&v, &c.spec, &format!("gltf.file ({file}) camera"))?;
+                (c.spec, c.aspect_ratio)
+            }
+            (None, None) => {
+                return Err(v.error("camera", "missing: the TOML gives no [camera] and the glTF file has no camera"));
+            }
+        };
+        let film = match &spec.film {
+            Some(f) => Film { width: f.width, height: f.height, spp: f.spp },
+            // The glTF camera's aspect ratio at 640 pixels wide.
+            None => {
+                let height =
+                    aspect_ratio.map_or(480.0, |a| (DEFAULT_GLTF_WIDTH as f32 / a).round().clamp(1.0, 16384.0));
+                Film { width: DEFAULT_GLTF_WIDTH, height: height as u32, spp: 1 }
+            }
+        };
 
         let environment = match &spec.environment {
             None => None,
@@ -427,7 +538,7 @@ impl Scene {
         Ok(Self {
             path: path.to_path_buf(),
             film,
-            camera_spec: spec.camera.clone(),
+            camera_spec,
             materials,
             textures,
             meshes,
@@ -437,6 +548,7 @@ impl Scene {
             indirect,
             distance_clamp: clamp,
             inputs,
+            warnings,
         })
     }
 
@@ -471,7 +583,8 @@ impl Scene {
             .map(|source| match *source {
                 LightSource::Point { .. } | LightSource::Spot { .. } => 1,
                 LightSource::Grid { count, .. } => u64::from(count[0]) * u64::from(count[1]),
-                LightSource::Area { samples, .. } | LightSource::Sun { samples, .. } => u64::from(samples),
+                LightSource::Area { samples, both_sides, .. } => u64::from(samples) * if both_sides { 2 } else { 1 },
+                LightSource::Sun { samples, .. } => u64::from(samples),
             })
             .sum();
         sources + self.environment.as_ref().map_or(0, |e| u64::from(e.samples))

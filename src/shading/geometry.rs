@@ -107,7 +107,7 @@ impl<'s> Geometry<'s> {
             kd,
             material,
             distance: hit.t * ray.direction.length(),
-            emitted: if front { material.emission } else { Vec3::ZERO },
+            emitted: if front || material.emits_both_sides { material.emission } else { Vec3::ZERO },
             epsilon: self.ray_epsilon,
             min_distance: self.ray_epsilon.max(self.distance_clamp),
         }

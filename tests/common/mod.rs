@@ -6,6 +6,8 @@ use std::process::{Command, Output};
 
 pub use lightcuts::output::read::{read_exr, ExrImage};
 
+pub mod gltf;
+
 /// A fresh temporary directory (tempfile's), removed on drop, with helpers
 /// for the files a test writes into it.
 pub struct TempDir(tempfile::TempDir);

@@ -103,7 +103,7 @@ pub fn run(args: &BenchArgs) -> Result<(), CliError> {
 }
 
 fn rays(args: &RaysArgs) -> Result<(), CliError> {
-    let scene = crate::scene::Scene::load(&args.scene)?;
+    let scene = args.pass.load(&args.scene)?;
     let settings = args.pass.settings(&scene, args.spp)?;
     let mode = args.mode.mode(settings.spp)?;
     if mode.cut().is_none() {

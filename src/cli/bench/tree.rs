@@ -198,6 +198,7 @@ pub fn measure_quality(
         exponent: 0.0,
         mirror: Vec3::ZERO,
         emission: Vec3::ZERO,
+        emits_both_sides: false,
     };
     let points = shading_points(&material, 1000);
     let device = Device::try_new()?;

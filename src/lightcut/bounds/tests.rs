@@ -75,6 +75,7 @@ fn material(rng: &mut Rng) -> Material {
         exponent: exponents[rng.below(exponents.len() as u64) as usize],
         mirror: Vec3::ZERO,
         emission: Vec3::ZERO,
+        emits_both_sides: false,
     }
 }
 
@@ -242,6 +243,7 @@ fn a_point_inside_the_box_gets_a_finite_bound_above_every_light() {
         exponent: 0.0,
         mirror: Vec3::ZERO,
         emission: Vec3::ZERO,
+        emits_both_sides: false,
     };
     let mut rng = Rng::seeded(3);
     let sp = surface(&mut rng, &m);

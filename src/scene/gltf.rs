@@ -1,0 +1,784 @@
+//! glTF 2.0 import (`.gltf` with external or embedded buffers, and `.glb`):
+//! the default scene's meshes, materials, KHR_lights_punctual lights,
+//! emissive meshes (as area lights) and cameras, mapped onto the renderer's
+//! model as docs/scene-format.md tabulates. Buffers, images and accessors are
+//! read here rather than by the `gltf` crate's importer so that every error
+//! names the file and the JSON location (`meshes[2].primitives[0].indices`).
+
+use std::collections::HashMap;
+use std::f32::consts::FRAC_PI_4;
+use std::path::{Path, PathBuf};
+
+use base64::Engine as _;
+use glam::{Affine2, Mat2, Mat3, Mat4, Vec2, Vec3, Vec4};
+use gltf::accessor::{DataType, Dimensions};
+use gltf::json::extensions::scene::khr_lights_punctual::{Light as LightJson, Type as LightType};
+use gltf::json::validation::Checked;
+use gltf::mesh::Mode;
+
+use super::file::{CameraSpec, GltfSpec};
+use super::image::{self, RgbImage};
+use super::material::{Albedo, Material};
+use super::mesh::Mesh;
+use super::texture::Texture;
+use super::{within_limits, LightSource, SceneError, MAX_COORDINATE, MAX_EMITTER_SAMPLES};
+
+/// Extensions whose absence from the renderer changes nothing it draws
+/// (when merely used) and which it implements; anything else listed in
+/// `extensionsRequired` is refused by name.
+const IMPLEMENTED: [&str; 4] =
+    ["KHR_lights_punctual", "KHR_materials_emissive_strength", "KHR_materials_specular", "KHR_texture_transform"];
+
+/// Most vertices, indices or elements one accessor may hold (2^28): beyond
+/// it a count is a corrupt file, not a scene.
+const MAX_ACCESSOR_COUNT: usize = 1 << 28;
+
+/// Deepest node hierarchy followed.
+const MAX_DEPTH: usize = 1024;
+
+/// Where the imported parts go: the scene's own lists, which the TOML's
+/// parts may already fill (indices are into these lists).
+pub struct Parts<'a> {
+    pub meshes: &'a mut Vec<Mesh>,
+    pub materials: &'a mut Vec<Material>,
+    pub textures: &'a mut Vec<Texture>,
+    pub lights: &'a mut Vec<LightSource>,
+    pub inputs: &'a mut Vec<PathBuf>,
+    pub warnings: &'a mut Vec<String>,
+}
+
+/// A perspective camera found in the file.
+#[derive(Debug, Clone)]
+pub struct GltfCamera {
+    pub spec: CameraSpec,
+    /// Width over height, when the file gives one.
+    pub aspect_ratio: Option<f32>,
+}
+
+/// Imports `spec.file` (relative to `base`) into `parts`; returns the chosen
+/// camera when `want_camera` (the TOML gives none).
+pub fn import(
+    scene_file: &Path,
+    base: &Path,
+    spec: &GltfSpec,
+    want_camera: bool,
+    parts: Parts<'_>,
+) -> Result<Option<GltfCamera>, SceneError> {
+    let path = base.join(&spec.file);
+    parts.inputs.push(path.clone());
+    let check = |ok: bool, field: &str, message: String| {
+        if ok {
+            Ok(())
+        } else {
+            Err(SceneError::new(scene_file, format!("gltf.{field}"), message))
+        }
+    };
+    check(
+        spec.lumens_per_watt.is_finite() && spec.lumens_per_watt > 0.0,
+        "lumens_per_watt",
+        format!("must be finite and > 0, got {}", spec.lumens_per_watt),
+    )?;
+    check(
+        (1..=MAX_EMITTER_SAMPLES).contains(&spec.emitter_samples),
+        "emitter_samples",
+        format!("must be between 1 and {MAX_EMITTER_SAMPLES}, got {}", spec.emitter_samples),
+    )?;
+    let bytes = std::fs::read(&path)
+        .map_err(|e| SceneError::new(scene_file, "gltf.file", format!("cannot read '{}': {e}", path.display())))?;
+    let gltf = parse(&path, &bytes)?;
+    let mut importer = Importer {
+        file: &path,
+        base: path.parent().unwrap_or(Path::new(".")).to_path_buf(),
+        doc: &gltf.document,
+        buffers: Vec::new(),
+        images: HashMap::new(),
+        materials: HashMap::new(),
+        spec,
+        parts,
+        skipped_primitives: 0,
+        emitters: 0,
+    };
+    importer.load_buffers(gltf.blob.as_deref())?;
+    importer.import_scene(want_camera)
+}
+
+/// Parses and validates the JSON (or GLB), refusing required extensions the
+/// renderer does not implement by name.
+fn parse(path: &Path, bytes: &[u8]) -> Result<gltf::Gltf, SceneError> {
+    let gltf = gltf::Gltf::from_slice_without_validation(bytes).map_err(|e| {
+        let location = match &e {
+            gltf::Error::Binary(_) => "GLB container".to_string(),
+            gltf::Error::Deserialize(d) => format!("line {}, column {}", d.line(), d.column()),
+            _ => "file".to_string(),
+        };
+        SceneError::new(path, location, format!("not a readable glTF 2.0 file: {e}"))
+    })?;
+    for (i, name) in gltf.document.extensions_required().enumerate() {
+        if !IMPLEMENTED.contains(&name) {
+            return Err(SceneError::new(
+                path,
+                format!("extensionsRequired[{i}]"),
+                format!(
+                    "the file requires {name}, which this renderer does not implement (it implements {})",
+                    IMPLEMENTED.join(", ")
+                ),
+            ));
+        }
+    }
+    let root = gltf.document.clone().into_json();
+    // gltf-json 1.4.1's validator indexes the POSITION accessor before
+    // checking that it exists (a panic on a hostile file): check it first.
+    for (m, mesh) in root.meshes.iter().enumerate() {
+        for (p, primitive) in mesh.primitives.iter().enumerate() {
+            let position = primitive.attributes.get(&Checked::Valid(gltf::Semantic::Positions));
+            if let Some(index) = position.filter(|i| i.value() >= root.accessors.len()) {
+                return Err(SceneError::new(
+                    path,
+                    format!("meshes[{m}].primitives[{p}].attributes.POSITION"),
+                    format!("accessor {} does not exist (the file has {})", index.value(), root.accessors.len()),
+                ));
+            }
+        }
+    }
+    gltf::Document::from_json(root).map_err(|e| match e {
+        gltf::Error::Validation(errors) => {
+            let (location, error) = &errors[0];
+            let more = if errors.len() > 1 { format!(" (and {} more)", errors.len() - 1) } else { String::new() };
+            SceneError::new(path, location.to_string(), format!("invalid: {error}{more}"))
+        }
+        other => SceneError::new(path, "file", other.to_string()),
+    })?;
+    Ok(gltf)
+}
+
+struct Importer<'a, 'p> {
+    file: &'a Path,
+    base: PathBuf,
+    doc: &'a gltf::Document,
+    buffers: Vec<Vec<u8>>,
+    /// Decoded images by glTF image index (linear RGB).
+    images: HashMap<usize, RgbImage>,
+    /// The scene's material index of each glTF material (None: the default).
+    materials: HashMap<Option<usize>, usize>,
+    spec: &'a GltfSpec,
+    parts: Parts<'p>,
+    skipped_primitives: usize,
+    emitters: u64,
+}
+
+impl Importer<'_, '_> {
+    fn error(&self, location: impl Into<String>, message: impl Into<String>) -> SceneError {
+        SceneError::new(self.file, location, message)
+    }
+
+    fn warn(&mut self, location: &str, message: &str) {
+        self.parts.warnings.push(format!("{}: {location}: {message}", self.file.display()));
+    }
+
+    /// Reads every buffer: the GLB's BIN chunk, a base64 `data:` URI or a file.
+    fn load_buffers(&mut self, blob: Option<&[u8]>) -> Result<(), SceneError> {
+        for buffer in self.doc.buffers() {
+            let location = format!("buffers[{}]", buffer.index());
+            let data = match buffer.source() {
+                gltf::buffer::Source::Bin => blob
+                    .ok_or_else(|| {
+                        self.error(&location, "refers to the GLB's BIN chunk, which the file does not have")
+                    })?
+                    .to_vec(),
+                gltf::buffer::Source::Uri(uri) => self.read_uri(uri, &format!("{location}.uri"))?,
+            };
+            if data.len() < buffer.length() {
+                return Err(self.error(
+                    format!("{location}.byteLength"),
+                    format!("is {} but the data holds only {} bytes", buffer.length(), data.len()),
+                ));
+            }
+            self.buffers.push(data);
+        }
+        Ok(())
+    }
+
+    /// The bytes a URI names: a base64 `data:` URI, or a file relative to the glTF file.
+    fn read_uri(&mut self, uri: &str, location: &str) -> Result<Vec<u8>, SceneError> {
+        if let Some(rest) = uri.strip_prefix("data:") {
+            let Some((_, payload)) = rest.split_once(";base64,") else {
+                return Err(self.error(location, "a data: URI must be base64 (';base64,')"));
+            };
+            return base64::engine::general_purpose::STANDARD
+                .decode(payload)
+                .map_err(|e| self.error(location, format!("bad base64 data: {e}")));
+        }
+        if let Some((scheme, _)) = uri.split_once("://") {
+            return Err(
+                self.error(location, format!("'{scheme}://' URIs are not supported: give a relative file path"))
+            );
+        }
+        let path = self.base.join(percent_decode(uri));
+        self.parts.inputs.push(path.clone());
+        std::fs::read(&path).map_err(|e| self.error(location, format!("cannot read '{}': {e}", path.display())))
+    }
+
+    fn import_scene(&mut self, want_camera: bool) -> Result<Option<GltfCamera>, SceneError> {
+        let Some(scene) = self.doc.default_scene().or_else(|| self.doc.scenes().next()) else {
+            return Err(self.error("scenes", "the file has no scene to render"));
+        };
+        let mut cameras = Vec::new();
+        let mut visited = vec![false; self.doc.nodes().len()];
+        // Depth-first, with an explicit stack (a hostile file cannot
+        // overflow ours) and each node visited once (no cycles).
+        let mut stack: Vec<(gltf::Node<'_>, Mat4, usize)> =
+            scene.nodes().map(|n| (n, Mat4::IDENTITY, 0)).collect::<Vec<_>>().into_iter().rev().collect();
+        while let Some((node, parent, depth)) = stack.pop() {
+            let location = format!("nodes[{}]", node.index());
+            if std::mem::replace(&mut visited[node.index()], true) {
+                return Err(self
+                    .error(&location, "is reached twice in the node hierarchy (a cycle, or a child of two parents)"));
+            }
+            if depth > MAX_DEPTH {
+                return Err(self.error(&location, format!("the node hierarchy is deeper than {MAX_DEPTH}")));
+            }
+            let local = Mat4::from_cols_array_2d(&node.transform().matrix());
+            let field = if node.transform().matrix() == Mat4::IDENTITY.to_cols_array_2d() { "" } else { ".matrix" };
+            if !local.is_finite() {
+                return Err(self.error(format!("{location}{field}"), "the transform is not finite"));
+            }
+            let world = parent * local;
+            if !world.is_finite() || !within_limits(world.w_axis.truncate()) {
+                return Err(self.error(
+                    &location,
+                    format!("the world transform places it outside +/-{MAX_COORDINATE:e} m or is not finite"),
+                ));
+            }
+            if let Some(mesh) = node.mesh() {
+                if node.skin().is_some() {
+                    self.warn(&location, "has a skin: rendered in its bind pose");
+                }
+                self.import_mesh(&mesh, &world)?;
+            }
+            if let Some(camera) = node.camera() {
+                cameras.push((camera, world, location.clone()));
+            }
+            if let Some(light) = node.light() {
+                self.import_light(light.index(), &world)?;
+            }
+            for child in node.children().collect::<Vec<_>>().into_iter().rev() {
+                stack.push((child, world, depth + 1));
+            }
+        }
+        if self.skipped_primitives > 0 {
+            let n = self.skipped_primitives;
+            self.warn("meshes", &format!("{n} point or line primitive(s) skipped: only triangles are rendered"));
+        }
+        if !want_camera {
+            return Ok(None);
+        }
+        let chosen = match &self.spec.camera {
+            None => cameras.first(),
+            Some(name) => {
+                let found = cameras.iter().find(|(c, _, _)| c.name() == Some(name.as_str()));
+                if found.is_none() {
+                    let names: Vec<&str> = cameras.iter().filter_map(|(c, _, _)| c.name()).collect();
+                    return Err(self.error(
+                        "cameras",
+                        format!("no camera named '{name}' in the scene (it has: {})", list_or_none(&names)),
+                    ));
+                }
+                found
+            }
+        };
+        let Some((camera, world, location)) = chosen else { return Ok(None) };
+        let gltf::camera::Projection::Perspective(p) = camera.projection() else {
+            return Err(self.error(
+                format!("cameras[{}]", camera.index()),
+                "orthographic cameras are not supported yet: pick a perspective one (--camera) or give [camera] in a TOML",
+            ));
+        };
+        let eye = world.w_axis.truncate();
+        let forward = world.transform_vector3(Vec3::NEG_Z).normalize_or_zero();
+        let up = world.transform_vector3(Vec3::Y).normalize_or_zero();
+        let fov_y = p.yfov().to_degrees();
+        if forward == Vec3::ZERO || up == Vec3::ZERO || forward.cross(up).length() < 1e-6 {
+            return Err(self.error(location, "the camera's transform is degenerate (zero or sheared scale)"));
+        }
+        if !(fov_y.is_finite() && fov_y > 0.0 && fov_y < 180.0) {
+            return Err(self.error(
+                format!("cameras[{}].perspective.yfov", camera.index()),
+                format!("must be between 0 and pi, got {}", p.yfov()),
+            ));
+        }
+        let aspect_ratio = p.aspect_ratio().filter(|a| a.is_finite() && *a > 0.0);
+        Ok(Some(GltfCamera {
+            spec: CameraSpec { eye: eye.to_array(), look_at: (eye + forward).to_array(), up: up.to_array(), fov_y },
+            aspect_ratio,
+        }))
+    }
+
+    fn import_mesh(&mut self, mesh: &gltf::Mesh<'_>, world: &Mat4) -> Result<(), SceneError> {
+        let normal_matrix = Mat3::from_mat4(*world).inverse().transpose();
+        let mirrored = Mat3::from_mat4(*world).determinant() < 0.0;
+        for primitive in mesh.primitives() {
+            let location = format!("meshes[{}].primitives[{}]", mesh.index(), primitive.index());
+            let mode = primitive.mode();
+            if matches!(mode, Mode::Points | Mode::Lines | Mode::LineLoop | Mode::LineStrip) {
+                self.skipped_primitives += 1;
+                continue;
+            }
+            if primitive.morph_targets().next().is_some() {
+                self.warn(&location, "has morph targets: rendered without them (base shape)");
+            }
+            let Some(positions) = primitive.get(&gltf::Semantic::Positions) else {
+                return Err(self.error(format!("{location}.attributes"), "has no POSITION"));
+            };
+            let positions = self.read_floats::<3>(&positions, &format!("{location}.attributes.POSITION"))?;
+            let count = positions.len();
+            let indices = match primitive.indices() {
+                Some(a) => {
+                    let at = format!("{location}.indices");
+                    let indices = self.read_indices(&a, &at)?;
+                    if let Some(k) = indices.iter().position(|&i| i as usize >= count) {
+                        return Err(self.error(at, format!("index {k} is {}, past the {count} vertices", indices[k])));
+                    }
+                    indices
+                }
+                None => (0..count as u32).collect(),
+            };
+            let mut triangles = triangulate(mode, &indices);
+            if mirrored {
+                // A mirroring transform turns the winding around; keep the
+                // front (emitting) side where the file's author saw it.
+                for t in &mut triangles {
+                    t.swap(1, 2);
+                }
+            }
+            let world_positions: Vec<Vec3> =
+                positions.iter().map(|p| world.transform_point3(Vec3::from_array(*p))).collect();
+            if let Some(bad) = world_positions.iter().position(|p| !within_limits(*p)) {
+                return Err(self.error(
+                    format!("{location}.attributes.POSITION"),
+                    format!("vertex {bad} is at {} in the world: coordinates must be finite and within +/-{MAX_COORDINATE:e} m", world_positions[bad]),
+                ));
+            }
+            let normals = match primitive.get(&gltf::Semantic::Normals) {
+                None => None,
+                Some(a) => {
+                    let at = format!("{location}.attributes.NORMAL");
+                    let normals = self.read_floats::<3>(&a, &at)?;
+                    if normals.len() != count {
+                        return Err(self.error(at, format!("has {} normals for {count} vertices", normals.len())));
+                    }
+                    let normals: Vec<Vec3> =
+                        normals.iter().map(|n| (normal_matrix * Vec3::from_array(*n)).normalize_or_zero()).collect();
+                    if normals.iter().any(|n| *n == Vec3::ZERO || !n.is_finite()) {
+                        self.warn(&at, "has zero or non-finite normals: shaded flat");
+                        None
+                    } else {
+                        Some(normals)
+                    }
+                }
+            };
+            let uvs = match primitive.get(&gltf::Semantic::TexCoords(0)) {
+                None => None,
+                Some(a) => {
+                    let at = format!("{location}.attributes.TEXCOORD_0");
+                    let uvs = self.read_floats::<2>(&a, &at)?;
+                    if uvs.len() != count {
+                        return Err(self.error(at, format!("has {} coordinates for {count} vertices", uvs.len())));
+                    }
+                    if uvs.iter().flatten().any(|x| !x.is_finite()) {
+                        return Err(self.error(at, "has non-finite texture coordinates"));
+                    }
+                    Some(uvs.iter().map(|uv| Vec2::from_array(*uv)).collect())
+                }
+            };
+            let material = self.material(primitive.material())?;
+            let emission = self.parts.materials[material].emission;
+            let both_sides = self.parts.materials[material].emits_both_sides;
+            let mesh = Mesh { positions: world_positions, normals, uvs, triangles, material };
+            let has_area = mesh.triangles.iter().any(|t| {
+                let [a, b, c] = t.map(|i| mesh.positions[i as usize]);
+                (b - a).cross(c - a).length() > 0.0
+            });
+            self.parts.meshes.push(mesh);
+            if emission != Vec3::ZERO && has_area {
+                self.emitters += 1;
+                self.parts.lights.push(LightSource::Area {
+                    mesh: self.parts.meshes.len() - 1,
+                    radiance: emission,
+                    samples: self.spec.emitter_samples,
+                    seed: 0x617f_0000 + self.emitters,
+                    both_sides,
+                });
+            }
+        }
+        Ok(())
+    }
+
+    /// KHR_lights_punctual light `index` placed by `world`: photometric
+    /// values over `lumens_per_watt` (candela to W/sr, lux to W/m^2).
+    fn import_light(&mut self, index: usize, world: &Mat4) -> Result<(), SceneError> {
+        let location = format!("extensions.KHR_lights_punctual.lights[{index}]");
+        let light: &LightJson = self
+            .doc
+            .as_json()
+            .extensions
+            .as_ref()
+            .and_then(|e| e.khr_lights_punctual.as_ref())
+            .and_then(|l| l.lights.get(index))
+            .ok_or_else(|| self.error(&location, "a node refers to a light the file does not define"))?;
+        let colour = Vec3::from_array(light.color);
+        if !colour.is_finite() || colour.min_element() < 0.0 {
+            return Err(self.error(format!("{location}.color"), format!("must be finite and >= 0, got {colour}")));
+        }
+        let value = light.intensity;
+        if !value.is_finite() || !(0.0..=1e30).contains(&value) {
+            return Err(self.error(format!("{location}.intensity"), format!("must be finite and >= 0, got {value}")));
+        }
+        let radiometric = colour * (value / self.spec.lumens_per_watt);
+        let position = world.w_axis.truncate();
+        // Lights shine along their node's -Z.
+        let forward = world.transform_vector3(Vec3::NEG_Z).normalize_or_zero();
+        if light.range.is_some() {
+            // Physical lights have no range; Cycles ignores it too.
+            self.warn(&format!("{location}.range"), "ignored: the light falls off as 1/d^2 to any distance");
+        }
+        let kind = match &light.type_ {
+            Checked::Valid(kind) => kind,
+            Checked::Invalid => {
+                return Err(self.error(format!("{location}.type"), "must be point, spot or directional"))
+            }
+        };
+        let needs_direction = !matches!(kind, LightType::Point);
+        if needs_direction && forward == Vec3::ZERO {
+            return Err(self.error(&location, "the light's node has a degenerate (zero-scale) transform"));
+        }
+        let source = match kind {
+            LightType::Point => LightSource::Point { position, intensity: radiometric },
+            LightType::Spot => {
+                let (inner, outer) =
+                    light.spot.as_ref().map_or((0.0, FRAC_PI_4), |s| (s.inner_cone_angle, s.outer_cone_angle));
+                if !(outer.is_finite() && outer > 0.0 && outer <= std::f32::consts::FRAC_PI_2) {
+                    return Err(self.error(
+                        format!("{location}.spot.outerConeAngle"),
+                        format!("must be in (0, pi/2], got {outer}"),
+                    ));
+                }
+                if !(inner.is_finite() && inner >= 0.0 && inner < outer) {
+                    return Err(self.error(
+                        format!("{location}.spot.innerConeAngle"),
+                        format!("must be in [0, outerConeAngle), got {inner}"),
+                    ));
+                }
+                LightSource::Spot {
+                    position,
+                    direction: forward,
+                    intensity: radiometric,
+                    inner_angle_degrees: inner.to_degrees(),
+                    outer_angle_degrees: outer.to_degrees().min(90.0),
+                }
+            }
+            LightType::Directional => LightSource::Sun {
+                direction: -forward,
+                irradiance: radiometric,
+                angular_radius_degrees: 0.0,
+                samples: 1,
+                seed: 0x6c7f_0000 + index as u64,
+            },
+        };
+        self.parts.lights.push(source);
+        Ok(())
+    }
+
+    /// The scene's material for a glTF material, made once.
+    fn material(&mut self, m: gltf::Material<'_>) -> Result<usize, SceneError> {
+        if let Some(&index) = self.materials.get(&m.index()) {
+            return Ok(index);
+        }
+        let location = m.index().map_or("materials (default)".to_string(), |i| format!("materials[{i}]"));
+        let pbr = m.pbr_metallic_roughness();
+        let base = Vec4::from_array(pbr.base_color_factor());
+        let metallic = pbr.metallic_factor();
+        let roughness = pbr.roughness_factor();
+        for (name, value) in
+            [("baseColorFactor", base.min_element()), ("metallicFactor", metallic), ("roughnessFactor", roughness)]
+        {
+            let max = if name == "baseColorFactor" { base.max_element() } else { value };
+            if !(value.is_finite() && max.is_finite() && value >= 0.0 && max <= 1.0) {
+                return Err(self.error(format!("{location}.pbrMetallicRoughness.{name}"), "must be between 0 and 1"));
+            }
+        }
+        let base_rgb = base.truncate();
+        // Dielectric reflectance at normal incidence: 4% (IOR 1.5), scaled
+        // by KHR_materials_specular; metals reflect their base colour.
+        let (specular_factor, specular_colour) = m
+            .specular()
+            .map_or((1.0, Vec3::ONE), |s| (s.specular_factor(), Vec3::from_array(s.specular_color_factor())));
+        let f0 = (0.04 * specular_colour * specular_factor).clamp(Vec3::ZERO, Vec3::ONE);
+        if !f0.is_finite() {
+            return Err(self.error(format!("{location}.extensions.KHR_materials_specular"), "must be finite"));
+        }
+        let specular = f0.lerp(base_rgb, metallic);
+        let diffuse_weight = 1.0 - metallic;
+        let albedo = match pbr.base_color_texture() {
+            None => Albedo::Constant(base_rgb * diffuse_weight),
+            Some(info) => {
+                let at = format!("{location}.pbrMetallicRoughness.baseColorTexture");
+                if info.tex_coord() != 0 {
+                    self.warn(&at, "uses TEXCOORD_1 or later: read with TEXCOORD_0");
+                }
+                let source = info.texture().source();
+                let image = self.image(&source, &at)?;
+                let tint = base_rgb * diffuse_weight;
+                let texels = image.texels.iter().map(|t| *t * tint).collect();
+                self.parts.textures.push(Texture::from_texels(image.width, image.height, texels));
+                Albedo::Texture {
+                    texture: self.parts.textures.len() - 1,
+                    transform: uv_transform(info.texture_transform()),
+                }
+            }
+        };
+        if pbr.metallic_roughness_texture().is_some() {
+            self.warn(&location, "metallicRoughnessTexture ignored: the factors are used");
+        }
+        match m.alpha_mode() {
+            gltf::material::AlphaMode::Opaque => {}
+            mode => self.warn(&location, &format!("alphaMode {mode:?} not supported yet: rendered opaque")),
+        }
+        // Phong's exponent from roughness: n = 2 / alpha^2 - 2 with alpha =
+        // roughness^2 (Walter et al. 2007's Beckmann-Phong correspondence);
+        // a perfectly smooth surface is a mirror of the same reflectance.
+        let alpha = roughness * roughness;
+        let (specular, exponent, mirror) = if roughness == 0.0 {
+            (Vec3::ZERO, 0.0, specular)
+        } else {
+            (specular, (2.0 / (alpha * alpha) - 2.0).clamp(0.0, 1e6), Vec3::ZERO)
+        };
+        let strength = m.emissive_strength().unwrap_or(1.0);
+        let mut emission = Vec3::from_array(m.emissive_factor()) * strength;
+        if !emission.is_finite() || emission.min_element() < 0.0 {
+            return Err(self.error(
+                format!("{location}.emissiveFactor"),
+                format!("emission must be finite and >= 0, got {emission}"),
+            ));
+        }
+        if let Some(info) = m.emissive_texture() {
+            let at = format!("{location}.emissiveTexture");
+            let image = self.image(&info.texture().source(), &at)?;
+            let mean = image.texels.iter().fold(Vec3::ZERO, |a, t| a + *t) / image.texels.len() as f32;
+            self.warn(&at, "emission is uniform over a surface here: the texture's mean colour is used");
+            emission *= mean;
+        }
+        let index = self.parts.materials.len();
+        self.parts.materials.push(Material {
+            name: m.name().map_or_else(|| location.clone(), str::to_string),
+            albedo,
+            specular,
+            exponent,
+            mirror,
+            emission,
+            emits_both_sides: m.double_sided(),
+        });
+        self.materials.insert(m.index(), index);
+        Ok(index)
+    }
+
+    /// Decodes an image (PNG or JPEG, sRGB) once.
+    fn image(&mut self, image: &gltf::Image<'_>, location: &str) -> Result<RgbImage, SceneError> {
+        if let Some(decoded) = self.images.get(&image.index()) {
+            return Ok(decoded.clone());
+        }
+        let at = format!("images[{}]", image.index());
+        let (bytes, named) = match image.source() {
+            gltf::image::Source::Uri { uri, .. } => {
+                let bytes = self.read_uri(uri, &format!("{at}.uri"))?;
+                let named = if uri.starts_with("data:") { None } else { Some(self.base.join(percent_decode(uri))) };
+                (bytes, named)
+            }
+            gltf::image::Source::View { view, .. } => {
+                (self.view_bytes(&view, &format!("{at}.bufferView"))?.to_vec(), None)
+            }
+        };
+        let decoded = image::decode_srgb(&bytes).map_err(|e| {
+            let what = named.as_ref().map_or_else(String::new, |p| format!("'{}': ", p.display()));
+            self.error(format!("{location} ({at})"), format!("{what}{e}"))
+        })?;
+        self.images.insert(image.index(), decoded.clone());
+        Ok(decoded)
+    }
+
+    /// The bytes of a buffer view, checked against its buffer.
+    fn view_bytes(&self, view: &gltf::buffer::View<'_>, location: &str) -> Result<&[u8], SceneError> {
+        let buffer = &self.buffers[view.buffer().index()];
+        let end = view.offset().checked_add(view.length());
+        match end {
+            Some(end) if end <= buffer.len() => Ok(&buffer[view.offset()..end]),
+            _ => Err(self.error(
+                format!("bufferViews[{}]", view.index()),
+                format!(
+                    "bytes {}..{} are past the end of buffers[{}] ({} bytes) ({location})",
+                    view.offset(),
+                    view.offset().saturating_add(view.length()),
+                    view.buffer().index(),
+                    buffer.len()
+                ),
+            )),
+        }
+    }
+
+    /// An accessor's elements, as raw bytes per element: (bytes, stride, count).
+    fn elements(
+        &self,
+        a: &gltf::Accessor<'_>,
+        location: &str,
+        size: usize,
+    ) -> Result<Option<(&[u8], usize)>, SceneError> {
+        let at = format!("accessors[{}]", a.index());
+        if a.sparse().is_some() {
+            return Err(self.error(format!("{at}.sparse"), format!("sparse accessors are not supported ({location})")));
+        }
+        if a.count() > MAX_ACCESSOR_COUNT {
+            return Err(self.error(
+                format!("{at}.count"),
+                format!("{} is more than {MAX_ACCESSOR_COUNT} ({location})", a.count()),
+            ));
+        }
+        let Some(view) = a.view() else { return Ok(None) };
+        let bytes = self.view_bytes(&view, location)?;
+        let stride = view.stride().unwrap_or(size);
+        if stride < size {
+            return Err(self.error(
+                format!("bufferViews[{}].byteStride", view.index()),
+                format!("{stride} is less than an element's {size} bytes ({location})"),
+            ));
+        }
+        let needed = match a.count() {
+            0 => Some(0),
+            n => (n - 1).checked_mul(stride).and_then(|x| x.checked_add(size)).and_then(|x| x.checked_add(a.offset())),
+        };
+        match needed {
+            Some(n) if n <= bytes.len() => Ok(Some((&bytes[a.offset().min(bytes.len())..], stride))),
+            _ => Err(self.error(
+                at.to_string(),
+                format!("{} elements of {size} bytes every {stride} from byte {} overrun bufferViews[{}] ({} bytes) ({location})", a.count(), a.offset(), view.index(), bytes.len()),
+            )),
+        }
+    }
+
+    /// A float accessor of N components (FLOAT, or normalized integers).
+    fn read_floats<const N: usize>(&self, a: &gltf::Accessor<'_>, location: &str) -> Result<Vec<[f32; N]>, SceneError> {
+        let want = match N {
+            2 => Dimensions::Vec2,
+            _ => Dimensions::Vec3,
+        };
+        if a.dimensions() != want {
+            return Err(self.error(location, format!("must be a {want:?} accessor, got {:?}", a.dimensions())));
+        }
+        let kind = a.data_type();
+        if kind != DataType::F32 && !a.normalized() {
+            return Err(self.error(location, format!("must be FLOAT or normalized integers, got {kind:?}")));
+        }
+        let component = kind.size();
+        let Some((bytes, stride)) = self.elements(a, location, component * N)? else {
+            return Ok(vec![[0.0; N]; a.count()]);
+        };
+        let read = |b: &[u8]| -> f32 {
+            match kind {
+                DataType::F32 => f32::from_le_bytes([b[0], b[1], b[2], b[3]]),
+                DataType::U8 => f32::from(b[0]) / 255.0,
+                DataType::I8 => (f32::from(b[0] as i8) / 127.0).max(-1.0),
+                DataType::U16 => f32::from(u16::from_le_bytes([b[0], b[1]])) / 65535.0,
+                DataType::I16 => (f32::from(i16::from_le_bytes([b[0], b[1]])) / 32767.0).max(-1.0),
+                DataType::U32 => u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as f32 / u32::MAX as f32,
+            }
+        };
+        Ok((0..a.count()).map(|i| std::array::from_fn(|c| read(&bytes[i * stride + c * component..]))).collect())
+    }
+
+    /// An index accessor (unsigned byte, short or int scalars).
+    fn read_indices(&self, a: &gltf::Accessor<'_>, location: &str) -> Result<Vec<u32>, SceneError> {
+        let kind = a.data_type();
+        if a.dimensions() != Dimensions::Scalar || !matches!(kind, DataType::U8 | DataType::U16 | DataType::U32) {
+            return Err(
+                self.error(location, format!("indices must be unsigned scalars, got {:?} {kind:?}", a.dimensions()))
+            );
+        }
+        let size = kind.size();
+        let Some((bytes, stride)) = self.elements(a, location, size)? else {
+            return Ok(vec![0; a.count()]);
+        };
+        Ok((0..a.count())
+            .map(|i| {
+                let b = &bytes[i * stride..];
+                match kind {
+                    DataType::U8 => u32::from(b[0]),
+                    DataType::U16 => u32::from(u16::from_le_bytes([b[0], b[1]])),
+                    _ => u32::from_le_bytes([b[0], b[1], b[2], b[3]]),
+                }
+            })
+            .collect())
+    }
+}
+
+/// Triangles of a primitive: lists as they are, strips and fans converted
+/// (alternate strip triangles reversed to keep one winding).
+fn triangulate(mode: Mode, indices: &[u32]) -> Vec<[u32; 3]> {
+    match mode {
+        Mode::TriangleStrip => (2..indices.len())
+            .map(|i| {
+                let (a, b, c) = (indices[i - 2], indices[i - 1], indices[i]);
+                if i % 2 == 0 {
+                    [a, b, c]
+                } else {
+                    [b, a, c]
+                }
+            })
+            .collect(),
+        Mode::TriangleFan => (2..indices.len()).map(|i| [indices[0], indices[i - 1], indices[i]]).collect(),
+        _ => indices.chunks_exact(3).map(|t| [t[0], t[1], t[2]]).collect(),
+    }
+}
+
+/// The map from a mesh's glTF uv to `Texture::lookup`'s: KHR_texture_transform
+/// (translation x rotation x scale, as the extension defines it), then v
+/// flipped (glTF's v = 0 is the image's top row, the lookup's its bottom).
+fn uv_transform(transform: Option<gltf::texture::TextureTransform<'_>>) -> Affine2 {
+    let flip = Affine2::from_mat2_translation(Mat2::from_diagonal(Vec2::new(1.0, -1.0)), Vec2::new(0.0, 1.0));
+    let Some(t) = transform else { return flip };
+    let (sin, cos) = t.rotation().sin_cos();
+    let rotation = Mat2::from_cols(Vec2::new(cos, -sin), Vec2::new(sin, cos));
+    let khr = Affine2::from_mat2_translation(
+        rotation * Mat2::from_diagonal(Vec2::from_array(t.scale())),
+        Vec2::from_array(t.offset()),
+    );
+    flip * khr
+}
+
+/// `%20`-style escapes of a relative URI decoded (invalid escapes kept).
+fn percent_decode(uri: &str) -> String {
+    let bytes = uri.as_bytes();
+    let mut out = Vec::with_capacity(bytes.len());
+    let mut i = 0;
+    while i < bytes.len() {
+        let hex = |c: u8| (c as char).to_digit(16);
+        if bytes[i] == b'%' && i + 2 < bytes.len() {
+            if let (Some(h), Some(l)) = (hex(bytes[i + 1]), hex(bytes[i + 2])) {
+                out.push((h * 16 + l) as u8);
+                i += 3;
+                continue;
+            }
+        }
+        out.push(bytes[i]);
+        i += 1;
+    }
+    String::from_utf8_lossy(&out).into_owned()
+}
+
+fn list_or_none(names: &[&str]) -> String {
+    if names.is_empty() {
+        "no named cameras".to_string()
+    } else {
+        names.join(", ")
+    }
+}
+
+#[cfg(test)]
+mod tests;

@@ -1,0 +1,390 @@
+//! glTF 2.0 import, on files the tests write (tests/common/gltf.rs) with
+//! answers that can be written down, and on the lobby Blender exported
+//! (scenes/lobby/) against Cycles' render of it.
+
+mod common;
+use common::gltf::{diffuse, floor_and_point_light, GltfBuilder};
+use common::*;
+
+use glam::{DVec3, Vec3};
+use lightcuts::embree::{Device, Ray};
+use lightcuts::light::Lights;
+use lightcuts::scene::{LightSource, Scene};
+use lightcuts::shading::{BatchBuffers, Geometry, LightBatch};
+use serde_json::json;
+use std::f64::consts::PI;
+
+/// The exact direct radiance (every light, one shadow ray each) leaving the
+/// surface the ray from `from` towards `to` hits first, towards `from`; and
+/// the radiance the hit surface emits.
+fn radiance_seen(scene: &Scene, from: Vec3, to: Vec3) -> (DVec3, Vec3) {
+    let lights = Lights::from_scene(scene);
+    let device = Device::try_new().unwrap();
+    let geometry = Geometry::try_new(&device, scene, &lights).unwrap();
+    let ray = Ray { origin: from, direction: (to - from).normalize(), t_near: 0.0, t_far: f32::INFINITY };
+    let hit = geometry.embree.intersect(&ray).expect("the ray hits the scene");
+    let sp = geometry.surface(&ray, &hit);
+    let mut buffers = BatchBuffers::default();
+    let mut batch = LightBatch::new(&geometry.embree, &sp, &mut buffers);
+    lights.for_each(|light| batch.add(&light));
+    (batch.finish().radiance, sp.emitted)
+}
+
+fn load(dir: &TempDir, name: &str, text: &str) -> Scene {
+    Scene::load(&dir.write(name, text)).unwrap_or_else(|e| panic!("{e}"))
+}
+
+fn assert_close(found: f64, expected: f64, tolerance: f64, what: &str) {
+    assert!(
+        (found - expected).abs() <= tolerance * expected.abs().max(1e-12),
+        "{what}: found {found}, expected {expected} (tolerance {tolerance})"
+    );
+}
+
+#[test]
+fn a_point_light_over_a_diffuse_plane_gives_the_inverse_square_answer() {
+    let dir = TempDir::new("gltf-point");
+    let scene = load(&dir, "s.gltf", &floor_and_point_light().embedded());
+    // 683 cd at 683 lm/W: 1 W/sr; L = (rho / pi) I cos(theta) / d^2.
+    assert_eq!(scene.lights, vec![LightSource::Point { position: Vec3::new(0.0, 2.0, 0.0), intensity: Vec3::ONE }]);
+    for x in [0.0f32, 1.0, 3.0] {
+        let (radiance, _) = radiance_seen(&scene, Vec3::new(x, 5.0, 0.5), Vec3::new(x, 0.0, 0.0));
+        let d2 = f64::from(x * x + 4.0);
+        let expected = 0.5 / PI * (2.0 / d2.sqrt()) / d2;
+        assert_close(radiance.x, expected, 1e-4, &format!("floor at x = {x}"));
+    }
+}
+
+#[test]
+fn the_camera_sets_the_film_aspect_and_can_be_chosen_by_name() {
+    let dir = TempDir::new("gltf-camera");
+    let mut g = floor_and_point_light();
+    let wide = g.camera(json!({ "type": "perspective", "name": "wide", "perspective": { "yfov": 1.0, "aspectRatio": 2.0, "znear": 0.1 } }));
+    g.node(json!({ "camera": wide, "translation": [0.0, 1.0, 8.0] }), true);
+    let ortho = g.camera(json!({ "type": "orthographic", "name": "plan", "orthographic": { "xmag": 1.0, "ymag": 1.0, "zfar": 10.0, "znear": 0.1 } }));
+    g.node(json!({ "camera": ortho, "translation": [0.0, 9.0, 0.0] }), true);
+    let path = dir.write("s.gltf", &g.embedded());
+    let first = Scene::load(&path).unwrap();
+    assert_eq!((first.film.width, first.film.height, first.film.spp), (640, 427, 1), "aspect 1.5 at 640 wide");
+    assert!((first.camera_spec.fov_y - 0.6f32.to_degrees()).abs() < 1e-4);
+    let eye = Vec3::from_array(first.camera_spec.eye);
+    let forward = Vec3::from_array(first.camera_spec.look_at) - eye;
+    assert!(eye.distance(Vec3::new(0.0, 6.0, 0.0)) < 1e-5 && forward.normalize().dot(Vec3::NEG_Y) > 0.99999);
+    let chosen = Scene::load_with_camera(&path, Some("wide")).unwrap();
+    assert_eq!((chosen.film.width, chosen.film.height), (640, 320));
+    assert_eq!(chosen.camera_spec.eye, [0.0, 1.0, 8.0]);
+    let e = Scene::load_with_camera(&path, Some("nope")).unwrap_err().to_string();
+    assert!(e.contains("s.gltf") && e.contains("no camera named 'nope'") && e.contains("top, wide, plan"), "{e}");
+    let e = Scene::load_with_camera(&path, Some("plan")).unwrap_err().to_string();
+    assert!(e.contains("cameras[2]") && e.contains("orthographic"), "{e}");
+    // The binary: --camera and --resolution.
+    let out = dir.path("o.exr");
+    lightcuts_ok(&[
+        "render",
+        s(&path),
+        "--camera",
+        "wide",
+        "--resolution",
+        "24x12",
+        "--exact",
+        "-o",
+        s(&out),
+        "--quiet",
+    ]);
+    let image = read_exr(&out).unwrap();
+    assert_eq!((image.width, image.height), (24, 12));
+}
+
+#[test]
+fn node_hierarchies_transform_meshes_and_a_mesh_may_be_used_twice() {
+    let dir = TempDir::new("gltf-nodes");
+    let mut g = GltfBuilder::new();
+    let m = g.material(diffuse([0.5, 0.5, 0.5]));
+    // A unit quad in x-y, front +z.
+    let quad = g.quad([0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], Some(m));
+    // Child: scaled by 2 and by -1 in x (a mirror: the winding must flip
+    // back), under a parent with a matrix translating by (10, 0, 0).
+    let child = g.node(json!({ "mesh": quad, "scale": [-2.0, 2.0, 2.0], "translation": [0.0, 0.0, 1.0] }), false);
+    let matrix = [1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 10.0, 0.0, 0.0, 1.0];
+    g.node(json!({ "matrix": matrix, "children": [child] }), true);
+    g.node(json!({ "mesh": quad }), true);
+    let cam = g.camera(json!({ "type": "perspective", "perspective": { "yfov": 0.8, "znear": 0.1 } }));
+    g.node(json!({ "camera": cam, "translation": [0.0, 0.5, 5.0] }), true);
+    let scene = load(&dir, "s.gltf", &g.embedded());
+    assert_eq!(scene.meshes.len(), 2, "one mesh, two nodes");
+    let placed = &scene.meshes[0];
+    let (lo, hi) = placed.positions.iter().fold((Vec3::MAX, Vec3::MIN), |(a, b), p| (a.min(*p), b.max(*p)));
+    assert_eq!((lo, hi), (Vec3::new(8.0, 0.0, 1.0), Vec3::new(10.0, 2.0, 1.0)));
+    // Still facing +z after the mirror.
+    let [a, b, c] = placed.triangles[0].map(|i| placed.positions[i as usize]);
+    assert!((b - a).cross(c - a).z > 0.0, "winding flipped back under a mirroring transform");
+    assert_eq!(scene.film.height, 480, "no aspect ratio: 640 x 480");
+}
+
+#[test]
+fn strips_and_fans_become_the_same_triangles_and_points_are_skipped_with_one_warning() {
+    let dir = TempDir::new("gltf-modes");
+    let mut g = floor_and_point_light();
+    let m = g.material(diffuse([0.5, 0.5, 0.5]));
+    let square = [[0.0, 1.0, 0.0], [1.0, 1.0, 0.0], [0.0, 2.0, 0.0], [1.0, 2.0, 0.0]];
+    let strip = g.mesh(&square, None, None, None, Some(m), Some(5));
+    let fan = g.mesh(&[square[0], square[1], square[3], square[2]], None, None, None, Some(m), Some(6));
+    let points = g.mesh(&square, None, None, None, Some(m), Some(0));
+    let lines = g.mesh(&square, None, None, None, Some(m), Some(1));
+    for mesh in [strip, fan, points, lines] {
+        g.node(json!({ "mesh": mesh }), true);
+    }
+    let scene = load(&dir, "s.gltf", &g.embedded());
+    assert_eq!(scene.meshes.len(), 3, "floor, strip, fan");
+    for mesh in &scene.meshes[1..] {
+        assert_eq!(mesh.triangles.len(), 2);
+        let normals: Vec<f32> = mesh
+            .triangles
+            .iter()
+            .map(|t| {
+                let [a, b, c] = t.map(|i| mesh.positions[i as usize]);
+                (b - a).cross(c - a).z
+            })
+            .collect();
+        assert!(normals.iter().all(|&z| (z - 1.0).abs() < 1e-6), "one winding, unit area: {normals:?}");
+    }
+    assert_eq!(scene.warnings.len(), 1, "{:?}", scene.warnings);
+    assert!(scene.warnings[0].contains("2 point or line primitive(s) skipped"), "{:?}", scene.warnings);
+}
+
+/// KHR_lights_punctual's falloff: 1 inside the inner cone, 0 outside the
+/// outer, t^2 between, t = (cos theta - cos outer) / (cos inner - cos outer).
+fn spot_falloff(theta: f64, inner: f64, outer: f64) -> f64 {
+    let t = ((theta.cos() - outer.cos()) / (inner.cos() - outer.cos())).clamp(0.0, 1.0);
+    t * t
+}
+
+#[test]
+fn a_spot_light_falls_off_between_its_cones_as_the_extension_defines() {
+    let dir = TempDir::new("gltf-spot");
+    let mut g = floor_and_point_light();
+    // Replace the point light by a spot of 2 x 683 cd pointing down.
+    g.json["extensions"]["KHR_lights_punctual"]["lights"][0] =
+        json!({ "type": "spot", "intensity": 1366.0, "spot": { "innerConeAngle": 0.35, "outerConeAngle": 0.5 } });
+    let s = std::f32::consts::FRAC_1_SQRT_2;
+    g.json["nodes"][1]["rotation"] = json!([-s, 0.0, 0.0, s]);
+    let scene = load(&dir, "s.gltf", &g.embedded());
+    let h = 2.0f64;
+    for theta in [0.0f64, 0.3, 0.4, 0.45, 0.49, 0.51, 0.7] {
+        let x = (h * theta.tan()) as f32;
+        let (radiance, _) = radiance_seen(&scene, Vec3::new(x, 5.0, 0.3), Vec3::new(x, 0.0, 0.0));
+        let d2 = h * h + f64::from(x) * f64::from(x);
+        let expected = 0.5 / PI * 2.0 * spot_falloff(theta, 0.35, 0.5) * theta.cos() / d2;
+        if expected == 0.0 {
+            assert_eq!(radiance.x, 0.0, "outside the outer cone at {theta}");
+        } else {
+            assert_close(radiance.x, expected, 1e-3, &format!("theta {theta}"));
+        }
+    }
+}
+
+/// Irradiance at distance c below the centre of a square of side a and
+/// radiance L (the sum of four corner rectangles' form factors, pi L F).
+fn square_irradiance(a: f64, c: f64, radiance: f64) -> f64 {
+    let x = a / (2.0 * c);
+    let s = (1.0 + x * x).sqrt();
+    // F of a corner rectangle X = Y = x: (1 / 2 pi)(2 x / s atan(x / s)).
+    let f = (2.0 * x / s * (x / s).atan()) / (2.0 * PI);
+    4.0 * PI * radiance * f
+}
+
+#[test]
+fn an_emissive_quad_lights_the_floor_with_its_irradiance_and_is_seen_from_both_sides() {
+    let dir = TempDir::new("gltf-emissive");
+    let mut g = floor_and_point_light();
+    g.json["extensions"]["KHR_lights_punctual"]["lights"][0]["intensity"] = json!(0.0);
+    g.use_extension("KHR_materials_emissive_strength");
+    let panel = g.material(json!({
+        "pbrMetallicRoughness": { "baseColorFactor": [0.0, 0.0, 0.0, 1.0], "metallicFactor": 0.0 },
+        "emissiveFactor": [1.0, 0.5, 0.25],
+        "extensions": { "KHR_materials_emissive_strength": { "emissiveStrength": 4.0 } },
+        "doubleSided": true,
+    }));
+    // 1 x 1 m at height 1.5, its front (u x v) facing down.
+    let quad = g.quad([-0.5, 1.5, -0.5], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0], Some(panel));
+    g.node(json!({ "mesh": quad }), true);
+    g.write_separate(&dir.path(""), "panel");
+    let toml = "[gltf]\nfile = \"panel.gltf\"\nemitter_samples = 4096\n";
+    let scene = load(&dir, "s.toml", toml);
+    let lights = Lights::from_scene(&scene);
+    assert_eq!(lights.oriented.len(), 2 * 4096, "both sides");
+    let (below, _) = radiance_seen(&scene, Vec3::new(0.0, 1.0, 0.01), Vec3::new(0.0, 0.0, 0.0));
+    let expected = 0.5 / PI * square_irradiance(1.0, 1.5, 4.0);
+    assert_close(below.x, expected, 0.01, "floor under the panel (red)");
+    assert_close(below.z, expected * 0.25, 0.01, "floor under the panel (blue)");
+    // Visible with its radiance from below (front) and above (back).
+    for y in [0.5f32, 3.0] {
+        let (_, emitted) = radiance_seen(&scene, Vec3::new(0.1, y, 0.1), Vec3::new(0.1, 1.5, 0.1));
+        assert_eq!(emitted, Vec3::new(4.0, 2.0, 1.0), "seen from y = {y}");
+    }
+    // One-sided when the material is not double-sided.
+    g.json["materials"][1]["doubleSided"] = json!(false);
+    g.write_separate(&dir.path(""), "panel");
+    let scene = load(&dir, "s.toml", toml);
+    assert_eq!(Lights::from_scene(&scene).oriented.len(), 4096);
+    let (_, emitted) = radiance_seen(&scene, Vec3::new(0.1, 3.0, 0.1), Vec3::new(0.1, 1.5, 0.1));
+    assert_eq!(emitted, Vec3::ZERO, "the back of a one-sided emitter is dark");
+}
+
+#[test]
+fn materials_map_base_colour_textures_metal_and_mirrors() {
+    let dir = TempDir::new("gltf-materials");
+    let mut g = floor_and_point_light();
+    // A 2 x 2 texture, white (sRGB 255, linear 1) at the top left, the
+    // rest sRGB 128 (linear ~0.216); glTF's uv (0, 0) is the top left.
+    let grey = [128u8; 3];
+    let texels: Vec<u8> = [[255u8; 3], grey, grey, grey].concat();
+    let texture = g.png_texture(2, 2, &texels);
+    g.use_extension("KHR_texture_transform");
+    g.json["materials"][0] = json!({
+        "pbrMetallicRoughness": {
+            "baseColorFactor": [0.5, 1.0, 1.0, 1.0],
+            "baseColorTexture": { "index": texture, "extensions": { "KHR_texture_transform": { "offset": [0.5, 0.0] } } },
+            "metallicFactor": 0.0,
+            "roughnessFactor": 0.5,
+        },
+    });
+    let metal = g.material(json!({ "pbrMetallicRoughness": { "baseColorFactor": [0.9, 0.6, 0.3, 1.0], "metallicFactor": 1.0, "roughnessFactor": 0.0 } }));
+    let q = g.quad([0.0, 3.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], Some(metal));
+    g.node(json!({ "mesh": q }), true);
+    let scene = load(&dir, "s.gltf", &g.embedded());
+    let floor = &scene.materials[scene.meshes[0].material];
+    // Dielectric: 4% specular, roughness 0.5 -> alpha 0.25 -> n = 2/alpha^2 - 2 = 30.
+    assert!((floor.specular - Vec3::splat(0.04)).length() < 1e-6 && (floor.exponent - 30.0).abs() < 1e-3);
+    // The offset of half the texture moves the left column to u in [0.5, 1];
+    // the white texel stays at the top (small v).
+    let at = |u: f32, v: f32| floor.albedo_at(glam::Vec2::new(u, v), &scene.textures);
+    let grey = lightcuts::util::color::srgb_to_linear(128.0 / 255.0);
+    assert!((at(0.75, 0.25) - Vec3::new(0.5, 1.0, 1.0)).length() < 1e-3, "{}", at(0.75, 0.25));
+    for (u, v) in [(0.25, 0.25), (0.75, 0.75), (0.25, 0.75)] {
+        assert!((at(u, v).y - grey).abs() < 1e-3, "({u}, {v}): {}", at(u, v));
+    }
+    let metal = &scene.materials[scene.meshes[1].material];
+    assert_eq!(metal.mirror, Vec3::new(0.9, 0.6, 0.3), "roughness 0: a mirror of the base colour");
+    assert_eq!((metal.specular, metal.albedo_at(glam::Vec2::ZERO, &scene.textures)), (Vec3::ZERO, Vec3::ZERO));
+}
+
+#[test]
+fn a_toml_scene_imports_a_gltf_file_and_adds_to_it() {
+    let dir = TempDir::new("gltf-toml");
+    floor_and_point_light().write_separate(&dir.path(""), "room");
+    let toml = r#"
+[gltf]
+file = "room.gltf"
+lumens_per_watt = 341.5
+[film]
+width = 32
+height = 16
+spp = 2
+[environment]
+radiance = [0.1, 0.1, 0.1]
+samples = 64
+[[lights]]
+type = "point"
+position = [1, 1, 1]
+intensity = [1, 1, 1]
+"#;
+    let scene = load(&dir, "s.toml", toml);
+    assert_eq!((scene.film.width, scene.film.height, scene.film.spp), (32, 16, 2));
+    assert_eq!(scene.lights.len(), 2);
+    assert!(scene
+        .lights
+        .contains(&LightSource::Point { position: Vec3::new(0.0, 2.0, 0.0), intensity: Vec3::splat(2.0) }));
+    assert!(scene.environment.is_some());
+    let inputs: Vec<String> =
+        scene.inputs.iter().map(|p| p.file_name().unwrap().to_string_lossy().into_owned()).collect();
+    assert_eq!(inputs, ["s.toml", "room.gltf", "room.bin"]);
+    // Renders in both modes, and the same through a .glb.
+    for mode in ["--bounded", "--stochastic"] {
+        let out = dir.path("o.exr");
+        lightcuts_ok(&["render", s(&dir.path("s.toml")), mode, "-o", s(&out), "--quiet"]);
+    }
+    let glb = dir.path("room.glb");
+    std::fs::write(&glb, floor_and_point_light().glb()).unwrap();
+    let (a, b) = (dir.path("a.exr"), dir.path("b.exr"));
+    lightcuts_ok(&["render", s(&glb), "--exact", "--resolution", "12x8", "-o", s(&a), "--quiet"]);
+    lightcuts_ok(&["render", s(&dir.path("room.gltf")), "--exact", "--resolution", "12x8", "-o", s(&b), "--quiet"]);
+    assert_eq!(read_exr(&a).unwrap().channels["R"], read_exr(&b).unwrap().channels["R"], ".glb and .gltf");
+}
+
+/// The lobby, modelled in Blender and exported by its glTF exporter,
+/// against Cycles' 2,048-spp render of the .blend: mean luminance within 1%
+/// and 8 x 8 blocks away from silhouettes within 2% (the issue's targets).
+#[test]
+fn the_lobby_matches_cycles() {
+    let dir = TempDir::new("gltf-lobby");
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/lobby");
+    let out = dir.path("lobby.exr");
+    lightcuts_ok(&[
+        "render",
+        s(&root.join("lobby.gltf")),
+        "--exact",
+        "--resolution",
+        "160x120",
+        "--spp",
+        "8",
+        "-o",
+        s(&out),
+        "--quiet",
+    ]);
+    let json = lightcuts_ok(&["compare", s(&out), s(&root.join("cycles_2048.exr")), "--blocks", "8", "--json"]);
+    let c: serde_json::Value = serde_json::from_str(&json).unwrap();
+    let ratio = c["mean_luminance"].as_f64().unwrap() / c["reference_mean_luminance"].as_f64().unwrap();
+    assert!((ratio - 1.0).abs() < 0.01, "mean luminance ratio {ratio}");
+    let blocks = c["blocks"]["mean_relative_error"].as_f64().unwrap();
+    assert!(blocks < 0.02, "8x8 blocks: mean relative error {blocks}");
+    assert!(c["blocks"]["blocks"].as_u64().unwrap() > 150, "most blocks compared: {}", c["blocks"]);
+}
+
+/// A glTF scene goes through the same commands as a TOML one: render (both
+/// modes, above), sweep, bench rays and compare.
+#[test]
+fn a_gltf_scene_sweeps_benches_and_compares() {
+    let dir = TempDir::new("gltf-commands");
+    let mut g = floor_and_point_light();
+    // Many lights, so that the cut has something to cut.
+    for i in 0..64 {
+        let light = g.light(json!({ "type": "point", "intensity": 20.0, "color": [1.0, 0.8, 0.6] }));
+        let (x, z) = ((i % 8) as f32 - 3.5, (i / 8) as f32 - 3.5);
+        g.node(
+            json!({ "translation": [x, 1.5, z], "extensions": { "KHR_lights_punctual": { "light": light } } }),
+            true,
+        );
+    }
+    let scene = dir.write("s.gltf", &g.embedded());
+    let out = dir.path("sweep");
+    let stdout = lightcuts_ok(&[
+        "sweep",
+        s(&scene),
+        "--out",
+        s(&out),
+        "--errors",
+        "0.02",
+        "--modes",
+        "bounded,stochastic",
+        "--spp",
+        "1",
+        "--resolution",
+        "24x16",
+        "--quiet",
+    ]);
+    assert!(stdout.contains("speedup"), "{stdout}");
+    let json = lightcuts_ok(&["bench", "rays", s(&scene), "--resolution", "24x16", "--quiet", "--json"]);
+    let v: serde_json::Value = serde_json::from_str(&json).unwrap();
+    assert!(v["lightcuts_mrays_per_s"].as_f64().unwrap() > 0.0, "{v}");
+    let json = lightcuts_ok(&[
+        "compare",
+        s(&out.join("reference-spp1.exr")),
+        s(&out.join("reference-spp1.exr")),
+        "--blocks",
+        "4",
+        "--json",
+    ]);
+    let c: serde_json::Value = serde_json::from_str(&json).unwrap();
+    assert_eq!(c["blocks"]["mean_relative_error"].as_f64(), Some(0.0), "an image against itself: {c}");
+}
