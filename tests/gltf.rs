@@ -388,3 +388,75 @@ fn a_gltf_scene_sweeps_benches_and_compares() {
     let c: serde_json::Value = serde_json::from_str(&json).unwrap();
     assert_eq!(c["blocks"]["mean_relative_error"].as_f64(), Some(0.0), "an image against itself: {c}");
 }
+
+/// The point a ray from `from` towards `to` hits first.
+fn hit_point(scene: &Scene, from: Vec3, to: Vec3) -> Vec3 {
+    let lights = Lights::from_scene(scene);
+    let device = Device::try_new().unwrap();
+    let geometry = Geometry::try_new(&device, scene, &lights).unwrap();
+    let ray = Ray { origin: from, direction: (to - from).normalize(), t_near: 0.0, t_far: f32::INFINITY };
+    let hit = geometry.embree.intersect(&ray).expect("the ray hits the scene");
+    geometry.surface(&ray, &hit).p
+}
+
+#[test]
+fn alpha_masks_cut_out_surfaces_for_camera_and_shadow_rays() {
+    let dir = TempDir::new("gltf-mask");
+    let mut g = floor_and_point_light();
+    g.json["nodes"][1]["translation"] = json!([0.0, 3.0, 0.0]);
+    // RGBA 4 x 1: alpha 0, 0, 255, 255; the left half of u is cut out.
+    let mut png = Vec::new();
+    {
+        let mut encoder = png::Encoder::new(&mut png, 4, 1);
+        encoder.set_color(png::ColorType::Rgba);
+        encoder.set_depth(png::BitDepth::Eight);
+        let texels = [[200u8, 200, 200, 0], [200, 200, 200, 0], [200, 200, 200, 255], [200, 200, 200, 255]];
+        encoder.write_header().unwrap().write_image_data(&texels.concat()).unwrap();
+    }
+    let uri =
+        format!("data:image/png;base64,{}", base64::Engine::encode(&base64::engine::general_purpose::STANDARD, &png));
+    g.json["images"] = json!([{ "uri": uri }]);
+    g.json["textures"] = json!([{ "source": 0 }]);
+    let leaves = g.material(json!({
+        "pbrMetallicRoughness": { "baseColorTexture": { "index": 0 }, "metallicFactor": 0.0 },
+        "alphaMode": "MASK",
+        "doubleSided": true,
+    }));
+    // An occluder at height 1, x in [-1, 1], u = (x + 1) / 2.
+    let quad = g.quad([-1.0, 1.0, -1.0], [2.0, 0.0, 0.0], [0.0, 0.0, 2.0], Some(leaves));
+    g.node(json!({ "mesh": quad }), true);
+    let scene = load(&dir, "s.gltf", &g.embedded());
+    // Camera rays: through the cut-out half to the floor, onto the solid half.
+    assert!(hit_point(&scene, Vec3::new(-0.5, 5.0, 0.0), Vec3::new(-0.5, 0.0, 0.0)).y.abs() < 1e-4);
+    assert!((hit_point(&scene, Vec3::new(0.5, 5.0, 0.0), Vec3::new(0.5, 0.0, 0.0)).y - 1.0).abs() < 1e-4);
+    // Shadow rays from the floor at x = -/+0.5 cross the occluder at x = -/+1/3.
+    let floor = |x: f32| radiance_seen(&scene, Vec3::new(x, 0.5, 2.0), Vec3::new(x, 0.0, 0.0)).0.x;
+    let d2 = 9.25f64;
+    assert_close(floor(-0.5), 0.5 / PI * (3.0 / d2.sqrt()) / d2, 1e-4, "lit through the cut-out");
+    assert_eq!(floor(0.5), 0.0, "shadowed by the solid half");
+    // BLEND is a mask at 0.5, with a warning; OPAQUE ignores alpha.
+    g.json["materials"][1]["alphaMode"] = json!("BLEND");
+    let scene = load(&dir, "s.gltf", &g.embedded());
+    assert!(scene.warnings.iter().any(|w| w.contains("BLEND")), "{:?}", scene.warnings);
+    assert!(hit_point(&scene, Vec3::new(-0.5, 5.0, 0.0), Vec3::new(-0.5, 0.0, 0.0)).y.abs() < 1e-4);
+    g.json["materials"][1]["alphaMode"] = json!("OPAQUE");
+    let scene = load(&dir, "s.gltf", &g.embedded());
+    assert!((hit_point(&scene, Vec3::new(-0.5, 5.0, 0.0), Vec3::new(-0.5, 0.0, 0.0)).y - 1.0).abs() < 1e-4);
+    // Packets of shadow rays (the exact render) agree: the image shows the
+    // cut-out's shadow, half lit, half dark, under the occluder.
+    let out = dir.path("o.exr");
+    g.json["materials"][1]["alphaMode"] = json!("MASK");
+    let path = dir.write("s.gltf", &g.embedded());
+    lightcuts_ok(&[
+        "render",
+        s(&path),
+        "--exact",
+        "--resolution",
+        "40x40",
+        "--camera",
+        "top",
+        "-o",
+        s(&out),
+        "--quiet",
+    ]);
+}

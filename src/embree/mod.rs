@@ -16,7 +16,7 @@ use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::Arc;
 use std::time::Instant;
 
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 
 /// An error reported by Embree (through the device's error callback or
 /// `rtcGetDeviceError`), or by the shim when Embree returned no object.
@@ -215,6 +215,37 @@ pub fn padded_vertex_floats(vertex_count: usize) -> usize {
 struct SharedMesh {
     _vertices: Vec<f32>,
     _indices: Vec<u32>,
+    /// The cut-out's description and the buffers it points into.
+    _mask: Option<MaskBuffers>,
+}
+
+struct MaskBuffers {
+    _raw: Box<sys::LcAlphaMask>,
+    _uvs: Vec<f32>,
+    _alpha: Vec<f32>,
+}
+
+// SAFETY: the mask's raw pointers point into buffers it (and its mesh) own;
+// nothing writes them after attachment, and Embree's filter callback only
+// reads them, from any tracing thread, as the scene allows (see SceneHandle).
+unsafe impl Send for MaskBuffers {}
+// SAFETY: as for Send: shared access is read-only.
+unsafe impl Sync for MaskBuffers {}
+
+/// A cut-out (glTF's alphaMode MASK): hits where the alpha, looked up at the
+/// hit's texture coordinate, is below `cutoff` are skipped by every query.
+#[derive(Debug, Clone)]
+pub struct AlphaMask {
+    /// Texture coordinates, one per vertex.
+    pub uvs: Vec<Vec2>,
+    /// Alpha texels, `width * height`, row 0 at the top.
+    pub alpha: Vec<f32>,
+    pub width: u32,
+    pub height: u32,
+    /// From the mesh's uv to the lookup's (v = 0 at the image's bottom row),
+    /// as the colour texture's (see `scene::Albedo::Texture`).
+    pub transform: glam::Affine2,
+    pub cutoff: f32,
 }
 
 struct SceneHandle {
@@ -252,6 +283,9 @@ pub enum MeshError {
     /// An index refers past the vertex list (caller's data is malformed).
     #[error("triangle {triangle} refers to vertex {index}, but the mesh has {vertex_count} vertices")]
     IndexOutOfRange { triangle: usize, index: u32, vertex_count: usize },
+    /// A cut-out whose uvs do not match the vertices, or an empty mask.
+    #[error("the alpha mask has {uvs} texture coordinates for {vertex_count} vertices, or no texels")]
+    BadMask { uvs: usize, vertex_count: usize },
     /// A vertex coordinate is NaN or infinite.
     #[error("vertex {vertex} is not finite")]
     NonFiniteVertex { vertex: usize },
@@ -264,6 +298,22 @@ impl SceneBuilder {
     /// Attaches a triangle mesh, copying its data into buffers padded as
     /// Embree requires. Indices are checked against the vertex count.
     pub fn attach_triangles(&mut self, vertices: &[Vec3], triangles: &[[u32; 3]]) -> Result<GeometryId, MeshError> {
+        self.attach_masked_triangles(vertices, triangles, None)
+    }
+
+    /// [`Self::attach_triangles`], with a cut-out when `mask` is given.
+    pub fn attach_masked_triangles(
+        &mut self,
+        vertices: &[Vec3],
+        triangles: &[[u32; 3]],
+        mask: Option<AlphaMask>,
+    ) -> Result<GeometryId, MeshError> {
+        if let Some(m) = &mask {
+            let texels = m.width as usize * m.height as usize;
+            if m.uvs.len() != vertices.len() || m.alpha.len() != texels || texels == 0 {
+                return Err(MeshError::BadMask { uvs: m.uvs.len(), vertex_count: vertices.len() });
+            }
+        }
         if let Some(vertex) = vertices.iter().position(|v| !v.is_finite()) {
             return Err(MeshError::NonFiniteVertex { vertex });
         }
@@ -295,7 +345,6 @@ impl SceneBuilder {
                 triangles.len(),
             )
         };
-        self.meshes.push(SharedMesh { _vertices: vertex_floats, _indices: index_u32 });
         self.raw.device.check("attaching a triangle mesh")?;
         if id == sys::LC_INVALID_ID {
             return Err(MeshError::Embree(EmbreeError {
@@ -305,6 +354,36 @@ impl SceneBuilder {
                 message: "rtcNewGeometry failed".into(),
             }));
         }
+        let mask = mask.map(|m| {
+            let uvs: Vec<f32> = m.uvs.iter().flat_map(|uv| uv.to_array()).collect();
+            let (a, alpha) = (m.transform, m.alpha);
+            let raw = Box::new(sys::LcAlphaMask {
+                indices: index_u32.as_ptr(),
+                uvs: uvs.as_ptr(),
+                alpha: alpha.as_ptr(),
+                width: m.width,
+                height: m.height,
+                transform: [
+                    a.matrix2.x_axis.x,
+                    a.matrix2.x_axis.y,
+                    a.matrix2.y_axis.x,
+                    a.matrix2.y_axis.y,
+                    a.translation.x,
+                    a.translation.y,
+                ],
+                cutoff: m.cutoff,
+            });
+            // SAFETY: the geometry was attached above and the scene is not
+            // yet committed; `raw` and the buffers it points into (the index
+            // buffer, `uvs` and `alpha`, whose heap storage does not move
+            // when the Vecs are moved) are owned by self.meshes until the
+            // scene is dropped and never mutated; the uvs cover every vertex
+            // the checked indices name, and alpha holds width x height texels.
+            unsafe { sys::lc_scene_set_alpha_mask(self.raw.ptr.as_ptr(), id, &*raw) };
+            MaskBuffers { _raw: raw, _uvs: uvs, _alpha: alpha }
+        });
+        self.meshes.push(SharedMesh { _vertices: vertex_floats, _indices: index_u32, _mask: mask });
+        self.raw.device.check("setting an alpha mask")?;
         Ok(id)
     }
 

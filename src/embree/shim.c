@@ -125,6 +125,66 @@ uint32_t lc_scene_attach_triangles(LcScene* scene, const float* vertices, size_t
     return (uint32_t)id;
 }
 
+static float mask_texel(const LcAlphaMask* m, long x, long y) {
+    long w = (long)m->width, h = (long)m->height;
+    x %= w;
+    y %= h;
+    if (x < 0) x += w;
+    if (y < 0) y += h;
+    return m->alpha[(size_t)y * m->width + (size_t)x];
+}
+
+/* The mask's alpha at a hit: the same bilinear, repeating lookup as the
+ * renderer's textures (texture.rs), so a cut-out edge is where the colour
+ * texture's alpha crosses the cutoff. */
+static float mask_alpha(const LcAlphaMask* m, unsigned prim, float u, float v) {
+    const uint32_t* t = &m->indices[3 * (size_t)prim];
+    float w = 1.0f - u - v;
+    float su = w * m->uvs[2 * t[0]] + u * m->uvs[2 * t[1]] + v * m->uvs[2 * t[2]];
+    float sv = w * m->uvs[2 * t[0] + 1] + u * m->uvs[2 * t[1] + 1] + v * m->uvs[2 * t[2] + 1];
+    const float* a = m->transform;
+    float lu = a[0] * su + a[2] * sv + a[4];
+    float lv = a[1] * su + a[3] * sv + a[5];
+    if (!isfinite(lu) || !isfinite(lv)) return 1.0f;
+    float x = (lu - floorf(lu)) * (float)m->width - 0.5f;
+    float y = (1.0f - (lv - floorf(lv))) * (float)m->height - 0.5f;
+    float x0 = floorf(x), y0 = floorf(y);
+    float fx = x - x0, fy = y - y0;
+    long ix = (long)x0, iy = (long)y0;
+    float top = mask_texel(m, ix, iy) * (1.0f - fx) + mask_texel(m, ix + 1, iy) * fx;
+    float bottom = mask_texel(m, ix, iy + 1) * (1.0f - fx) + mask_texel(m, ix + 1, iy + 1) * fx;
+    return top * (1.0f - fy) + bottom * fy;
+}
+
+/* Fields of lane i of an N-wide RTCHitN: Embree's SoA layout (Ng_x, Ng_y,
+ * Ng_z, u, v, primID, ... each N wide, the same in Embree 3 and 4), which
+ * its RTCHitN_u and friends read but declare for C++ only. */
+static float hitn_u(const struct RTCHitN* hit, unsigned n, unsigned i) { return ((const float*)hit)[3 * n + i]; }
+static float hitn_v(const struct RTCHitN* hit, unsigned n, unsigned i) { return ((const float*)hit)[4 * n + i]; }
+static unsigned hitn_prim(const struct RTCHitN* hit, unsigned n, unsigned i) { return ((const unsigned*)hit)[5 * n + i]; }
+
+/* Embree's filter callback (both majors, any packet width N): rejects the
+ * hits where the mask is below its cutoff, so traversal goes on past them. */
+static void alpha_filter(const struct RTCFilterFunctionNArguments* args) {
+    const LcAlphaMask* m = (const LcAlphaMask*)args->geometryUserPtr;
+    for (unsigned i = 0; i < args->N; ++i) {
+        if (args->valid[i] != -1) continue;
+        unsigned prim = hitn_prim(args->hit, args->N, i);
+        float u = hitn_u(args->hit, args->N, i);
+        float v = hitn_v(args->hit, args->N, i);
+        if (mask_alpha(m, prim, u, v) < m->cutoff) args->valid[i] = 0;
+    }
+}
+
+void lc_scene_set_alpha_mask(LcScene* scene, uint32_t geom_id, const LcAlphaMask* mask) {
+    RTCGeometry geometry = rtcGetGeometry(scene->scene, geom_id);
+    if (geometry == NULL) return;
+    rtcSetGeometryUserData(geometry, (void*)mask);
+    rtcSetGeometryIntersectFilterFunction(geometry, alpha_filter);
+    rtcSetGeometryOccludedFilterFunction(geometry, alpha_filter);
+    rtcCommitGeometry(geometry);
+}
+
 void lc_scene_commit(LcScene* scene) { rtcCommitScene(scene->scene); }
 
 static void to_rtc_ray(const LcRay* in, struct RTCRay* out) {

@@ -65,6 +65,26 @@ void lc_scene_release(LcScene* scene);
 uint32_t lc_scene_attach_triangles(LcScene* scene,
                                    const float* vertices, size_t vertex_count,
                                    const uint32_t* indices, size_t triangle_count);
+/* A cut-out (glTF's alphaMode MASK): a hit on the mesh whose alpha, looked up
+ * bilinearly (repeating) at the hit's texture coordinate, is below `cutoff`
+ * is ignored by every query (closest hit, occlusion, packets), through
+ * Embree's intersection and occlusion filter functions. All pointers are
+ * owned by the caller and must outlive the scene. */
+typedef struct LcAlphaMask {
+    const uint32_t* indices; /* the mesh's triangles, 3 per triangle */
+    const float* uvs;        /* 2 per vertex */
+    const float* alpha;      /* width * height, row 0 at the top */
+    uint32_t width;
+    uint32_t height;
+    /* (u, v) -> (m[0] u + m[2] v + m[4], m[1] u + m[3] v + m[5]): the lookup
+     * coordinate, whose v = 0 is the image's bottom row. */
+    float transform[6];
+    float cutoff;
+} LcAlphaMask;
+
+/* Makes geometry `geom_id` (attached, not yet committed scene) a cut-out. */
+void lc_scene_set_alpha_mask(LcScene* scene, uint32_t geom_id, const LcAlphaMask* mask);
+
 void lc_scene_commit(LcScene* scene);
 
 /* Closest hit along one ray; returns 1 on a hit, 0 on a miss. */

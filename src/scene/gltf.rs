@@ -18,7 +18,7 @@ use gltf::mesh::Mode;
 
 use super::file::{CameraSpec, GltfSpec};
 use super::image::{self, RgbImage};
-use super::material::{Albedo, Material};
+use super::material::{Albedo, Cutout, Material};
 use super::mesh::Mesh;
 use super::texture::Texture;
 use super::{within_limits, LightSource, SceneError, MAX_COORDINATE, MAX_EMITTER_SAMPLES};
@@ -518,6 +518,7 @@ impl Importer<'_, '_> {
         }
         let specular = f0.lerp(base_rgb, metallic);
         let diffuse_weight = 1.0 - metallic;
+        let mut coverage = None;
         let albedo = match pbr.base_color_texture() {
             None => Albedo::Constant(base_rgb * diffuse_weight),
             Some(info) => {
@@ -530,19 +531,38 @@ impl Importer<'_, '_> {
                 let tint = base_rgb * diffuse_weight;
                 let texels = image.texels.iter().map(|t| *t * tint).collect();
                 self.parts.textures.push(Texture::from_texels(image.width, image.height, texels));
-                Albedo::Texture {
-                    texture: self.parts.textures.len() - 1,
-                    transform: uv_transform(info.texture_transform()),
-                }
+                let transform = uv_transform(info.texture_transform());
+                coverage = image.alpha.as_ref().map(|a| {
+                    (a.iter().map(|x| x * base.w).collect::<Vec<f32>>(), image.width, image.height, transform)
+                });
+                Albedo::Texture { texture: self.parts.textures.len() - 1, transform }
             }
         };
         if pbr.metallic_roughness_texture().is_some() {
             self.warn(&location, "metallicRoughnessTexture ignored: the factors are used");
         }
-        match m.alpha_mode() {
-            gltf::material::AlphaMode::Opaque => {}
-            mode => self.warn(&location, &format!("alphaMode {mode:?} not supported yet: rendered opaque")),
+        let cutoff = match m.alpha_mode() {
+            gltf::material::AlphaMode::Opaque => None,
+            gltf::material::AlphaMode::Mask => Some(m.alpha_cutoff().unwrap_or(0.5)),
+            gltf::material::AlphaMode::Blend => {
+                self.warn(&location, "alphaMode BLEND rendered as MASK with a cutoff of 0.5 (no partial transparency)");
+                Some(0.5)
+            }
+        };
+        if cutoff.is_some_and(|c| !c.is_finite()) {
+            return Err(self.error(format!("{location}.alphaCutoff"), "must be finite"));
         }
+        // Only a mask that removes something costs Embree a filter call.
+        let cutout = cutoff.and_then(|cutoff| {
+            let (alpha, width, height, transform) = coverage.unwrap_or_else(|| (vec![base.w], 1, 1, Affine2::IDENTITY));
+            alpha.iter().any(|&a| a < cutoff).then(|| Cutout {
+                alpha,
+                width: width as u32,
+                height: height as u32,
+                transform,
+                cutoff,
+            })
+        });
         // Phong's exponent from roughness: n = 2 / alpha^2 - 2 with alpha =
         // roughness^2 (Walter et al. 2007's Beckmann-Phong correspondence);
         // a perfectly smooth surface is a mirror of the same reflectance.
@@ -576,6 +596,7 @@ impl Importer<'_, '_> {
             mirror,
             emission,
             emits_both_sides: m.double_sided(),
+            cutout,
         });
         self.materials.insert(m.index(), index);
         Ok(index)

@@ -14,6 +14,8 @@ pub struct RgbImage {
     pub width: usize,
     pub height: usize,
     pub texels: Vec<Vec3>,
+    /// Coverage (linear, 0 to 1) per texel, for a PNG with an alpha channel.
+    pub alpha: Option<Vec<f32>>,
 }
 
 /// Why an image a scene names cannot be used. Caused by the user's file.
@@ -82,7 +84,7 @@ fn decode_jpeg(bytes: &[u8]) -> Result<RgbImage, ImageError> {
             Vec3::new(c(0), c(1), c(2))
         })
         .collect();
-    Ok(RgbImage { width, height, texels })
+    Ok(RgbImage { width, height, texels, alpha: None })
 }
 
 fn decode_png(reader: impl std::io::Read) -> Result<RgbImage, ImageError> {
@@ -114,7 +116,10 @@ fn decode_png(reader: impl std::io::Read) -> Result<RgbImage, ImageError> {
     if texels.is_empty() {
         return Err(ImageError::Empty);
     }
-    Ok(RgbImage { width, height, texels })
+    // Alpha is linear coverage (PNG's grey + alpha and RGBA), not sRGB.
+    let alpha =
+        matches!(channels, 2 | 4).then(|| (0..width * height).map(|p| sample(p * channels + channels - 1)).collect());
+    Ok(RgbImage { width, height, texels, alpha })
 }
 
 /// Reads the R, G and B channels of an OpenEXR's first RGB layer as radiance,
@@ -122,7 +127,12 @@ fn decode_png(reader: impl std::io::Read) -> Result<RgbImage, ImageError> {
 pub fn read_radiance_exr(path: &Path) -> Result<RgbImage, ImageError> {
     let image = exr::prelude::read_first_rgba_layer_from_file(
         path,
-        |size, _| RgbImage { width: size.width(), height: size.height(), texels: vec![Vec3::ZERO; size.area()] },
+        |size, _| RgbImage {
+            width: size.width(),
+            height: size.height(),
+            texels: vec![Vec3::ZERO; size.area()],
+            alpha: None,
+        },
         |image: &mut RgbImage, at, (r, g, b, _): (f32, f32, f32, f32)| {
             image.texels[at.y() * image.width + at.x()] = Vec3::new(r, g, b);
         },

@@ -34,6 +34,21 @@ pub struct Material {
     /// Whether `emission` leaves the back side too (glTF's double-sided
     /// emissive materials, as Cycles renders them).
     pub emits_both_sides: bool,
+    /// Where the surface is cut out (glTF's alphaMode MASK): rays pass
+    /// through where the coverage is below the cutoff.
+    pub cutout: Option<Cutout>,
+}
+
+/// Coverage texels and the cutoff below which a surface is absent.
+#[derive(Debug, Clone)]
+pub struct Cutout {
+    /// `width * height` coverages, row 0 at the top.
+    pub alpha: Vec<f32>,
+    pub width: u32,
+    pub height: u32,
+    /// From the mesh's uv to the lookup's, as [`Albedo::Texture`]'s.
+    pub transform: Affine2,
+    pub cutoff: f32,
 }
 
 impl Material {

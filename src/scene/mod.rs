@@ -149,6 +149,7 @@ fn add_emitter(
         mirror: Vec3::ZERO,
         emission: radiance,
         emits_both_sides: false,
+        cutout: None,
     });
     meshes.push(mesh);
     meshes.len() - 1
@@ -269,6 +270,7 @@ impl Scene {
                 mirror,
                 emission: Vec3::ZERO,
                 emits_both_sides: false,
+                cutout: None,
             });
         }
 

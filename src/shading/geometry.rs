@@ -3,7 +3,7 @@
 use glam::{Vec2, Vec3};
 
 use super::surface::SurfacePoint;
-use crate::embree::{self, Device, EmbreeError, Hit, MeshError, Ray};
+use crate::embree::{self, AlphaMask, Device, EmbreeError, Hit, MeshError, Ray};
 use crate::light::Lights;
 use crate::scene::material::reflect;
 use crate::scene::Scene;
@@ -33,8 +33,16 @@ impl<'s> Geometry<'s> {
         let mut builder = device.try_new_scene()?;
         let mut mesh_of_geometry = Vec::new();
         for (i, mesh) in scene.meshes.iter().enumerate() {
+            let mask = scene.materials[mesh.material].cutout.as_ref().map(|c| AlphaMask {
+                uvs: mesh.uvs.clone().unwrap_or_else(|| vec![Vec2::ZERO; mesh.positions.len()]),
+                alpha: c.alpha.clone(),
+                width: c.width,
+                height: c.height,
+                transform: c.transform,
+                cutoff: c.cutoff,
+            });
             let id = builder
-                .attach_triangles(&mesh.positions, &mesh.triangles)
+                .attach_masked_triangles(&mesh.positions, &mesh.triangles, mask)
                 .map_err(|source| GeometryError::Mesh { shape: i, source })?;
             debug_assert_eq!(id as usize, mesh_of_geometry.len(), "Embree assigns ids in order");
             mesh_of_geometry.push(i);

@@ -199,6 +199,7 @@ pub fn measure_quality(
         mirror: Vec3::ZERO,
         emission: Vec3::ZERO,
         emits_both_sides: false,
+        cutout: None,
     };
     let points = shading_points(&material, 1000);
     let device = Device::try_new()?;

@@ -76,6 +76,7 @@ fn material(rng: &mut Rng) -> Material {
         mirror: Vec3::ZERO,
         emission: Vec3::ZERO,
         emits_both_sides: false,
+        cutout: None,
     }
 }
 
@@ -244,6 +245,7 @@ fn a_point_inside_the_box_gets_a_finite_bound_above_every_light() {
         mirror: Vec3::ZERO,
         emission: Vec3::ZERO,
         emits_both_sides: false,
+        cutout: None,
     };
     let mut rng = Rng::seeded(3);
     let sp = surface(&mut rng, &m);
