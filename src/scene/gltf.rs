@@ -555,7 +555,7 @@ impl Importer<'_, '_> {
         // Only a mask that removes something costs Embree a filter call.
         let cutout = cutoff.and_then(|cutoff| {
             let (alpha, width, height, transform) = coverage.unwrap_or_else(|| (vec![base.w], 1, 1, Affine2::IDENTITY));
-            alpha.iter().any(|&a| a < cutoff).then(|| Cutout {
+            alpha.iter().any(|&a| a < cutoff).then_some(Cutout {
                 alpha,
                 width: width as u32,
                 height: height as u32,

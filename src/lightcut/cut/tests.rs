@@ -10,6 +10,11 @@ use crate::util::sampling::Rng;
 /// A floor, two occluding spheres (one glossy) and `n x n` lights of mixed
 /// brightness over them; returns the scene loaded from text.
 fn scene(n: u32) -> Scene {
+    scene_with(n, "")
+}
+
+/// [`scene`] with more `lights` (TOML `[[lights]]` entries).
+fn scene_with(n: u32, lights: &str) -> Scene {
     let text = format!(
         r#"
 [film]
@@ -55,6 +60,7 @@ u = [8, 0, 0]
 v = [0, 0, 8]
 count = [{n}, 2]
 intensity = [0.2, 0.1, 0.05]
+{lights}
 "#
     );
     let spec = toml::from_str(&text).unwrap();
@@ -108,4 +114,39 @@ fn error_zero_refines_to_the_exact_sum_at_every_point() {
         let diff = (cut - exact).abs().max_element();
         assert!(diff <= 1e-9 * exact.max_element().max(1e-300), "error 0: {cut} vs {exact}");
     });
+}
+
+/// 20 x 20 spots over the scene, tilted and of widths from 10 to 88 degrees.
+fn spots() -> String {
+    let mut rng = Rng::seeded(17);
+    let mut text = String::new();
+    for j in 0..20 {
+        for i in 0..20 {
+            let (x, z) = (-4.0 + 0.4 * i as f32, -4.0 + 0.4 * j as f32);
+            let outer = rng.range_f32(10.0, 88.0);
+            let inner = outer * rng.range_f32(0.0, 0.9);
+            let (dx, dz) = (rng.range_f32(-0.8, 0.8), rng.range_f32(-0.8, 0.8));
+            text += &format!(
+                "[[lights]]\ntype = \"spot\"\nposition = [{x}, {}, {z}]\ndirection = [{dx}, -1, {dz}]\n\
+                 intensity = [0.3, 0.25, 0.2]\ninner_angle = {inner}\nouter_angle = {outer}\n",
+                rng.range_f32(1.5, 3.5)
+            );
+        }
+    }
+    text
+}
+
+/// The same check through trees of spots: the widest outer angle of a node
+/// (`SpotBlock::min_cos_outer`) must cover every light below it.
+#[test]
+fn spot_cuts_are_within_the_sum_of_their_bounds() {
+    let scene = scene_with(4, &spots());
+    let settings = CutSettings { error: 0.02, max_cut: 1000 };
+    let mut worst = 0.0f64;
+    at_shading_points(&scene, settings, |cut, exact, bound| {
+        let error = (luminance64(cut) - luminance64(exact)).abs();
+        assert!(error <= bound + 1e-9 * luminance64(exact), "error {error} > bound sum {bound}");
+        worst = worst.max(error / luminance64(exact).max(1e-12));
+    });
+    assert!(worst > 0.0, "at 2% the cut must actually approximate somewhere");
 }
