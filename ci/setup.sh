@@ -10,14 +10,17 @@
 #                        checks that every file a scene reads is committed)
 #                        and OpenImageIO's tools (an independent reader of the
 #                        EXRs we write: oiiotool, iinfo, idiff)
+#   ci/setup.sh --slurm  also Slurm and MUNGE, for ci/slurm-test.sh's
+#                        single-node cluster (farm/slurm/)
 set -euo pipefail
 
 packages=(libembree-dev libclang-dev gcc libc6-dev fonts-dejavu-core)
 case "${1:-}" in
 "") ;;
 --test) packages+=(git openimageio-tools) ;;
+--slurm) packages+=(git openimageio-tools slurm-wlm munge) ;;
 *)
-    echo "usage: ci/setup.sh [--test]" >&2
+    echo "usage: ci/setup.sh [--test | --slurm]" >&2
     exit 2
     ;;
 esac

@@ -1,6 +1,7 @@
 //! The command line. This is the only place an error becomes an exit code:
 //! everything below returns `Result`s.
 
+mod assemble_cmd;
 pub mod bench;
 mod compare_cmd;
 mod process;
@@ -32,6 +33,8 @@ pub enum Command {
     Sweep(sweep_cmd::SweepArgs),
     /// Benchmarks that print measured figures (--json for machines).
     Bench(bench::BenchArgs),
+    /// Assemble one frame from the tiles of `render --tile I/N`.
+    Assemble(assemble_cmd::AssembleArgs),
 }
 
 /// Everything that can stop a command, each naming its cause.
@@ -71,6 +74,7 @@ pub fn main() -> i32 {
         Command::Compare(args) => compare_cmd::run(&args),
         Command::Bench(args) => bench::run(&args),
         Command::Sweep(args) => sweep_cmd::run(&args),
+        Command::Assemble(args) => assemble_cmd::run(&args),
     };
     match result {
         Ok(()) => 0,
@@ -81,7 +85,8 @@ pub fn main() -> i32 {
     }
 }
 
-/// On SIGINT remove any temporary output file being written, then exit 130
+/// On SIGINT (or SIGTERM, as Slurm's scancel sends) remove any temporary
+/// output file being written and any claim held, then exit 130
 /// (the shell convention for death by SIGINT).
 fn ctrlc_cleanup() {
     let _ = ctrlc::set_handler(|| {

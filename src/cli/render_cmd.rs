@@ -44,6 +44,79 @@ pub struct RenderArgs {
     /// Embree (times every ray query), peak memory.
     #[arg(long)]
     pub stats: bool,
+    /// Render tile I of N (I from 0): the horizontal band of rows
+    /// floor(I H / N) to floor((I + 1) H / N), every column; the EXR's data
+    /// window is the band, its display window the frame (see `assemble`).
+    #[arg(long, value_name = "I/N", value_parser = parse_tile, conflicts_with = "pixel_bounds")]
+    pub tile: Option<(u32, u32)>,
+    /// Skip the render when the output exists, and claim the output
+    /// atomically (OUT.exr.claim, created exclusively) before rendering, so
+    /// that two processes never render the same file and a re-run renders
+    /// only what is missing.
+    #[arg(long)]
+    pub no_overwrite: bool,
+}
+
+/// Parses `I/N` with 0 <= I < N.
+pub fn parse_tile(s: &str) -> Result<(u32, u32), String> {
+    let (i, n) = s.split_once('/').ok_or_else(|| format!("expected I/N, got '{s}'"))?;
+    let i: u32 = i.trim().parse().map_err(|_| format!("'{i}' is not a non-negative integer"))?;
+    let n: u32 = n.trim().parse().map_err(|_| format!("'{n}' is not a positive integer"))?;
+    if n == 0 || i >= n {
+        return Err(format!("need 0 <= I < N, got {i}/{n}"));
+    }
+    Ok((i, n))
+}
+
+/// Rows `[y0, y1)` of tile `index` of `count` horizontal bands of a frame
+/// `height` pixels high: floor(I H / N) to floor((I + 1) H / N).
+#[must_use]
+pub fn tile_rows(index: u32, count: u32, height: u32) -> (u32, u32) {
+    let row = |i: u32| (u64::from(i) * u64::from(height) / u64::from(count)) as u32;
+    (row(index), row(index + 1))
+}
+
+/// An output claimed by this process (`OUT.exr.claim`, created exclusively):
+/// removed when dropped, and by the interrupt handler, so that a failed or
+/// cancelled render leaves the tile to the next attempt.
+struct Claim(PathBuf);
+
+impl Claim {
+    /// Claims `output`; None when another process holds the claim.
+    fn take(output: &std::path::Path) -> Result<Option<Self>, CliError> {
+        let mut name = output.as_os_str().to_owned();
+        name.push(".claim");
+        let path = PathBuf::from(name);
+        match std::fs::OpenOptions::new().write(true).create_new(true).open(&path) {
+            Ok(mut file) => {
+                use std::io::Write as _;
+                crate::output::temporary::register(&path);
+                // Who holds it, for a farm operator reading a stale claim.
+                let _ = writeln!(file, "pid {} on {}", std::process::id(), hostname());
+                Ok(Some(Self(path)))
+            }
+            Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => Ok(None),
+            Err(e) => Err(crate::output::OutputError::io(&path, "create the claim file")(e).into()),
+        }
+    }
+}
+
+impl Drop for Claim {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_file(&self.0);
+        crate::output::temporary::unregister(&self.0);
+    }
+}
+
+fn hostname() -> String {
+    std::fs::read_to_string("/proc/sys/kernel/hostname").map_or_else(|_| "?".into(), |h| h.trim().to_string())
+}
+
+/// A hash of every file the scene read (in order), as 16 hex digits: what
+/// `assemble` requires its tiles to share.
+pub fn scene_hash(scene: &Scene) -> Result<String, CliError> {
+    let hashes = scene.inputs.iter().map(|p| super::sweep_cmd::hash_file(p)).collect::<Result<Vec<_>, _>>()?;
+    Ok(crate::util::hash::combined_hex(hashes))
 }
 
 /// How direct light is computed. Without a mode flag, the mode that gave
@@ -180,8 +253,34 @@ pub fn cut_settings(error: f64, max_cut: usize) -> Result<CutSettings, CliError>
 }
 
 pub fn run(args: &RenderArgs) -> Result<(), CliError> {
+    let _claim = if args.no_overwrite {
+        if args.output.exists() {
+            println!("{}: exists, skipped (--no-overwrite)", args.output.display());
+            return Ok(());
+        }
+        match Claim::take(&args.output)? {
+            Some(claim) => Some(claim),
+            None => {
+                println!("{}: claimed by another process, skipped (--no-overwrite)", args.output.display());
+                return Ok(());
+            }
+        }
+    } else {
+        None
+    };
     let scene = args.pass.load(&args.scene)?;
-    let settings = args.pass.settings(&scene, args.spp)?;
+    let mut settings = args.pass.settings(&scene, args.spp)?;
+    if let Some((index, count)) = args.tile {
+        if count > settings.height {
+            return Err(CliError::Usage {
+                flag: "--tile",
+                message: format!("{count} tiles of a frame {} rows high: at most one tile per row", settings.height),
+            });
+        }
+        let (y0, y1) = tile_rows(index, count, settings.height);
+        settings.bounds = PixelBounds { x0: 0, x1: settings.width, y0, y1 };
+    }
+    let scene_hash = scene_hash(&scene)?;
     let mode = args.mode.mode(settings.spp)?;
     if !args.exposure.is_finite() {
         return Err(CliError::Usage { flag: "--exposure", message: format!("must be finite, got {}", args.exposure) });
@@ -203,6 +302,7 @@ pub fn run(args: &RenderArgs) -> Result<(), CliError> {
         lights: lights.iter().sum::<usize>() as u64,
         spp: settings.spp,
         seed: settings.seed,
+        scene_hash,
     };
     write_exr(&args.output, &film, ExrChannels { half_beauty: args.half, lightcut_aovs: cut.is_some() }, &meta)?;
     if let Some(png) = &args.png {

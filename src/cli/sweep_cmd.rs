@@ -122,17 +122,9 @@ pub struct SweepRow {
     pub fraction_above_2_percent: f64,
 }
 
-fn hash_bytes(bytes: &[u8]) -> u64 {
-    bytes.chunks(8).fold(0x243f_6a88_85a3_08d3, |h, c| {
-        let mut word = [0u8; 8];
-        word[..c.len()].copy_from_slice(c);
-        crate::util::sampling::mix64(h ^ u64::from_le_bytes(word))
-    })
-}
-
-fn hash_file(path: &Path) -> Result<u64, OutputError> {
+pub(super) fn hash_file(path: &Path) -> Result<u64, OutputError> {
     let bytes = std::fs::read(path).map_err(OutputError::io(path, "read the file to hash it"))?;
-    Ok(hash_bytes(&bytes))
+    Ok(crate::util::hash::hash_bytes(&bytes))
 }
 
 /// `lightcuts VERSION EXE-HASH`: the running binary, exactly.
@@ -146,7 +138,13 @@ fn rgb(film: &Film) -> Vec<DVec3> {
     film.pixels.iter().map(|p| DVec3::new(f64::from(p.rgb[0]), f64::from(p.rgb[1]), f64::from(p.rgb[2]))).collect()
 }
 
-fn metadata(scene: &Scene, settings: &PassSettings, mode: String, result: &PassResult) -> ExrMetadata {
+fn metadata(
+    scene: &Scene,
+    key: &ReferenceKey,
+    settings: &PassSettings,
+    mode: String,
+    result: &PassResult,
+) -> ExrMetadata {
     ExrMetadata {
         scene_file: scene.path.clone(),
         render_mode: mode,
@@ -154,6 +152,7 @@ fn metadata(scene: &Scene, settings: &PassSettings, mode: String, result: &PassR
         lights: result.lights.iter().sum::<usize>() as u64,
         spp: settings.spp,
         seed: settings.seed,
+        scene_hash: crate::util::hash::combined_hex(key.inputs.iter().map(|(_, h)| *h)),
     }
 }
 
@@ -189,7 +188,7 @@ fn reference(
     }
     let progress = Progress::for_stderr("exact", quiet);
     let result = session.render(settings, Mode::Exact, &|event| progress.report(event));
-    let meta = metadata(session.scene, settings, "exact".into(), &result);
+    let meta = metadata(session.scene, key, settings, "exact".into(), &result);
     write_exr(&exr_path, &result.film, ExrChannels { half_beauty: false, lightcut_aovs: false }, &meta)?;
     let record =
         ReferenceRecord { key: key.clone(), seconds: result.seconds, shadow_rays: result.stats.shading.shadow_rays };
@@ -246,7 +245,7 @@ pub fn run(args: &SweepArgs) -> Result<(), CliError> {
                 let comparison =
                     compare_rgb(&rgb(&result.film), &reference_rgb, b.width() as usize, b.height() as usize).summary;
                 let path = args.out.join(format!("{}-spp{spp}-error-{error}.exr", sweep_mode.name()));
-                let meta = metadata(&scene, &settings, mode.describe(), &result);
+                let meta = metadata(&scene, &key, &settings, mode.describe(), &result);
                 write_exr(&path, &result.film, ExrChannels { half_beauty: false, lightcut_aovs: true }, &meta)?;
                 let shading = &result.stats.shading;
                 rows.push(SweepRow {

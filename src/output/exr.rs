@@ -20,6 +20,8 @@ pub struct ExrMetadata {
     pub lights: u64,
     pub spp: u32,
     pub seed: u64,
+    /// Hash of every file the scene read (16 hex digits).
+    pub scene_hash: String,
 }
 
 /// Which channels to write.
@@ -91,6 +93,7 @@ pub fn write_exr(
     other("lightcuts:lights", AttributeValue::Text(Text::from(meta.lights.to_string().as_str())));
     other("lightcuts:samplesPerPixel", AttributeValue::I32(meta.spp.min(i32::MAX as u32) as i32));
     other("lightcuts:seed", AttributeValue::Text(Text::from(meta.seed.to_string().as_str())));
+    other("lightcuts:sceneHash", AttributeValue::Text(Text::from(meta.scene_hash.as_str())));
 
     let encoding =
         Encoding { compression: Compression::ZIP16, blocks: Blocks::ScanLines, line_order: LineOrder::Increasing };

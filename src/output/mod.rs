@@ -3,6 +3,7 @@
 //! in the destination directory and renamed into place, so a reader never sees
 //! a half-written image under the output name.
 
+pub mod assemble;
 pub mod compare;
 pub mod exr;
 pub mod plot;
@@ -71,6 +72,18 @@ pub enum OutputError {
     /// An image lacks a channel the command needs.
     #[error("{}: channel '{channel}' missing (has {available})", path.display())]
     MissingChannel { path: PathBuf, channel: String, available: String },
+    /// A tile to assemble disagrees with the first tile.
+    #[error("{}: {what} is '{found}', but {} has '{expected}': tiles of different renders", path.display(), reference.display())]
+    TileMismatch { path: PathBuf, reference: PathBuf, what: String, found: String, expected: String },
+    /// Two tiles cover the same pixels.
+    #[error(
+        "{}: overlaps {} on x {}..{}, y {}..{}",
+        path.display(), other.display(), window[0], window[1], window[2], window[3]
+    )]
+    TileOverlap { path: PathBuf, other: PathBuf, window: [u32; 4] },
+    /// The tiles leave pixels of the frame uncovered.
+    #[error("{}: {pixels} pixels of the frame are in no tile: {missing}", path.display())]
+    TileGaps { path: PathBuf, pixels: u64, missing: String },
     /// Two images to compare do not cover the same pixels.
     #[error(
         "{}: data window {}x{} at ({}, {}) differs from the reference's {}x{} at ({}, {}) ({})",

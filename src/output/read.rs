@@ -21,6 +21,8 @@ pub struct ExrImage {
     pub channels: BTreeMap<String, Vec<f32>>,
     /// Custom header attributes rendered as text.
     pub attributes: BTreeMap<String, String>,
+    /// The channels stored as 16-bit half floats.
+    pub half: std::collections::BTreeSet<String>,
 }
 
 impl ExrImage {
@@ -45,7 +47,11 @@ pub fn read_exr(path: &Path) -> std::result::Result<ExrImage, OutputError> {
         .map_err(|source| OutputError::Exr { path: path.to_path_buf(), action: "read", source })?;
     let layer = &image.layer_data;
     let mut channels = BTreeMap::new();
+    let mut half = std::collections::BTreeSet::new();
     for channel in &layer.channel_data.list {
+        if matches!(channel.sample_data, FlatSamples::F16(_)) {
+            half.insert(channel.name.to_string());
+        }
         let values: Vec<f32> = channel.sample_data.values_as_f32().collect();
         channels.insert(channel.name.to_string(), values);
     }
@@ -73,5 +79,6 @@ pub fn read_exr(path: &Path) -> std::result::Result<ExrImage, OutputError> {
         display_height: display.size.height(),
         channels,
         attributes,
+        half,
     })
 }

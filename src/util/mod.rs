@@ -2,4 +2,5 @@
 //! deterministic random numbers. Nothing here imports the rest of the crate.
 
 pub mod color;
+pub mod hash;
 pub mod sampling;

@@ -1,0 +1,119 @@
+//! Tiles for a farm: `render --tile I/N` and `--no-overwrite`, and
+//! `assemble`, run as the real binary. (ci/slurm-test.sh runs the same on a
+//! real Slurm cluster.)
+
+mod common;
+use common::*;
+
+fn same_pixels(a: &ExrImage, b: &ExrImage) {
+    assert_eq!(a.channels.keys().collect::<Vec<_>>(), b.channels.keys().collect::<Vec<_>>());
+    for (name, values) in &a.channels {
+        let other = &b.channels[name];
+        assert!(values.iter().zip(other).all(|(x, y)| x.to_bits() == y.to_bits()), "{name} differs");
+    }
+    assert_eq!((a.width, a.height, a.x0, a.y0), (b.width, b.height, b.x0, b.y0));
+}
+
+#[test]
+fn tiles_assemble_to_the_one_process_render_bit_for_bit() {
+    let dir = TempDir::new("farm-tiles");
+    let scene = dir.write("s.toml", &small_scene(16));
+    let one = dir.path("one.exr");
+    let common = ["--resolution", "40x30", "--spp", "2", "--quiet"];
+    lightcuts_ok(&[&["render", s(&scene), "-o", s(&one)][..], &common].concat());
+    let one = read_exr(&one).unwrap();
+    for n in [1u32, 3, 7] {
+        let mut tiles = Vec::new();
+        for i in 0..n {
+            let tile = dir.path(&format!("t{n}-{i}.exr"));
+            let spec = format!("{i}/{n}");
+            lightcuts_ok(&[&["render", s(&scene), "-o", s(&tile), "--tile", &spec][..], &common].concat());
+            let image = read_exr(&tile).unwrap();
+            // Bands: rows floor(i H / n) .. floor((i + 1) H / n), full width.
+            assert_eq!((image.x0, image.y0 as u32, image.width), (0, i * 30 / n, 40));
+            assert_eq!(image.height as u32, (i + 1) * 30 / n - i * 30 / n);
+            tiles.push(tile);
+        }
+        let frame = dir.path(&format!("frame{n}.exr"));
+        let args: Vec<&str> = ["assemble", s(&frame)].into_iter().chain(tiles.iter().map(|t| s(t))).collect();
+        lightcuts_ok(&args);
+        same_pixels(&read_exr(&frame).unwrap(), &one);
+    }
+}
+
+#[test]
+fn assemble_refuses_gaps_overlaps_and_tiles_of_other_renders() {
+    let dir = TempDir::new("farm-refuse");
+    let scene = dir.write("s.toml", &small_scene(16));
+    let render = |out: &str, tile: &str, seed: &str| {
+        let out = dir.path(out);
+        lightcuts_ok(&[
+            "render",
+            s(&scene),
+            "-o",
+            s(&out),
+            "--tile",
+            tile,
+            "--seed",
+            seed,
+            "--resolution",
+            "16x12",
+            "--quiet",
+        ]);
+        out
+    };
+    let (a, b, c) = (render("a.exr", "0/3", "0"), render("b.exr", "1/3", "0"), render("c.exr", "2/3", "0"));
+    let other_seed = render("d.exr", "2/3", "7");
+    let frame = dir.path("frame.exr");
+    let missing = dir.path("never-rendered.exr");
+    let stderr = lightcuts_fails(&["assemble", s(&frame), s(&a), s(&missing), s(&c)]);
+    assert!(stderr.contains("64 pixels of the frame are in no tile: x 0..16, y 4..8"), "{stderr}");
+    assert!(stderr.contains("never-rendered.exr"), "{stderr}");
+    let stderr = lightcuts_fails(&["assemble", s(&frame), s(&a), s(&b), s(&b), s(&c)]);
+    assert!(stderr.contains("overlaps") && stderr.contains("y 4..8"), "{stderr}");
+    let stderr = lightcuts_fails(&["assemble", s(&frame), s(&a), s(&b), s(&other_seed)]);
+    assert!(stderr.contains("lightcuts:seed is '7'") && stderr.contains("d.exr"), "{stderr}");
+    assert!(!frame.exists(), "no frame written on refusal");
+    lightcuts_ok(&["assemble", s(&frame), s(&a), s(&b), s(&c)]);
+    // A changed scene file changes the scene hash.
+    let text = small_scene(16);
+    assert!(text.contains("fov_y = 45"));
+    std::fs::write(&scene, text.replace("fov_y = 45", "fov_y = 46")).unwrap();
+    let changed = render("e.exr", "2/3", "0");
+    let stderr = lightcuts_fails(&["assemble", s(&frame), s(&a), s(&b), s(&changed)]);
+    assert!(stderr.contains("lightcuts:sceneHash"), "{stderr}");
+    // Usage errors.
+    for bad in ["3/3", "1/0", "x/2"] {
+        // clap's usage errors exit 2.
+        let output = lightcuts(&["render", s(&scene), "-o", s(&dir.path("u.exr")), "--tile", bad]);
+        let stderr = String::from_utf8_lossy(&output.stderr);
+        assert!(output.status.code() == Some(2) && stderr.contains("--tile"), "{stderr}");
+    }
+    let stderr =
+        lightcuts_fails(&["render", s(&scene), "-o", s(&dir.path("u.exr")), "--tile", "12/13", "--resolution", "4x12"]);
+    assert!(stderr.contains("--tile: 13 tiles of a frame 12 rows high"), "{stderr}");
+}
+
+#[test]
+fn no_overwrite_skips_existing_and_claimed_outputs_and_releases_its_claim() {
+    let dir = TempDir::new("farm-claim");
+    let scene = dir.write("s.toml", &small_scene(16));
+    let out = dir.path("o.exr");
+    let render =
+        || lightcuts_ok(&["render", s(&scene), "-o", s(&out), "--no-overwrite", "--resolution", "8x6", "--quiet"]);
+    render();
+    assert!(out.exists() && !dir.path("o.exr.claim").exists(), "rendered, claim released: {:?}", dir.files());
+    let before = std::fs::read(&out).unwrap();
+    assert!(render().contains("exists, skipped"));
+    assert_eq!(std::fs::read(&out).unwrap(), before, "an existing output is left alone");
+    // Another process's claim: skipped, the claim left alone.
+    std::fs::remove_file(&out).unwrap();
+    std::fs::write(dir.path("o.exr.claim"), "pid 1 on elsewhere\n").unwrap();
+    assert!(render().contains("claimed by another process, skipped"));
+    assert!(!out.exists() && dir.path("o.exr.claim").exists());
+    // A failed render releases its claim, so that a re-run tries again.
+    std::fs::remove_file(dir.path("o.exr.claim")).unwrap();
+    let bad = dir.write("bad.toml", "[film]\nwidth = 0\n");
+    lightcuts_fails(&["render", s(&bad), "-o", s(&out), "--no-overwrite"]);
+    assert!(!dir.path("o.exr.claim").exists() && !out.exists(), "{:?}", dir.files());
+}
