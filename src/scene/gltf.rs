@@ -238,7 +238,10 @@ impl Importer<'_, '_> {
                 return Err(self.error(&location, format!("the node hierarchy is deeper than {MAX_DEPTH}")));
             }
             let local = Mat4::from_cols_array_2d(&node.transform().matrix());
-            let field = if node.transform().matrix() == Mat4::IDENTITY.to_cols_array_2d() { "" } else { ".matrix" };
+            let field = match node.transform() {
+                gltf::scene::Transform::Matrix { .. } => ".matrix",
+                gltf::scene::Transform::Decomposed { .. } => " (translation, rotation, scale)",
+            };
             if !local.is_finite() {
                 return Err(self.error(format!("{location}{field}"), "the transform is not finite"));
             }
