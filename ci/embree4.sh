@@ -125,4 +125,5 @@ chroot "$root" /usr/bin/env -i \
     CARGO_HOME=/opt/cargo \
     CARGO_TARGET_DIR=/var/cache/lightcuts-target \
     LIGHTCUTS_EXPECT_EMBREE_MAJOR=4 \
+    LIGHTCUTS_WITHOUT_OIIO=1 \
     bash -c 'cd /src && cargo test --release --locked --offline'

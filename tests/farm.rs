@@ -117,3 +117,35 @@ fn no_overwrite_skips_existing_and_claimed_outputs_and_releases_its_claim() {
     lightcuts_fails(&["render", s(&bad), "-o", s(&out), "--no-overwrite"]);
     assert!(!dir.path("o.exr.claim").exists() && !out.exists(), "{:?}", dir.files());
 }
+
+#[test]
+fn assemble_refuses_tiles_through_different_cameras() {
+    use serde_json::json;
+    let dir = TempDir::new("farm-camera");
+    let mut g = common::gltf::floor_and_point_light();
+    let side = g.camera(json!({ "type": "perspective", "name": "side", "perspective": { "yfov": 0.6, "aspectRatio": 1.5, "znear": 0.1 } }));
+    g.node(json!({ "camera": side, "translation": [0.0, 1.0, 8.0] }), true);
+    let scene = dir.write("s.gltf", &g.embedded());
+    let render = |out: &str, tile: &str, camera: &str| {
+        let out = dir.path(out);
+        lightcuts_ok(&[
+            "render",
+            s(&scene),
+            "-o",
+            s(&out),
+            "--tile",
+            tile,
+            "--camera",
+            camera,
+            "--resolution",
+            "12x8",
+            "--quiet",
+        ]);
+        out
+    };
+    let (a, b) = (render("a.exr", "0/2", "top"), render("b.exr", "1/2", "side"));
+    let stderr = lightcuts_fails(&["assemble", s(&dir.path("f.exr")), s(&a), s(&b)]);
+    assert!(stderr.contains("worldToCamera"), "{stderr}");
+    let c = render("c.exr", "1/2", "top");
+    lightcuts_ok(&["assemble", s(&dir.path("f.exr")), s(&a), s(&c)]);
+}

@@ -303,6 +303,8 @@ pub fn run(args: &RenderArgs) -> Result<(), CliError> {
         spp: settings.spp,
         seed: settings.seed,
         scene_hash,
+        world_to_camera: Some(scene.camera(settings.width, settings.height).world_to_camera().to_cols_array()),
+        world_to_ndc: Some(scene.camera(settings.width, settings.height).world_to_ndc().to_cols_array()),
     };
     write_exr(&args.output, &film, ExrChannels { half_beauty: args.half, lightcut_aovs: cut.is_some() }, &meta)?;
     if let Some(png) = &args.png {

@@ -153,6 +153,8 @@ fn metadata(
         spp: settings.spp,
         seed: settings.seed,
         scene_hash: crate::util::hash::combined_hex(key.inputs.iter().map(|(_, h)| *h)),
+        world_to_camera: Some(scene.camera(settings.width, settings.height).world_to_camera().to_cols_array()),
+        world_to_ndc: Some(scene.camera(settings.width, settings.height).world_to_ndc().to_cols_array()),
     }
 }
 

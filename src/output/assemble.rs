@@ -60,6 +60,14 @@ pub fn assemble(output: &Path, tiles: &[PathBuf]) -> Result<Assembled, OutputErr
                 return Err(mismatch(key, value(image), value(first)));
             }
         }
+        // The camera too (a glTF scene's --camera is not in the scene hash).
+        let show = |m: Option<[f32; 16]>| m.map_or_else(|| "(absent)".to_string(), |m| format!("{m:?}"));
+        if image.world_to_camera != first.world_to_camera {
+            return Err(mismatch("worldToCamera", show(image.world_to_camera), show(first.world_to_camera)));
+        }
+        if image.world_to_ndc != first.world_to_ndc {
+            return Err(mismatch("worldToNDC", show(image.world_to_ndc), show(first.world_to_ndc)));
+        }
     }
     // Which tile covers each pixel: overlaps are errors, gaps are listed.
     let mut owner: Vec<Option<usize>> = vec![None; width * height];
@@ -132,6 +140,8 @@ pub fn assemble(output: &Path, tiles: &[PathBuf]) -> Result<Assembled, OutputErr
         spp: attribute("lightcuts:samplesPerPixel").parse().unwrap_or(0),
         seed: attribute("lightcuts:seed").parse().unwrap_or(0),
         scene_hash: attribute("lightcuts:sceneHash"),
+        world_to_camera: first.world_to_camera,
+        world_to_ndc: first.world_to_ndc,
     };
     let channels = ExrChannels {
         half_beauty: first.half.contains("R"),

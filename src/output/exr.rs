@@ -22,6 +22,20 @@ pub struct ExrMetadata {
     pub seed: u64,
     /// Hash of every file the scene read (16 hex digits).
     pub scene_hash: String,
+    /// OpenEXR's `worldToCamera` and `worldToNDC` (Imath's row-vector
+    /// matrices, 16 floats row by row).
+    pub world_to_camera: Option<[f32; 16]>,
+    pub world_to_ndc: Option<[f32; 16]>,
+}
+
+/// The primaries and white point of the renderer's RGB: Rec. 709 / sRGB, D65.
+fn rec709() -> exr::meta::attribute::Chromaticities {
+    exr::meta::attribute::Chromaticities {
+        red: Vec2(0.64, 0.33),
+        green: Vec2(0.30, 0.60),
+        blue: Vec2(0.15, 0.06),
+        white: Vec2(0.3127, 0.3290),
+    }
 }
 
 /// Which channels to write.
@@ -82,6 +96,8 @@ pub fn write_exr(
     let mut attributes = LayerAttributes {
         layer_position: Vec2(b.x0 as i32, b.y0 as i32),
         software_name: Some(Text::from(concat!("lightcuts ", env!("CARGO_PKG_VERSION")))),
+        world_to_camera: meta.world_to_camera,
+        world_to_normalized_device: meta.world_to_ndc,
         ..LayerAttributes::default()
     };
     let mut other = |key: &str, value: AttributeValue| {
@@ -99,7 +115,10 @@ pub fn write_exr(
         Encoding { compression: Compression::ZIP16, blocks: Blocks::ScanLines, line_order: LineOrder::Increasing };
     let layer = Layer::new(size, attributes, encoding, AnyChannels::sort(list.into_iter().map(colour).collect()));
     let display = IntegerBounds::new(Vec2(0, 0), Vec2(film.full_width as usize, film.full_height as usize));
-    let image = Image::new(ImageAttributes::new(display), layer);
+    let mut image_attributes = ImageAttributes::new(display);
+    image_attributes.chromaticities = Some(rec709());
+    image_attributes.pixel_aspect = 1.0;
+    let image = Image::new(image_attributes, layer);
     write_atomically(path, |file| image.write().to_unbuffered(file).map_err(write_error(path)))
 }
 

@@ -23,6 +23,9 @@ pub struct ExrImage {
     pub attributes: BTreeMap<String, String>,
     /// The channels stored as 16-bit half floats.
     pub half: std::collections::BTreeSet<String>,
+    /// OpenEXR's `worldToCamera` and `worldToNDC`, when present.
+    pub world_to_camera: Option<[f32; 16]>,
+    pub world_to_ndc: Option<[f32; 16]>,
 }
 
 impl ExrImage {
@@ -80,5 +83,7 @@ pub fn read_exr(path: &Path) -> std::result::Result<ExrImage, OutputError> {
         channels,
         attributes,
         half,
+        world_to_camera: layer.attributes.world_to_camera,
+        world_to_ndc: layer.attributes.world_to_normalized_device,
     })
 }

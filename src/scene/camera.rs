@@ -1,6 +1,6 @@
 //! A pinhole camera.
 
-use glam::Vec3;
+use glam::{Mat4, Vec3, Vec4};
 
 use crate::embree::Ray;
 
@@ -28,6 +28,37 @@ impl Camera {
         Self { eye, right, up, forward, tan_half_fov_y: (fov_y_degrees.to_radians() * 0.5).tan(), width, height }
     }
 
+    /// World to camera space as OpenEXR's `worldToCamera` defines it:
+    /// left-handed, origin at the eye, x right, y up, z the viewing
+    /// direction (for column vectors; the EXR stores its transpose, Imath's
+    /// row-vector form, which has the same 16 floats as this matrix's columns).
+    #[must_use]
+    pub fn world_to_camera(&self) -> Mat4 {
+        let (r, u, f) = (self.right, self.up, self.forward);
+        Mat4::from_cols(
+            Vec4::new(r.x, u.x, f.x, 0.0),
+            Vec4::new(r.y, u.y, f.y, 0.0),
+            Vec4::new(r.z, u.z, f.z, 0.0),
+            Vec4::new(-r.dot(self.eye), -u.dot(self.eye), -f.dot(self.eye), 1.0),
+        )
+    }
+
+    /// World to normalised device coordinates (OpenEXR's `worldToNDC`):
+    /// after the division by w (= the camera-space depth z), x and y run
+    /// from -1 to 1 across the display window (y up) and z = 1 - 1/z, a
+    /// depth that grows with distance (its near plane at 1 scene unit).
+    #[must_use]
+    pub fn world_to_ndc(&self) -> Mat4 {
+        let aspect = self.width as f32 / self.height as f32;
+        let projection = Mat4::from_cols(
+            Vec4::new(1.0 / (self.tan_half_fov_y * aspect), 0.0, 0.0, 0.0),
+            Vec4::new(0.0, 1.0 / self.tan_half_fov_y, 0.0, 0.0),
+            Vec4::new(0.0, 0.0, 1.0, 1.0),
+            Vec4::new(0.0, 0.0, -1.0, 0.0),
+        );
+        projection * self.world_to_camera()
+    }
+
     /// The primary ray through film position (x, y) in pixels of the full
     /// frame, (0, 0) at the top-left corner; the direction is unit length, so
     /// ray parameter t is the distance from the eye.
@@ -43,6 +74,28 @@ impl Camera {
 
 #[cfg(test)]
 mod tests {
+    #[test]
+    fn world_to_camera_and_ndc_map_the_view_as_openexr_defines_them() {
+        let camera = super::Camera::new(
+            glam::Vec3::new(1.0, 2.0, 3.0),
+            glam::Vec3::new(1.0, 2.0, -7.0),
+            glam::Vec3::Y,
+            90.0,
+            200,
+            100,
+        );
+        let c = camera.world_to_camera();
+        // The eye is the origin; the look-at point is 10 units along +z.
+        assert!(c.transform_point3(glam::Vec3::new(1.0, 2.0, 3.0)).length() < 1e-5);
+        assert!(
+            (c.transform_point3(glam::Vec3::new(1.0, 2.0, -7.0)) - glam::Vec3::new(0.0, 0.0, 10.0)).length() < 1e-5
+        );
+        // The top-right corner ray's points land at NDC (1, 1).
+        let ray = camera.ray(200.0, 0.0);
+        let p = camera.world_to_ndc().project_point3(ray.origin + 5.0 * ray.direction);
+        assert!((p.x - 1.0).abs() < 1e-5 && (p.y - 1.0).abs() < 1e-5, "{p}");
+    }
+
     use super::*;
 
     #[test]
