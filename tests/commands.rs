@@ -140,3 +140,50 @@ fn sweep_renders_a_new_reference_when_a_file_the_scene_reads_changes() {
     assert_ne!(std::fs::metadata(out.join("reference-spp1.exr")).unwrap().modified().unwrap(), stamp, "re-rendered");
     assert!(second.iter().sum::<f32>() < 0.5 * first.iter().sum::<f32>(), "the new reference sees the new texture");
 }
+
+#[test]
+fn aovs_choose_the_layers_written() {
+    let dir = TempDir::new("aovs");
+    let scene = dir.write("s.toml", &small_scene(16));
+    let channels = |extra: &[&str]| {
+        let out = dir.path("o.exr");
+        lightcuts_ok(&[&["render", s(&scene), "-o", s(&out), "--resolution", "12x8", "--quiet"][..], extra].concat());
+        read_exr(&out).unwrap().channels.keys().cloned().collect::<Vec<_>>().join(",")
+    };
+    assert_eq!(
+        channels(&[]),
+        "A,B,G,N.X,N.Y,N.Z,R,Z,albedo.B,albedo.G,albedo.R,lightcuts.cut_size,lightcuts.shadow_rays"
+    );
+    assert_eq!(channels(&["--exact"]), "A,B,G,N.X,N.Y,N.Z,R,Z,albedo.B,albedo.G,albedo.R");
+    assert_eq!(channels(&["--aovs", "none"]), "A,B,G,R");
+    assert_eq!(channels(&["--aovs", "Z,lightcuts"]), "A,B,G,R,Z,lightcuts.cut_size,lightcuts.shadow_rays");
+    assert_eq!(channels(&["--aovs", "N", "--exact"]), "A,B,G,N.X,N.Y,N.Z,R");
+    let stderr = lightcuts_fails(&["render", s(&scene), "-o", s(&dir.path("x.exr")), "--exact", "--aovs", "lightcuts"]);
+    assert!(stderr.contains("--aovs") && !dir.path("x.exr").exists(), "{stderr}");
+    let output = lightcuts(&["render", s(&scene), "-o", s(&dir.path("x.exr")), "--aovs", "albedo,Q"]);
+    assert!(output.status.code() == Some(2) && String::from_utf8_lossy(&output.stderr).contains("unknown AOV 'Q'"));
+    // Tiles keep their selection through assemble.
+    let tiles: Vec<_> = (0..2)
+        .map(|i| {
+            let t = dir.path(&format!("t{i}.exr"));
+            let tile = format!("{i}/2");
+            lightcuts_ok(&[
+                "render",
+                s(&scene),
+                "-o",
+                s(&t),
+                "--resolution",
+                "12x8",
+                "--tile",
+                &tile,
+                "--aovs",
+                "Z",
+                "--quiet",
+            ]);
+            t
+        })
+        .collect();
+    let frame = dir.path("frame.exr");
+    lightcuts_ok(&["assemble", s(&frame), s(&tiles[0]), s(&tiles[1])]);
+    assert_eq!(read_exr(&frame).unwrap().channels.keys().cloned().collect::<Vec<_>>().join(","), "A,B,G,R,Z");
+}

@@ -8,7 +8,7 @@ use super::progress::Progress;
 use super::{parse_pixel_bounds, parse_resolution, CliError};
 use crate::lightcut::stochastic::{STOCHASTIC_DEFAULTS, STOCHASTIC_FROM_SPP};
 use crate::lightcut::CutSettings;
-use crate::output::exr::{write_exr, ExrChannels, ExrMetadata};
+use crate::output::exr::{write_exr, Aovs, ExrChannels, ExrMetadata};
 use crate::output::preview::write_png;
 use crate::render::session::{Mode, PassResult, Session};
 use crate::render::{PassSettings, PixelBounds};
@@ -31,6 +31,11 @@ pub struct RenderArgs {
     /// Write the beauty (R, G, B, A) as 16-bit half floats.
     #[arg(long)]
     pub half: bool,
+    /// The AOV layers to write beside the beauty: a comma-separated list of
+    /// albedo, N, Z and lightcuts (the cut's size and shadow rays; cut modes
+    /// only), or none. Default: all the render mode produces.
+    #[arg(long, value_name = "LIST", value_parser = Aovs::parse)]
+    pub aovs: Option<Aovs>,
     /// Also write a tone-mapped sRGB PNG preview.
     #[arg(long, value_name = "PREVIEW.png")]
     pub png: Option<PathBuf>,
@@ -282,6 +287,13 @@ pub fn run(args: &RenderArgs) -> Result<(), CliError> {
     }
     let scene_hash = scene_hash(&scene)?;
     let mode = args.mode.mode(settings.spp)?;
+    let aovs = args.aovs.unwrap_or(Aovs::all(mode.cut().is_some()));
+    if aovs.lightcuts && mode.cut().is_none() {
+        return Err(CliError::Usage {
+            flag: "--aovs",
+            message: "lightcuts (the cut's size and shadow rays) needs a cut mode, not --exact".into(),
+        });
+    }
     if !args.exposure.is_finite() {
         return Err(CliError::Usage { flag: "--exposure", message: format!("must be finite, got {}", args.exposure) });
     }
@@ -306,7 +318,7 @@ pub fn run(args: &RenderArgs) -> Result<(), CliError> {
         world_to_camera: Some(scene.camera(settings.width, settings.height).world_to_camera().to_cols_array()),
         world_to_ndc: Some(scene.camera(settings.width, settings.height).world_to_ndc().to_cols_array()),
     };
-    write_exr(&args.output, &film, ExrChannels { half_beauty: args.half, lightcut_aovs: cut.is_some() }, &meta)?;
+    write_exr(&args.output, &film, ExrChannels { half_beauty: args.half, aovs }, &meta)?;
     if let Some(png) = &args.png {
         write_png(png, &film, args.exposure)?;
     }

@@ -18,7 +18,7 @@ use super::CliError;
 use crate::lightcut::stochastic::STOCHASTIC_DEFAULTS;
 use crate::lightcut::CutSettings;
 use crate::output::compare::compare_rgb;
-use crate::output::exr::{write_exr, ExrChannels, ExrMetadata};
+use crate::output::exr::{write_exr, Aovs, ExrChannels, ExrMetadata};
 use crate::output::plot::{Plot, Series};
 use crate::output::read::read_exr;
 use crate::output::{write_atomically, OutputError};
@@ -191,7 +191,7 @@ fn reference(
     let progress = Progress::for_stderr("exact", quiet);
     let result = session.render(settings, Mode::Exact, &|event| progress.report(event));
     let meta = metadata(session.scene, key, settings, "exact".into(), &result);
-    write_exr(&exr_path, &result.film, ExrChannels { half_beauty: false, lightcut_aovs: false }, &meta)?;
+    write_exr(&exr_path, &result.film, ExrChannels { half_beauty: false, aovs: Aovs::all(false) }, &meta)?;
     let record =
         ReferenceRecord { key: key.clone(), seconds: result.seconds, shadow_rays: result.stats.shading.shadow_rays };
     let text = serde_json::to_string_pretty(&record).expect("plain data serialises");
@@ -248,7 +248,7 @@ pub fn run(args: &SweepArgs) -> Result<(), CliError> {
                     compare_rgb(&rgb(&result.film), &reference_rgb, b.width() as usize, b.height() as usize).summary;
                 let path = args.out.join(format!("{}-spp{spp}-error-{error}.exr", sweep_mode.name()));
                 let meta = metadata(&scene, &key, &settings, mode.describe(), &result);
-                write_exr(&path, &result.film, ExrChannels { half_beauty: false, lightcut_aovs: true }, &meta)?;
+                write_exr(&path, &result.film, ExrChannels { half_beauty: false, aovs: Aovs::all(true) }, &meta)?;
                 let shading = &result.stats.shading;
                 rows.push(SweepRow {
                     mode: sweep_mode,

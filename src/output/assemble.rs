@@ -6,7 +6,7 @@
 
 use std::path::{Path, PathBuf};
 
-use super::exr::{write_exr, ExrChannels, ExrMetadata};
+use super::exr::{write_exr, Aovs, ExrChannels, ExrMetadata};
 use super::read::{read_exr, ExrImage};
 use super::OutputError;
 use crate::render::{Film, Pixel, PixelBounds};
@@ -143,10 +143,10 @@ pub fn assemble(output: &Path, tiles: &[PathBuf]) -> Result<Assembled, OutputErr
         world_to_camera: first.world_to_camera,
         world_to_ndc: first.world_to_ndc,
     };
-    let channels = ExrChannels {
-        half_beauty: first.half.contains("R"),
-        lightcut_aovs: first.channels.contains_key("lightcuts.cut_size"),
-    };
+    let has = |name: &str| first.channels.contains_key(name);
+    let aovs =
+        Aovs { albedo: has("albedo.R"), normal: has("N.X"), depth: has("Z"), lightcuts: has("lightcuts.cut_size") };
+    let channels = ExrChannels { half_beauty: first.half.contains("R"), aovs };
     write_exr(output, &film, channels, &meta)?;
     Ok(Assembled { width: width as u32, height: height as u32, tiles: tiles.len(), render_seconds })
 }

@@ -43,8 +43,48 @@ fn rec709() -> exr::meta::attribute::Chromaticities {
 pub struct ExrChannels {
     /// 16-bit half floats for the beauty (R, G, B, A); AOVs stay 32-bit.
     pub half_beauty: bool,
-    /// Whether to write the `lightcuts.*` AOVs.
-    pub lightcut_aovs: bool,
+    /// The AOV layers to write.
+    pub aovs: Aovs,
+}
+
+/// The AOV layers an EXR holds beside the beauty (`render --aovs`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Aovs {
+    /// `albedo.R/G/B`: the diffuse albedo of the first hit.
+    pub albedo: bool,
+    /// `N.X/Y/Z`: the shading normal.
+    pub normal: bool,
+    /// `Z`: the distance to the first hit.
+    pub depth: bool,
+    /// `lightcuts.cut_size` and `lightcuts.shadow_rays` (cut modes only).
+    pub lightcuts: bool,
+}
+
+impl Aovs {
+    /// Every layer a render in a mode with (`cut`) or without a cut produces.
+    #[must_use]
+    pub fn all(cut: bool) -> Self {
+        Self { albedo: true, normal: true, depth: true, lightcuts: cut }
+    }
+
+    /// The layers named in `list` (`albedo`, `N`, `Z`, `lightcuts`, comma
+    /// separated; `none` for the beauty alone).
+    pub fn parse(list: &str) -> std::result::Result<Self, String> {
+        let mut aovs = Self { albedo: false, normal: false, depth: false, lightcuts: false };
+        if list.trim() == "none" {
+            return Ok(aovs);
+        }
+        for name in list.split(',').map(str::trim) {
+            match name {
+                "albedo" => aovs.albedo = true,
+                "N" => aovs.normal = true,
+                "Z" => aovs.depth = true,
+                "lightcuts" => aovs.lightcuts = true,
+                other => return Err(format!("unknown AOV '{other}': expected albedo, N, Z, lightcuts or none")),
+            }
+        }
+        Ok(aovs)
+    }
 }
 
 /// Largest finite half float: beauty values beyond it are clamped, never Inf.
@@ -80,15 +120,22 @@ pub fn write_exr(
         beauty("G", column(&|p| p.rgb[1])),
         beauty("B", column(&|p| p.rgb[2])),
         beauty("A", column(&|p| p.alpha)),
-        full("albedo.R", column(&|p| p.albedo[0])),
-        full("albedo.G", column(&|p| p.albedo[1])),
-        full("albedo.B", column(&|p| p.albedo[2])),
-        full("N.X", column(&|p| p.normal[0])),
-        full("N.Y", column(&|p| p.normal[1])),
-        full("N.Z", column(&|p| p.normal[2])),
-        full("Z", column(&|p| p.z)),
     ];
-    if channels.lightcut_aovs {
+    let aovs = channels.aovs;
+    if aovs.albedo {
+        list.push(full("albedo.R", column(&|p| p.albedo[0])));
+        list.push(full("albedo.G", column(&|p| p.albedo[1])));
+        list.push(full("albedo.B", column(&|p| p.albedo[2])));
+    }
+    if aovs.normal {
+        list.push(full("N.X", column(&|p| p.normal[0])));
+        list.push(full("N.Y", column(&|p| p.normal[1])));
+        list.push(full("N.Z", column(&|p| p.normal[2])));
+    }
+    if aovs.depth {
+        list.push(full("Z", column(&|p| p.z)));
+    }
+    if aovs.lightcuts {
         list.push(full("lightcuts.cut_size", column(&|p| p.cut_size)));
         list.push(full("lightcuts.shadow_rays", column(&|p| p.shadow_rays)));
     }
