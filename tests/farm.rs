@@ -69,6 +69,8 @@ fn assemble_refuses_gaps_overlaps_and_tiles_of_other_renders() {
     let stderr = lightcuts_fails(&["assemble", s(&frame), s(&a), s(&missing), s(&c)]);
     assert!(stderr.contains("64 pixels of the frame are in no tile: x 0..16, y 4..8"), "{stderr}");
     assert!(stderr.contains("never-rendered.exr"), "{stderr}");
+    let stderr = lightcuts_fails(&["assemble", s(&frame), s(&missing)]);
+    assert!(stderr.contains("none of the tiles exists") && stderr.contains("never-rendered.exr"), "{stderr}");
     let stderr = lightcuts_fails(&["assemble", s(&frame), s(&a), s(&b), s(&b), s(&c)]);
     assert!(stderr.contains("overlaps") && stderr.contains("y 4..8"), "{stderr}");
     let stderr = lightcuts_fails(&["assemble", s(&frame), s(&a), s(&b), s(&other_seed)]);

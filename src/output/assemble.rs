@@ -31,8 +31,8 @@ pub struct Assembled {
 pub fn assemble(output: &Path, tiles: &[PathBuf]) -> Result<Assembled, OutputError> {
     let (present, absent): (Vec<&PathBuf>, Vec<&PathBuf>) = tiles.iter().partition(|t| t.exists());
     let Some(&first_path) = present.first() else {
-        // Reading the first reports that it does not exist.
-        return read_exr(&tiles[0]).map(|_| unreachable!("an absent file was read"));
+        let names: Vec<String> = absent.iter().map(|p| p.display().to_string()).collect();
+        return Err(OutputError::NoTiles { path: output.to_path_buf(), missing: names.join(", ") });
     };
     let tiles: Vec<PathBuf> = present.iter().map(|p| (*p).clone()).collect();
     let images: Vec<ExrImage> = tiles.iter().map(|t| read_exr(t)).collect::<Result<_, _>>()?;

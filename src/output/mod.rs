@@ -84,6 +84,9 @@ pub enum OutputError {
     /// The tiles leave pixels of the frame uncovered.
     #[error("{}: {pixels} pixels of the frame are in no tile: {missing}", path.display())]
     TileGaps { path: PathBuf, pixels: u64, missing: String },
+    /// None of the tile files to assemble exists.
+    #[error("{}: none of the tiles exists: {missing}", path.display())]
+    NoTiles { path: PathBuf, missing: String },
     /// Two images to compare do not cover the same pixels.
     #[error(
         "{}: data window {}x{} at ({}, {}) differs from the reference's {}x{} at ({}, {}) ({})",
