@@ -63,42 +63,11 @@ fn lightcuts_at_two_percent_stays_close_to_exact_and_casts_fewer_rays() {
 #[test]
 fn known_answer_holds_in_lightcuts_mode() {
     let dir = TempDir::new("lc-known");
-    let scene = dir.write(
-        "inside.toml",
-        r#"
-[film]
-width = 24
-height = 16
-[camera]
-eye = [0.2, 0.1, 0]
-look_at = [1, 0, 0.4]
-fov_y = 60
-[materials.inner]
-albedo = [0.5, 0.5, 0.5]
-[[shapes]]
-type = "sphere"
-center = [0, 0, 0]
-radius = 2
-segments = 512
-material = "inner"
-[[lights]]
-type = "grid"
-corner = [0, 0, 0]
-u = [0, 0, 0]
-v = [0, 0, 0]
-count = [20, 15]
-intensity = [0.01, 0.02, 0.03]
-"#,
-    );
+    let scene = dir.write("inside.toml", &inside_sphere_scene(24, 16));
     let out = dir.path("o.exr");
     lightcuts_ok(&["render", s(&scene), "-o", s(&out), "--quiet"]);
     let image = read_exr(&out).unwrap();
-    for (c, name) in ["R", "G", "B"].iter().enumerate() {
-        let expected = 0.5 / std::f32::consts::PI * 300.0 * 0.01 * (c as f32 + 1.0) / 4.0;
-        for &v in image.channel(&out, name).unwrap() {
-            assert!((v - expected).abs() <= 1e-3 * expected, "{name}: {v} vs {expected}");
-        }
-    }
+    assert_inside_sphere_answer(&out, &image);
     // Every light is in one place: the root alone is exact.
     assert!(image.channels["lightcuts.cut_size"].iter().all(|&c| c == 1.0));
 }

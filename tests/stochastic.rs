@@ -59,42 +59,11 @@ fn the_error_falls_with_samples_per_pixel() {
 #[test]
 fn known_answer_holds_in_stochastic_mode() {
     let dir = TempDir::new("st-known");
-    let scene = dir.write(
-        "inside.toml",
-        r#"
-[film]
-width = 16
-height = 12
-[camera]
-eye = [0.2, 0.1, 0]
-look_at = [1, 0, 0.4]
-fov_y = 60
-[materials.inner]
-albedo = [0.5, 0.5, 0.5]
-[[shapes]]
-type = "sphere"
-center = [0, 0, 0]
-radius = 2
-segments = 512
-material = "inner"
-[[lights]]
-type = "grid"
-corner = [0, 0, 0]
-u = [0, 0, 0]
-v = [0, 0, 0]
-count = [20, 15]
-intensity = [0.01, 0.02, 0.03]
-"#,
-    );
+    let scene = dir.write("inside.toml", &inside_sphere_scene(16, 12));
     let out = dir.path("o.exr");
     lightcuts_ok(&["render", s(&scene), "-o", s(&out), "--stochastic", "--spp", "3", "--quiet"]);
     let image = read_exr(&out).unwrap();
-    for (c, name) in ["R", "G", "B"].iter().enumerate() {
-        let expected = 0.5 / std::f32::consts::PI * 300.0 * 0.01 * (c as f32 + 1.0) / 4.0;
-        for &v in image.channel(&out, name).unwrap() {
-            assert!((v - expected).abs() <= 1e-3 * expected, "{name}: {v} vs {expected}");
-        }
-    }
+    assert_inside_sphere_answer(&out, &image);
 }
 
 /// Oriented (an area light and VPLs), directional (the sun's disc and the

@@ -123,3 +123,47 @@ intensity = [1.0, 0.9, 0.8]
 "#
     )
 }
+
+/// 300 coincident lights (20 x 15, intensities 0.01, 0.02, 0.03 W/sr each)
+/// at the centre of a diffuse sphere of radius 2 (albedo 0.5), seen from
+/// inside on a `width` x `height` film: every pixel has the known answer
+/// L = k_d / pi * sum(I) / R^2 (see [`assert_inside_sphere_answer`]).
+pub fn inside_sphere_scene(width: u32, height: u32) -> String {
+    format!(
+        r#"
+[film]
+width = {width}
+height = {height}
+[camera]
+eye = [0.2, 0.1, 0]
+look_at = [1, 0, 0.4]
+fov_y = 60
+[materials.inner]
+albedo = [0.5, 0.5, 0.5]
+[[shapes]]
+type = "sphere"
+center = [0, 0, 0]
+radius = 2
+segments = 512
+material = "inner"
+[[lights]]
+type = "grid"
+corner = [0, 0, 0]
+u = [0, 0, 0]
+v = [0, 0, 0]
+count = [20, 15]
+intensity = [0.01, 0.02, 0.03]
+"#
+    )
+}
+
+/// Asserts that every pixel of a render of [`inside_sphere_scene`] is the
+/// known answer to 0.1%, channel by channel.
+pub fn assert_inside_sphere_answer(path: &Path, image: &ExrImage) {
+    for (c, name) in ["R", "G", "B"].iter().enumerate() {
+        let expected = 0.5 / std::f32::consts::PI * 300.0 * 0.01 * (c as f32 + 1.0) / 4.0;
+        for &v in image.channel(path, name).unwrap() {
+            assert!((v - expected).abs() <= 1e-3 * expected, "{name}: {v} vs {expected}");
+        }
+    }
+}
