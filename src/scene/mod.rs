@@ -131,14 +131,16 @@ pub const MAX_VPL_PATHS: u32 = 1 << 24;
 pub const MAX_EMITTER_SAMPLES: u32 = 1 << 24;
 
 /// Adds an area emitter's geometry: visible, black, emitting `radiance` from
-/// the side its triangles' winding faces. Returns its mesh index.
+/// the side its triangles' winding faces. Returns its light: `samples`
+/// oriented lights drawn with `seed`.
 fn add_emitter(
     meshes: &mut Vec<Mesh>,
     materials: &mut Vec<Material>,
     mut mesh: Mesh,
     radiance: Vec3,
+    samples: u32,
     seed: u64,
-) -> usize {
+) -> LightSource {
     mesh.material = materials.len();
     mesh.normals = None; // emission is one-sided by the triangles' winding
     materials.push(Material {
@@ -152,7 +154,7 @@ fn add_emitter(
         cutout: None,
     });
     meshes.push(mesh);
-    meshes.len() - 1
+    LightSource::Area { mesh: meshes.len() - 1, radiance, samples, seed, both_sides: false }
 }
 
 impl Scene {
@@ -402,14 +404,8 @@ impl Scene {
                     })?;
                     let radiance = v.non_negative_rgb(*radiance, &field("radiance"))?;
                     v.sample_count(*samples, &field("samples"))?;
-                    let mesh = add_emitter(&mut meshes, &mut materials, Mesh::quad(c, u, w, 0), radiance, i as u64);
-                    lights.push(LightSource::Area {
-                        mesh,
-                        radiance,
-                        samples: *samples,
-                        seed: i as u64,
-                        both_sides: false,
-                    });
+                    let quad = Mesh::quad(c, u, w, 0);
+                    lights.push(add_emitter(&mut meshes, &mut materials, quad, radiance, *samples, i as u64));
                 }
                 LightSpec::AreaMesh(AreaMeshSpec { file, scale, translate, radiance, samples }) => {
                     v.check(scale.is_finite() && *scale > 0.0, &field("scale"), || {
@@ -430,14 +426,7 @@ impl Scene {
                             &format!("vertex {bad} is outside +/-{MAX_COORDINATE:e} m after scaling"),
                         ));
                     }
-                    let mesh = add_emitter(&mut meshes, &mut materials, mesh, radiance, i as u64);
-                    lights.push(LightSource::Area {
-                        mesh,
-                        radiance,
-                        samples: *samples,
-                        seed: i as u64,
-                        both_sides: false,
-                    });
+                    lights.push(add_emitter(&mut meshes, &mut materials, mesh, radiance, *samples, i as u64));
                 }
                 LightSpec::Sun(SunSpec { direction, irradiance, angular_radius, samples }) => {
                     let d = v.point(*direction, &field("direction"))?;
