@@ -91,18 +91,23 @@ fn at_shading_points(scene: &Scene, settings: CutSettings, mut check: impl FnMut
     }
 }
 
-#[test]
-fn the_error_of_every_cut_is_within_the_sum_of_its_bounds() {
-    let scene = scene(24);
+/// At 2%, the error of the cut at every test point of `scene` is within
+/// the sum of its bounds, and somewhere the cut does approximate.
+fn check_error_within_bounds(scene: &Scene) {
     let settings = CutSettings { error: 0.02, max_cut: 1000 };
     let mut worst = 0.0f64;
-    at_shading_points(&scene, settings, |cut, exact, bound| {
+    at_shading_points(scene, settings, |cut, exact, bound| {
         let error = (luminance64(cut) - luminance64(exact)).abs();
         // 1e-9 relative: f64 summation order differs between the two.
         assert!(error <= bound + 1e-9 * luminance64(exact), "error {error} > bound sum {bound}");
         worst = worst.max(error / luminance64(exact).max(1e-12));
     });
     assert!(worst > 0.0, "at 2% the cut must actually approximate somewhere");
+}
+
+#[test]
+fn the_error_of_every_cut_is_within_the_sum_of_its_bounds() {
+    check_error_within_bounds(&scene(24));
 }
 
 #[test]
@@ -140,13 +145,5 @@ fn spots() -> String {
 /// (`SpotBlock::min_cos_outer`) must cover every light below it.
 #[test]
 fn spot_cuts_are_within_the_sum_of_their_bounds() {
-    let scene = scene_with(4, &spots());
-    let settings = CutSettings { error: 0.02, max_cut: 1000 };
-    let mut worst = 0.0f64;
-    at_shading_points(&scene, settings, |cut, exact, bound| {
-        let error = (luminance64(cut) - luminance64(exact)).abs();
-        assert!(error <= bound + 1e-9 * luminance64(exact), "error {error} > bound sum {bound}");
-        worst = worst.max(error / luminance64(exact).max(1e-12));
-    });
-    assert!(worst > 0.0, "at 2% the cut must actually approximate somewhere");
+    check_error_within_bounds(&scene_with(4, &spots()));
 }
