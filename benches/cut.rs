@@ -19,7 +19,7 @@ fn cut(c: &mut Criterion) {
     let scene = Scene::load(&path).expect("scenes/grid10k.toml loads");
     let device = Device::try_new().expect("Embree device");
     let lights = Lights::from_scene(&scene);
-    let geometry = Geometry::try_new(&device, &scene, &lights).expect("geometry");
+    let geometry = Geometry::try_new(&device, &scene, std::slice::from_ref(&lights)).expect("geometry");
     let trees = LightTrees::build(&lights, 0);
     let camera = scene.camera(64, 48);
     let points: Vec<_> = (0..48)
@@ -32,14 +32,15 @@ fn cut(c: &mut Criterion) {
     let mut group = c.benchmark_group("lightcut");
     group.sample_size(10);
     for error in [0.02, 0.005] {
-        let settings = CutSettings { error, max_cut: 1000 };
+        let settings = CutSettings { error, max_cut: 1000, ..CutSettings::default() };
         group.bench_function(format!("grid10k_{}_points_error_{error}", points.len()), |b| {
             let mut scratch = CutScratch::default();
             b.iter(|| {
                 let mut nodes = 0;
                 for sp in &points {
                     nodes +=
-                        std::hint::black_box(evaluate(&trees, sp, &geometry.embree, &settings, &mut scratch)).nodes;
+                        std::hint::black_box(evaluate(&trees, sp, &geometry.embree, &settings, &mut scratch, &mut []))
+                            .nodes;
                 }
                 nodes
             });

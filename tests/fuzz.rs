@@ -213,17 +213,28 @@ fn render_small(scene: &Scene) {
     if scene.light_count_bound() > 20_000 || scene.triangle_count() > 200_000 {
         return; // Valid but too slow for a fuzz iteration.
     }
-    let lights = Lights::from_scene(scene);
+    let lights = Lights::by_group(scene);
     let device = Device::try_new().unwrap();
     let Ok(geometry) = Geometry::try_new(&device, scene, &lights) else { return };
     let camera = scene.camera(4, 3);
-    let settings = PassSettings { width: 4, height: 3, spp: 1, seed: 1, bounds: PixelBounds::full(4, 3) };
-    let trees = LightTrees::build(&lights, 1);
+    let settings =
+        PassSettings { width: 4, height: 3, spp: 1, seed: 1, bounds: PixelBounds::full(4, 3), cryptomatte: true };
+    let trees = LightTrees::build_groups(&lights, 1);
+    let emission_group = scene.emission_groups();
     for direct in [DirectLighting::Exact, DirectLighting::Lightcuts { trees: &trees, settings: CutSettings::default() }]
     {
-        let integrator =
-            Integrator { geometry: &geometry, lights: &lights, direct, max_mirror_depth: scene.max_mirror_depth };
+        let integrator = Integrator {
+            geometry: &geometry,
+            lights: &lights,
+            direct,
+            max_mirror_depth: scene.max_mirror_depth,
+            split_groups: scene.groups.named(),
+            emission_group: &emission_group,
+        };
         let (film, _) = render::render(&integrator, &camera, &settings, &|_| {});
+        for channel in &film.channels {
+            assert!(channel.values.iter().all(|v| v.is_finite()), "non-finite {}", channel.name);
+        }
         for p in &film.pixels {
             let values = [
                 p.rgb.as_slice(),

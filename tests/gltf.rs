@@ -20,7 +20,7 @@ use std::f64::consts::PI;
 fn radiance_seen(scene: &Scene, from: Vec3, to: Vec3) -> (DVec3, Vec3) {
     let lights = Lights::from_scene(scene);
     let device = Device::try_new().unwrap();
-    let geometry = Geometry::try_new(&device, scene, &lights).unwrap();
+    let geometry = Geometry::try_new(&device, scene, std::slice::from_ref(&lights)).unwrap();
     let ray = Ray { origin: from, direction: (to - from).normalize(), t_near: 0.0, t_far: f32::INFINITY };
     let hit = geometry.embree.intersect(&ray).expect("the ray hits the scene");
     let sp = geometry.surface(&ray, &hit);
@@ -393,7 +393,7 @@ fn a_gltf_scene_sweeps_benches_and_compares() {
 fn hit_point(scene: &Scene, from: Vec3, to: Vec3) -> Vec3 {
     let lights = Lights::from_scene(scene);
     let device = Device::try_new().unwrap();
-    let geometry = Geometry::try_new(&device, scene, &lights).unwrap();
+    let geometry = Geometry::try_new(&device, scene, std::slice::from_ref(&lights)).unwrap();
     let ray = Ray { origin: from, direction: (to - from).normalize(), t_near: 0.0, t_far: f32::INFINITY };
     let hit = geometry.embree.intersect(&ray).expect("the ray hits the scene");
     geometry.surface(&ray, &hit).p
@@ -459,4 +459,34 @@ fn alpha_masks_cut_out_surfaces_for_camera_and_shadow_rays() {
         s(&out),
         "--quiet",
     ]);
+}
+
+#[test]
+fn gltf_lights_join_groups_by_light_node_or_material_name() {
+    let dir = TempDir::new("gltf-groups");
+    let mut g = floor_and_point_light();
+    // An emissive panel (material "Glow") on node "Panel".
+    let glow = g.material(json!({ "name": "Glow", "emissiveFactor": [1.0, 1.0, 1.0] }));
+    let panel = g.quad([-0.5, 3.0, -0.5], [0.0, 0.0, 1.0], [1.0, 0.0, 0.0], Some(glow));
+    g.node(json!({ "mesh": panel, "name": "Panel" }), true);
+    let gltf = g.write_separate(dir.path("").as_path(), "groups");
+    let file = gltf.file_name().unwrap().to_str().unwrap();
+    let rules = |light: &str| {
+        format!(
+            "[gltf]\nfile = \"{file}\"\n[[gltf.groups]]\ngroup = \"key\"\nlight = \"{light}\"\n[[gltf.groups]]\ngroup = \"fill\"\nmaterial = \"Gl*\"\n"
+        )
+    };
+    let scene = load(&dir, "groups.toml", &rules("bulb"));
+    assert_eq!(scene.groups.names, ["key", "fill"]);
+    let kinds: Vec<(bool, usize)> = scene
+        .lights
+        .iter()
+        .zip(&scene.groups.of_light)
+        .map(|(l, &g)| (matches!(l, LightSource::Area { .. }), g))
+        .collect();
+    assert!(kinds.contains(&(false, 0)) && kinds.contains(&(true, 1)), "{kinds:?}");
+    // A rule that matches nothing is an error naming it.
+    let path = dir.write("stale.toml", &rules("lamp"));
+    let e = Scene::load(&path).unwrap_err().to_string();
+    assert!(e.contains("stale.toml") && e.contains("gltf.groups[0].light") && e.contains("lamp"), "{e}");
 }

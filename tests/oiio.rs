@@ -55,8 +55,25 @@ fn openimageio_reads_every_file_the_renderer_writes() {
     lightcuts_ok(&["compare", s(&full), s(&frame), "--diff", s(&diff_png), "--diff-exr", s(&diff_exr)]);
     let sweep = dir.path("sweep");
     lightcuts_ok(&[&["sweep", s(&scene), "--out", s(&sweep), "--errors", "0.05", "--spp", "1"][..], &small].concat());
-    let mut files =
-        vec![full.clone(), half, window, tiles[0].clone(), frame.clone(), diff_png, diff_exr, dir.path("preview.png")];
+    // Light groups and Cryptomatte: the scene with its lights in two groups.
+    let grouped = dir.write(
+        "grouped.toml",
+        &(small_scene(16).replacen("[[lights]]\n", "[[lights]]\ngroup = \"key\"\n", 1)
+            + "[[lights]]\ntype = \"point\"\ngroup = \"fill\"\nposition = [2, 2, 2]\nintensity = [0.5, 0.5, 0.5]\n"),
+    );
+    let layers = dir.path("layers.exr");
+    lightcuts_ok(&[&["render", s(&grouped), "-o", s(&layers), "--cryptomatte"][..], &small].concat());
+    let mut files = vec![
+        full.clone(),
+        half,
+        window,
+        tiles[0].clone(),
+        frame.clone(),
+        diff_png,
+        diff_exr,
+        dir.path("preview.png"),
+        layers.clone(),
+    ];
     for entry in std::fs::read_dir(&sweep).unwrap() {
         let path = entry.unwrap().path();
         if path.extension().is_some_and(|e| e == "exr" || e == "png") {
@@ -79,5 +96,9 @@ fn openimageio_reads_every_file_the_renderer_writes() {
         ] {
             assert!(info.contains(attribute), "{attribute} missing from {}: {info}", render.display());
         }
+    }
+    let info = oiio_reads(&layers);
+    for expected in ["Combined_", "CryptoObject00.R", "CryptoMaterial02.A", "cryptomatte/", "MurmurHash3_32"] {
+        assert!(info.contains(expected), "{expected} missing from {}: {info}", layers.display());
     }
 }

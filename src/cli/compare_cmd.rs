@@ -74,4 +74,17 @@ fn print_comparison(c: &Comparison, json: bool) {
         println!("  95th percentile      {:.4}%", 100.0 * b.p95_relative_error);
         println!("  maximum              {:.4}%", 100.0 * b.max_relative_error);
     }
+    if !c.groups.is_empty() {
+        println!("light groups           mean error   99th pct.    mean luminance (test / reference)");
+        for g in &c.groups {
+            println!(
+                "  {:<20} {:>9.4}%  {:>9.4}%    {:.6} / {:.6}",
+                g.group,
+                100.0 * g.mean_relative_error,
+                100.0 * g.p99_relative_error,
+                g.mean_luminance,
+                g.reference_mean_luminance
+            );
+        }
+    }
 }

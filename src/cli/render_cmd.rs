@@ -7,7 +7,7 @@ use clap::Args;
 use super::progress::Progress;
 use super::{parse_pixel_bounds, parse_resolution, CliError};
 use crate::lightcut::stochastic::{STOCHASTIC_DEFAULTS, STOCHASTIC_FROM_SPP};
-use crate::lightcut::CutSettings;
+use crate::lightcut::{CutSettings, GroupError};
 use crate::output::exr::{write_exr, Aovs, ExrChannels, ExrMetadata};
 use crate::output::preview::write_png;
 use crate::render::session::{Mode, PassResult, Session};
@@ -32,10 +32,15 @@ pub struct RenderArgs {
     #[arg(long)]
     pub half: bool,
     /// The AOV layers to write beside the beauty: a comma-separated list of
-    /// albedo, N, Z and lightcuts (the cut's size and shadow rays; cut modes
-    /// only), or none. Default: all the render mode produces.
+    /// albedo, N, Z, lightcuts (the cut's size and shadow rays; cut modes
+    /// only), groups (Combined_<group>.R/G/B per light group; scenes with
+    /// groups), cryptomatte, or none. Default: all but cryptomatte.
     #[arg(long, value_name = "LIST", value_parser = Aovs::parse)]
     pub aovs: Option<Aovs>,
+    /// Also write Cryptomatte's object and material ID mattes
+    /// (CryptoObject00..02, CryptoMaterial00..02).
+    #[arg(long)]
+    pub cryptomatte: bool,
     /// Also write a tone-mapped sRGB PNG preview.
     #[arg(long, value_name = "PREVIEW.png")]
     pub png: Option<PathBuf>,
@@ -146,9 +151,26 @@ pub struct ModeArgs {
     /// 0 splits every cluster, reproducing --exact (bounded) when max-cut allows.
     #[arg(long)]
     pub error: Option<f64>,
-    /// Largest cut per shading point, in nodes (bounded default 1000).
+    /// Largest cut per shading point, in nodes (bounded default 1000; per
+    /// light group with --group-error group).
     #[arg(long)]
     pub max_cut: Option<usize>,
+    /// In a scene with light groups, what each cluster's error is held to:
+    /// `group` (a cut per group, within --error of the group's own light:
+    /// every group layer as accurate as the beauty) or `pixel` (one cut,
+    /// within --error of the pixel's total: cheaper, dim groups' layers
+    /// less accurate). Bounded mode only.
+    #[arg(long, value_name = "group|pixel", value_parser = parse_group_error, conflicts_with_all = ["exact", "stochastic"])]
+    pub group_error: Option<GroupError>,
+}
+
+/// Parses `--group-error`.
+pub fn parse_group_error(s: &str) -> Result<GroupError, String> {
+    match s {
+        "group" => Ok(GroupError::Group),
+        "pixel" => Ok(GroupError::Pixel),
+        _ => Err(format!("expected group or pixel, got '{s}'")),
+    }
 }
 
 impl ModeArgs {
@@ -162,7 +184,8 @@ impl ModeArgs {
             matches!(default_mode(spp), Mode::Stochastic(_))
         };
         let defaults = if stochastic { STOCHASTIC_DEFAULTS } else { CutSettings::default() };
-        let cut = cut_settings(self.error.unwrap_or(defaults.error), self.max_cut.unwrap_or(defaults.max_cut))?;
+        let mut cut = cut_settings(self.error.unwrap_or(defaults.error), self.max_cut.unwrap_or(defaults.max_cut))?;
+        cut.group_error = self.group_error.unwrap_or(defaults.group_error);
         Ok(if stochastic { Mode::Stochastic(cut) } else { Mode::Bounded(cut) })
     }
 }
@@ -243,7 +266,7 @@ pub fn pass_settings(
             PixelBounds { x0, x1, y0, y1 }
         }
     };
-    Ok(PassSettings { width, height, spp, seed, bounds })
+    Ok(PassSettings { width, height, spp, seed, bounds, cryptomatte: false })
 }
 
 /// The cut settings of a lightcuts render, validated.
@@ -254,7 +277,7 @@ pub fn cut_settings(error: f64, max_cut: usize) -> Result<CutSettings, CliError>
     if max_cut == 0 {
         return Err(CliError::Usage { flag: "--max-cut", message: "must be at least 1".into() });
     }
-    Ok(CutSettings { error, max_cut })
+    Ok(CutSettings { error, max_cut, ..CutSettings::default() })
 }
 
 pub fn run(args: &RenderArgs) -> Result<(), CliError> {
@@ -287,7 +310,9 @@ pub fn run(args: &RenderArgs) -> Result<(), CliError> {
     }
     let scene_hash = scene_hash(&scene)?;
     let mode = args.mode.mode(settings.spp)?;
-    let aovs = args.aovs.unwrap_or(Aovs::all(mode.cut().is_some()));
+    let mut aovs = args.aovs.unwrap_or(Aovs::all(mode.cut().is_some()));
+    aovs.cryptomatte |= args.cryptomatte;
+    settings.cryptomatte = aovs.cryptomatte;
     if aovs.lightcuts && mode.cut().is_none() {
         return Err(CliError::Usage {
             flag: "--aovs",
@@ -302,7 +327,7 @@ pub fn run(args: &RenderArgs) -> Result<(), CliError> {
     crate::embree::set_timing(args.stats);
     let cpu_before = super::process::cpu_seconds();
     let PassResult { film, stats, seconds, trees, tree_bytes, vpls, vpl_time, lights } =
-        session.render(&settings, mode, &|event| progress.report(event));
+        session.render(&settings, mode, aovs.groups, &|event| progress.report(event));
     let cpu_seconds = super::process::cpu_seconds().zip(cpu_before).map(|(after, before)| after - before);
     let cut = mode.cut();
     let mode = mode.describe();
@@ -337,6 +362,10 @@ pub fn run(args: &RenderArgs) -> Result<(), CliError> {
         lights[2],
         lights[3]
     );
+    if scene.groups.named() {
+        let layers = if aovs.groups { "a layer each" } else { "no layers: --aovs leaves out groups" };
+        println!("  light groups     {} ({layers})", scene.groups.names.join(", "));
+    }
     if vpls > 0 {
         println!("  indirect         {vpls} virtual point lights traced in {:.3} s", vpl_time.as_secs_f64());
     }

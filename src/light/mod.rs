@@ -194,8 +194,28 @@ impl Lights {
     /// emitter samples from its own seeded stream.
     #[must_use]
     pub fn from_scene(scene: &Scene) -> Self {
+        Self::of_group(scene, None)
+    }
+
+    /// The scene's lights split by light group (`Scene::groups`): one
+    /// `Lights` per group, each as [`Lights::from_scene`] orders them. A
+    /// light is sampled the same whichever group it is in.
+    #[must_use]
+    pub fn by_group(scene: &Scene) -> Vec<Self> {
+        if !scene.groups.named() {
+            return vec![Self::from_scene(scene)];
+        }
+        (0..scene.groups.count()).map(|g| Self::of_group(scene, Some(g))).collect()
+    }
+
+    /// The lights of group `group`, or of every group.
+    fn of_group(scene: &Scene, group: Option<usize>) -> Self {
+        let wanted = |g: usize| group.is_none_or(|want| want == g);
         let mut lights = Self::default();
-        for source in &scene.lights {
+        for (i, source) in scene.lights.iter().enumerate() {
+            if !wanted(scene.groups.of_light.get(i).copied().unwrap_or(0)) {
+                continue;
+            }
             match *source {
                 LightSource::Point { position, intensity } => lights.omni.push(OmniLight { position, intensity }),
                 LightSource::Spot { position, direction, intensity, inner_angle_degrees, outer_angle_degrees } => {
@@ -245,7 +265,7 @@ impl Lights {
                 }
             }
         }
-        if let Some(environment) = &scene.environment {
+        if let Some(environment) = scene.environment.as_ref().filter(|_| wanted(scene.groups.environment)) {
             lights.directional.extend(emitters::sample_environment(
                 &environment.map,
                 environment.samples as usize,

@@ -208,10 +208,15 @@ impl LightTree {
 /// renderer must never be slower than `--exact` (measured: few4 in the README).
 pub const EXHAUSTIVE_LIGHTS: usize = 200;
 
-/// The light trees of a scene, laid out for the cut: one per light kind the
-/// scene has, no more.
+/// The light trees of a scene, laid out for the cut: one per light group
+/// and light kind the scene has, no more (clusters never span groups).
 pub struct LightTrees {
+    /// Group by group (in the order of the scene's groups), kind by kind.
     pub trees: Vec<layout::CutTree>,
+    /// The trees of group g: `trees[groups[g].clone()]`.
+    pub groups: Vec<std::ops::Range<usize>>,
+    /// The group of each tree, in the order of `trees`.
+    pub group_of_tree: Vec<usize>,
     /// Build time of each tree (clustering and layout), in the order of `trees`.
     pub build_times: Vec<Duration>,
     /// 1 / the total luminance of every light (1 when that is 0 or not
@@ -225,26 +230,39 @@ impl LightTrees {
     /// pool; the trees do not depend on its thread count).
     #[must_use]
     pub fn build(lights: &Lights, seed: u64) -> Self {
+        Self::build_groups(std::slice::from_ref(lights), seed)
+    }
+
+    /// Builds a tree for each light group (`groups[g]`: group g's lights)
+    /// and each kind present in it.
+    #[must_use]
+    pub fn build_groups(groups: &[Lights], seed: u64) -> Self {
         let mut trees = Vec::new();
+        let mut ranges = Vec::with_capacity(groups.len());
         let mut build_times = Vec::new();
         let mut total = 0.0f64;
-        for kind in LightKind::ALL {
-            if lights.count(kind) == 0 {
-                continue;
+        for lights in groups {
+            let first = trees.len();
+            for kind in LightKind::ALL {
+                if lights.count(kind) == 0 {
+                    continue;
+                }
+                let start = Instant::now();
+                let leaves = lights.tree_lights(kind);
+                total += leaves.iter().map(|l| f64::from(luminance(l.intensity))).sum::<f64>();
+                trees.push(if leaves.len() <= EXHAUSTIVE_LIGHTS {
+                    layout::CutTree::exhaustive(kind, leaves)
+                } else {
+                    layout::CutTree::from_tree(&ploc::build(kind, &leaves, seed))
+                });
+                build_times.push(start.elapsed());
             }
-            let start = Instant::now();
-            let leaves = lights.tree_lights(kind);
-            total += leaves.iter().map(|l| f64::from(luminance(l.intensity))).sum::<f64>();
-            trees.push(if leaves.len() <= EXHAUSTIVE_LIGHTS {
-                layout::CutTree::exhaustive(kind, leaves)
-            } else {
-                layout::CutTree::from_tree(&ploc::build(kind, &leaves, seed))
-            });
-            build_times.push(start.elapsed());
+            ranges.push(first..trees.len());
         }
+        let group_of_tree = ranges.iter().enumerate().flat_map(|(g, r)| r.clone().map(move |_| g)).collect();
         let scale = (1.0 / total) as f32;
         let scale = if scale.is_finite() && scale > 0.0 { scale } else { 1.0 };
-        Self { trees, build_times, scale }
+        Self { trees, groups: ranges, group_of_tree, build_times, scale }
     }
 
     /// The trees of one built tree each (benchmarks of other builders).
@@ -253,7 +271,13 @@ impl LightTrees {
         let total: f64 = tree.leaves.iter().map(|l| f64::from(luminance(l.intensity))).sum();
         let scale = (1.0 / total) as f32;
         let scale = if scale.is_finite() && scale > 0.0 { scale } else { 1.0 };
-        Self { trees: vec![layout::CutTree::from_tree(tree)], build_times: vec![Duration::ZERO], scale }
+        Self {
+            trees: vec![layout::CutTree::from_tree(tree)],
+            groups: vec![0..1],
+            group_of_tree: vec![0],
+            build_times: vec![Duration::ZERO],
+            scale,
+        }
     }
 
     #[must_use]

@@ -43,13 +43,41 @@ pub const REFINE_BATCH: usize = 8;
 pub struct CutSettings {
     /// Relative error threshold epsilon (0.02 = 2%, Weber's law).
     pub error: f64,
-    /// Largest cut, in nodes.
+    /// Largest cut, in nodes (per light group with [`GroupError::Group`]).
     pub max_cut: usize,
+    /// What the threshold is relative to when the scene has light groups.
+    pub group_error: GroupError,
 }
 
 impl Default for CutSettings {
     fn default() -> Self {
-        Self { error: 0.02, max_cut: 1000 }
+        Self { error: 0.02, max_cut: 1000, group_error: GroupError::Group }
+    }
+}
+
+/// What a scene with light groups holds each group's error to
+/// (`--group-error`). Clusters never span groups either way.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum GroupError {
+    /// A cut per group, each refined until every node's bound is within
+    /// `error` of that group's own total: a dim fill light's layer is as
+    /// accurate as the key light's (and the beauty, their sum, at least as
+    /// accurate as without groups).
+    Group,
+    /// One cut through every group's trees, refined against the pixel's
+    /// total as without groups; each node's estimate goes to its group's
+    /// layer. Cheaper, but a dim group's layer is accurate only relative to
+    /// the pixel.
+    Pixel,
+}
+
+impl GroupError {
+    #[must_use]
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Group => "group",
+            Self::Pixel => "pixel",
+        }
     }
 }
 
@@ -139,6 +167,8 @@ pub struct CutScratch {
 }
 
 struct Cut<'a, 'p> {
+    /// The trees cut through (a group's, or every group's); entries number
+    /// their tree by its index here.
     trees: &'a [CutTree],
     evaluator: LightEvaluator<'a, 'p>,
     bounds: PointBounds,
@@ -285,13 +315,13 @@ impl Cut<'_, '_> {
 /// Every light of the trees too small for a cut, one by one with the exact
 /// renderer's code (the same for both cut modes).
 pub(super) fn exhaustive(
-    trees: &LightTrees,
+    trees: &[CutTree],
     sp: &SurfacePoint<'_>,
     embree: &EmbreeScene,
     batch: &mut BatchBuffers,
 ) -> BatchResult {
     let mut exhaustive = LightBatch::new(embree, sp, batch);
-    for tree in &trees.trees {
+    for tree in trees {
         for light in &tree.lights {
             exhaustive.add(&light.light(tree.kind));
         }
@@ -299,20 +329,80 @@ pub(super) fn exhaustive(
     exhaustive.finish()
 }
 
-/// Direct light at `sp` from every tree, by a lightcut.
+/// The exhaustive part of a cut through several groups' trees, group by
+/// group: each group's sum added to `groups[g]`, and the total.
+pub(super) fn exhaustive_by_group(
+    trees: &LightTrees,
+    sp: &SurfacePoint<'_>,
+    embree: &EmbreeScene,
+    batch: &mut BatchBuffers,
+    groups: &mut [DVec3],
+) -> BatchResult {
+    let mut total = BatchResult::default();
+    for (g, range) in trees.groups.iter().enumerate() {
+        let found = exhaustive(&trees.trees[range.clone()], sp, embree, batch);
+        groups[g] += found.radiance;
+        total.radiance += found.radiance;
+        total.lights += found.lights;
+        total.shadow_rays += found.shadow_rays;
+    }
+    total
+}
+
+/// Direct light at `sp` from every tree, by a lightcut. When `groups` is
+/// not empty (a scene with light groups: one slot per group), each group's
+/// share of the radiance is added to its slot, and the cut controls the
+/// error as `settings.group_error` says.
 pub fn evaluate(
     trees: &LightTrees,
     sp: &SurfacePoint<'_>,
     embree: &EmbreeScene,
     settings: &CutSettings,
     scratch: &mut CutScratch,
+    groups: &mut [DVec3],
 ) -> CutResult {
+    if groups.is_empty() {
+        return cut_through(trees, 0..trees.trees.len(), sp, embree, settings, scratch, None);
+    }
+    match settings.group_error {
+        GroupError::Pixel => cut_through(trees, 0..trees.trees.len(), sp, embree, settings, scratch, Some(groups)),
+        GroupError::Group => {
+            let mut total = CutResult::default();
+            for (g, range) in trees.groups.iter().enumerate() {
+                let found = cut_through(trees, range.clone(), sp, embree, settings, scratch, None);
+                groups[g] += found.radiance;
+                total.radiance += found.radiance;
+                total.error_bound += found.error_bound;
+                total.nodes += found.nodes;
+                total.shadow_rays += found.shadow_rays;
+            }
+            total
+        }
+    }
+}
+
+/// One cut through `trees.trees[range]`, its threshold relative to their
+/// total. With `groups`, every node's estimate is also added to the slot of
+/// its tree's group.
+fn cut_through(
+    all: &LightTrees,
+    range: std::ops::Range<usize>,
+    sp: &SurfacePoint<'_>,
+    embree: &EmbreeScene,
+    settings: &CutSettings,
+    scratch: &mut CutScratch,
+    mut groups: Option<&mut [DVec3]>,
+) -> CutResult {
+    let trees = &all.trees[range.clone()];
     // Small trees first, light by light with the exact renderer's code; their
     // sum is exact and counts in the total the threshold is relative to.
-    let fixed = exhaustive(trees, sp, embree, &mut scratch.batch);
+    let fixed = match groups.as_deref_mut() {
+        Some(groups) => exhaustive_by_group(all, sp, embree, &mut scratch.batch, groups),
+        None => exhaustive(trees, sp, embree, &mut scratch.batch),
+    };
     let mut result =
         CutResult { radiance: fixed.radiance, error_bound: 0.0, nodes: fixed.lights, shadow_rays: fixed.shadow_rays };
-    if trees.trees.iter().all(|t| t.blocks.is_empty()) {
+    if trees.iter().all(|t| t.blocks.is_empty()) {
         return result;
     }
 
@@ -320,9 +410,9 @@ pub fn evaluate(
     scratch.heap.clear();
     scratch.fresh.clear();
     scratch.rays.clear();
-    let scale = trees.scale;
+    let scale = all.scale;
     let mut cut = Cut {
-        trees: &trees.trees,
+        trees,
         evaluator: LightEvaluator::new(sp),
         bounds: PointBounds::new(sp, scale),
         embree,
@@ -331,7 +421,7 @@ pub fn evaluate(
         cut_nodes: 0,
         shadow_rays: 0,
     };
-    for (i, tree) in trees.trees.iter().enumerate() {
+    for (i, tree) in trees.iter().enumerate() {
         if !tree.blocks.is_empty() {
             cut.add_children(i as u8, 0, None);
         }
@@ -367,6 +457,9 @@ pub fn evaluate(
     for entry in cut.scratch.entries.iter().filter(|e| e.in_cut) {
         radiance += entry.estimate();
         bound += f64::from(entry.bound);
+        if let Some(groups) = groups.as_deref_mut() {
+            groups[all.group_of_tree[range.start + entry.tree as usize]] += entry.estimate();
+        }
     }
     result.radiance = radiance;
     result.error_bound = bound / f64::from(scale);

@@ -9,5 +9,5 @@ pub mod bounds;
 pub mod cut;
 pub mod stochastic;
 
-pub use cut::{evaluate, CutResult, CutScratch, CutSettings, EXHAUSTIVE_LIGHTS};
+pub use cut::{evaluate, CutResult, CutScratch, CutSettings, GroupError, EXHAUSTIVE_LIGHTS};
 pub use stochastic::StochasticScratch;

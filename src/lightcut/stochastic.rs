@@ -20,7 +20,7 @@ use std::collections::BinaryHeap;
 use glam::{DVec3, Vec3};
 
 use super::bounds::PointBounds;
-use super::cut::{exhaustive, CutResult, CutSettings};
+use super::cut::{exhaustive, exhaustive_by_group, CutResult, CutSettings, GroupError};
 use crate::embree::{PacketWidth, Scene as EmbreeScene, ShadowRay};
 use crate::light_tree::layout::CutTree;
 use crate::light_tree::LightTrees;
@@ -30,7 +30,7 @@ use crate::util::sampling::Rng;
 
 /// The stochastic mode's default cut settings (chosen by measurement: see
 /// the README's "Stochastic lightcuts" section).
-pub const STOCHASTIC_DEFAULTS: CutSettings = CutSettings { error: 0.05, max_cut: 1000 };
+pub const STOCHASTIC_DEFAULTS: CutSettings = CutSettings { error: 0.05, max_cut: 1000, group_error: GroupError::Group };
 
 /// From this many samples per pixel on, a render without a mode flag is
 /// stochastic (measured: see the README).
@@ -67,6 +67,8 @@ pub struct StochasticScratch {
     walks: Vec<Walk>,
     drawn: Vec<Drawn>,
     values: Vec<DVec3>,
+    /// The tree of each of `values`.
+    value_trees: Vec<u8>,
     rays: Vec<ShadowRay>,
     occluded: Vec<bool>,
 }
@@ -81,6 +83,10 @@ pub type Importance<'f> = &'f dyn Fn(&CutTree, [usize; 2]) -> [[f32; 2]; 2];
 /// random choices come from `rng`. `settings.error` and `settings.max_cut`
 /// choose the cut: a node is split while its bound is above `error` times
 /// the cut's summed bounds and the cut has fewer than `max_cut` nodes.
+/// When `groups` is not empty (one slot per light group), every drawn
+/// light's contribution is also added to its group's slot: each group's sum
+/// is an unbiased estimate of that group's light (one cut through every
+/// group's trees; `settings.group_error` is for the bounded cut).
 pub fn evaluate(
     trees: &LightTrees,
     sp: &SurfacePoint<'_>,
@@ -88,6 +94,7 @@ pub fn evaluate(
     settings: &CutSettings,
     rng: &mut Rng,
     scratch: &mut StochasticScratch,
+    groups: &mut [DVec3],
 ) -> CutResult {
     let bounds = PointBounds::new(sp, trees.scale);
     let importance = |tree: &CutTree, [a, b]: [usize; 2]| {
@@ -95,7 +102,7 @@ pub fn evaluate(
         let [a0, a1, b0, b1] = bounds.importance_quad(tree.kind, [&tree.blocks[a], &tree.blocks[b]], cones);
         [[a0, a1], [b0, b1]]
     };
-    evaluate_with(trees, sp, embree, settings, rng, scratch, &bounds, &importance)
+    evaluate_with(trees, sp, embree, settings, rng, scratch, &bounds, &importance, groups)
 }
 
 /// [`evaluate`] with the walks' importance given (for tests of bias).
@@ -109,8 +116,13 @@ pub(crate) fn evaluate_with(
     scratch: &mut StochasticScratch,
     bounds: &PointBounds,
     importance: Importance<'_>,
+    groups: &mut [DVec3],
 ) -> CutResult {
-    let fixed = exhaustive(trees, sp, embree, &mut scratch.batch);
+    let fixed = if groups.is_empty() {
+        exhaustive(&trees.trees, sp, embree, &mut scratch.batch)
+    } else {
+        exhaustive_by_group(trees, sp, embree, &mut scratch.batch, groups)
+    };
     let mut result =
         CutResult { radiance: fixed.radiance, error_bound: 0.0, nodes: fixed.lights, shadow_rays: fixed.shadow_rays };
     if trees.trees.iter().all(|t| t.blocks.is_empty()) {
@@ -179,6 +191,7 @@ pub(crate) fn evaluate_with(
     // Evaluate them four at a time, trace their shadow rays in packets.
     let evaluator = LightEvaluator::new(sp);
     scratch.values.clear();
+    scratch.value_trees.clear();
     scratch.rays.clear();
     let mut unshadowed = DVec3::ZERO;
     for group in scratch.drawn.chunk_by(|a, b| a.tree == b.tree) {
@@ -198,8 +211,14 @@ pub(crate) fn evaluate_with(
                     Some(ray) => {
                         scratch.rays.push(ray);
                         scratch.values.push(value);
+                        scratch.value_trees.push(d.tree);
                     }
-                    None => unshadowed += value,
+                    None => {
+                        unshadowed += value;
+                        if let Some(slot) = groups.get_mut(trees.group_of_tree[d.tree as usize]) {
+                            *slot += value;
+                        }
+                    }
                 }
             }
         }
@@ -207,9 +226,12 @@ pub(crate) fn evaluate_with(
     embree.occluded_packets(&scratch.rays, &mut scratch.occluded, PacketWidth::Sixteen);
     result.shadow_rays += scratch.rays.len() as u64;
     let mut radiance = fixed.radiance + unshadowed;
-    for (value, &occluded) in scratch.values.iter().zip(&scratch.occluded) {
+    for ((value, &occluded), &tree) in scratch.values.iter().zip(&scratch.occluded).zip(&scratch.value_trees) {
         if !occluded {
             radiance += *value;
+            if let Some(slot) = groups.get_mut(trees.group_of_tree[tree as usize]) {
+                *slot += *value;
+            }
         }
     }
     result.radiance = radiance;

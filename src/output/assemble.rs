@@ -9,7 +9,25 @@ use std::path::{Path, PathBuf};
 use super::exr::{write_exr, Aovs, ExrChannels, ExrMetadata};
 use super::read::{read_exr, ExrImage};
 use super::OutputError;
-use crate::render::{Film, Pixel, PixelBounds};
+use crate::render::{Film, FilmChannel, Pixel, PixelBounds};
+
+/// The channels a [`Pixel`] holds; every other channel of a tile is carried
+/// over as it is (light groups, Cryptomatte).
+const FIXED_CHANNELS: [&str; 13] = [
+    "R",
+    "G",
+    "B",
+    "A",
+    "albedo.R",
+    "albedo.G",
+    "albedo.B",
+    "N.X",
+    "N.Y",
+    "N.Z",
+    "Z",
+    "lightcuts.cut_size",
+    "lightcuts.shadow_rays",
+];
 
 /// Header attributes every tile must share with the first.
 pub const MUST_AGREE: [&str; 5] =
@@ -123,11 +141,35 @@ pub fn assemble(output: &Path, tiles: &[PathBuf]) -> Result<Assembled, OutputErr
             shadow_rays: value("lightcuts.shadow_rays"),
         };
     }
+    // The light groups' and Cryptomatte's channels, and Cryptomatte's header.
+    let channels = first
+        .channels
+        .keys()
+        .filter(|name| !FIXED_CHANNELS.contains(&name.as_str()))
+        .map(|name| FilmChannel {
+            name: name.clone(),
+            values: (0..width * height)
+                .map(|i| {
+                    let image = &images[owner[i].expect("every pixel is covered")];
+                    let (x, y) = (i % width, i / width);
+                    image.channels[name][(y - image.y0 as usize) * image.width + (x - image.x0 as usize)]
+                })
+                .collect(),
+        })
+        .collect();
+    let attributes = first
+        .attributes
+        .iter()
+        .filter(|(key, _)| key.starts_with("cryptomatte/"))
+        .map(|(key, value)| (key.clone(), value.clone()))
+        .collect();
     let film = Film {
         full_width: width as u32,
         full_height: height as u32,
         bounds: PixelBounds::full(width as u32, height as u32),
         pixels,
+        channels,
+        attributes,
     };
     let attribute = |key: &str| first.attributes.get(key).cloned().unwrap_or_default();
     let render_seconds =
@@ -144,8 +186,14 @@ pub fn assemble(output: &Path, tiles: &[PathBuf]) -> Result<Assembled, OutputErr
         world_to_ndc: first.world_to_ndc,
     };
     let has = |name: &str| first.channels.contains_key(name);
-    let aovs =
-        Aovs { albedo: has("albedo.R"), normal: has("N.X"), depth: has("Z"), lightcuts: has("lightcuts.cut_size") };
+    let aovs = Aovs {
+        albedo: has("albedo.R"),
+        normal: has("N.X"),
+        depth: has("Z"),
+        lightcuts: has("lightcuts.cut_size"),
+        groups: film.channels.iter().any(|c| c.name.starts_with("Combined_")),
+        cryptomatte: film.channels.iter().any(|c| c.name.starts_with("Crypto")),
+    };
     let channels = ExrChannels { half_beauty: first.half.contains("R"), aovs };
     write_exr(output, &film, channels, &meta)?;
     Ok(Assembled { width: width as u32, height: height as u32, tiles: tiles.len(), render_seconds })

@@ -40,6 +40,22 @@ pub struct Comparison {
     /// Block averages compared (`compare --blocks`), when asked for.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub blocks: Option<BlockComparison>,
+    /// Each light group's layer compared with the reference's, when both
+    /// images have group layers.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub groups: Vec<GroupComparison>,
+}
+
+/// One light group's layer (`Combined_<group>.R/G/B`) against the
+/// reference's: relative error on luminance, with the floor taken from the
+/// group's own mean (so a dim group is held to its own light).
+#[derive(Debug, Clone, Serialize)]
+pub struct GroupComparison {
+    pub group: String,
+    pub mean_relative_error: f64,
+    pub p99_relative_error: f64,
+    pub mean_luminance: f64,
+    pub reference_mean_luminance: f64,
 }
 
 /// Relative error of the mean luminance of `size` x `size`-pixel blocks:
@@ -126,8 +142,25 @@ pub struct ComparisonResult {
 }
 
 fn luminances(image: &ExrImage, path: &Path) -> Result<Vec<DVec3>, OutputError> {
-    let (r, g, b) = (image.channel(path, "R")?, image.channel(path, "G")?, image.channel(path, "B")?);
+    layer_rgb(image, path, "")
+}
+
+/// The RGB of a layer: `prefix` is "" for the beauty, `Combined_key.` for a group.
+pub fn layer_rgb(image: &ExrImage, path: &Path, prefix: &str) -> Result<Vec<DVec3>, OutputError> {
+    let channel = |c: &str| image.channel(path, &format!("{prefix}{c}"));
+    let (r, g, b) = (channel("R")?, channel("G")?, channel("B")?);
     Ok(r.iter().zip(g).zip(b).map(|((&r, &g), &b)| DVec3::new(f64::from(r), f64::from(g), f64::from(b))).collect())
+}
+
+/// The light groups an image has layers for, in the file's channel order.
+#[must_use]
+pub fn group_names(image: &ExrImage) -> Vec<String> {
+    image
+        .channels
+        .keys()
+        .filter_map(|name| name.strip_prefix("Combined_")?.strip_suffix(".R"))
+        .map(str::to_string)
+        .collect()
 }
 
 /// Compares two EXRs' R, G and B; with `blocks`, also their block averages
@@ -151,6 +184,18 @@ pub fn compare_files(test: &Path, reference: &Path, blocks: Option<usize>) -> Re
         };
         result.summary.blocks =
             Some(compare_blocks(&lum(&t, test)?, &lum(&r, reference)?, depth, t.width, t.height, size));
+    }
+    let reference_groups = group_names(&r);
+    for group in group_names(&t).into_iter().filter(|g| reference_groups.contains(g)) {
+        let prefix = format!("Combined_{group}.");
+        let c = compare_rgb(&layer_rgb(&t, test, &prefix)?, &layer_rgb(&r, reference, &prefix)?, t.width, t.height);
+        result.summary.groups.push(GroupComparison {
+            group,
+            mean_relative_error: c.summary.mean_relative_error,
+            p99_relative_error: c.summary.p99_relative_error,
+            mean_luminance: c.summary.mean_luminance,
+            reference_mean_luminance: c.summary.reference_mean_luminance,
+        });
     }
     Ok(result)
 }
@@ -188,6 +233,7 @@ pub fn compare_rgb(test: &[DVec3], reference: &[DVec3], width: usize, height: us
         mean_luminance: lt.iter().sum::<f64>() / n as f64,
         reference_mean_luminance: mean_ref,
         blocks: None,
+        groups: Vec::new(),
     };
     let difference = test.iter().zip(reference).map(|(a, b)| (*a - *b).abs()).collect();
     ComparisonResult { summary, relative, width, height, difference }

@@ -1,7 +1,10 @@
 //! OpenEXR output: single part, scanlines, ZIP compression. Channels `R,G,B,A`,
 //! `albedo.R/G/B`, `N.X/Y/Z`, `Z`, plus lightcuts' `lightcuts.cut_size` and
-//! `lightcuts.shadow_rays` when the render mode produces them. The data window
-//! is the rendered window; the display window the full frame.
+//! `lightcuts.shadow_rays` when the render mode produces them, each light
+//! group's `Combined_<group>.R/G/B` (Cycles' names for light-group passes)
+//! when the scene has groups, and Cryptomatte's `CryptoObject00..02` and
+//! `CryptoMaterial00..02` when asked for. The data window is the rendered
+//! window; the display window the full frame.
 
 use std::path::{Path, PathBuf};
 
@@ -58,19 +61,25 @@ pub struct Aovs {
     pub depth: bool,
     /// `lightcuts.cut_size` and `lightcuts.shadow_rays` (cut modes only).
     pub lightcuts: bool,
+    /// `Combined_<group>.R/G/B` per light group (scenes with groups only).
+    pub groups: bool,
+    /// Cryptomatte's object and material mattes.
+    pub cryptomatte: bool,
 }
 
 impl Aovs {
-    /// Every layer a render in a mode with (`cut`) or without a cut produces.
+    /// The default layers of a render in a mode with (`cut`) or without a
+    /// cut: every one but Cryptomatte's (`--cryptomatte` adds it).
     #[must_use]
     pub fn all(cut: bool) -> Self {
-        Self { albedo: true, normal: true, depth: true, lightcuts: cut }
+        Self { albedo: true, normal: true, depth: true, lightcuts: cut, groups: true, cryptomatte: false }
     }
 
-    /// The layers named in `list` (`albedo`, `N`, `Z`, `lightcuts`, comma
-    /// separated; `none` for the beauty alone).
+    /// The layers named in `list` (`albedo`, `N`, `Z`, `lightcuts`,
+    /// `groups`, `cryptomatte`, comma separated; `none` for the beauty alone).
     pub fn parse(list: &str) -> std::result::Result<Self, String> {
-        let mut aovs = Self { albedo: false, normal: false, depth: false, lightcuts: false };
+        let mut aovs =
+            Self { albedo: false, normal: false, depth: false, lightcuts: false, groups: false, cryptomatte: false };
         if list.trim() == "none" {
             return Ok(aovs);
         }
@@ -80,11 +89,24 @@ impl Aovs {
                 "N" => aovs.normal = true,
                 "Z" => aovs.depth = true,
                 "lightcuts" => aovs.lightcuts = true,
-                other => return Err(format!("unknown AOV '{other}': expected albedo, N, Z, lightcuts or none")),
+                "groups" => aovs.groups = true,
+                "cryptomatte" => aovs.cryptomatte = true,
+                other => {
+                    return Err(format!(
+                        "unknown AOV '{other}': expected albedo, N, Z, lightcuts, groups, cryptomatte or none"
+                    ))
+                }
             }
         }
         Ok(aovs)
     }
+}
+
+/// An attribute's text as UTF-8 bytes, as OpenEXR stores strings (the exr
+/// crate's `Text::from` accepts only Latin-1 and panics on the rest, and a
+/// glTF name in a Cryptomatte manifest may be anything).
+fn utf8_text(value: &str) -> Text {
+    Text::from_bytes_unchecked(value.as_bytes().iter().copied().collect())
 }
 
 /// Largest finite half float: beauty values beyond it are clamped, never Inf.
@@ -139,6 +161,11 @@ pub fn write_exr(
         list.push(full("lightcuts.cut_size", column(&|p| p.cut_size)));
         list.push(full("lightcuts.shadow_rays", column(&|p| p.shadow_rays)));
     }
+    // The light groups and the mattes: the film holds them only when they
+    // were asked for (they change what is rendered).
+    for channel in &film.channels {
+        list.push(full(&channel.name, channel.values.clone()));
+    }
 
     let mut attributes = LayerAttributes {
         layer_position: Vec2(b.x0 as i32, b.y0 as i32),
@@ -150,13 +177,16 @@ pub fn write_exr(
     let mut other = |key: &str, value: AttributeValue| {
         attributes.other.insert(Text::from(key), value);
     };
-    other("lightcuts:sceneFile", AttributeValue::Text(Text::from(meta.scene_file.display().to_string().as_str())));
+    other("lightcuts:sceneFile", AttributeValue::Text(utf8_text(&meta.scene_file.display().to_string())));
     other("lightcuts:renderMode", AttributeValue::Text(Text::from(meta.render_mode.as_str())));
     other("lightcuts:renderTimeSeconds", AttributeValue::F64(meta.render_seconds));
     other("lightcuts:lights", AttributeValue::Text(Text::from(meta.lights.to_string().as_str())));
     other("lightcuts:samplesPerPixel", AttributeValue::I32(meta.spp.min(i32::MAX as u32) as i32));
     other("lightcuts:seed", AttributeValue::Text(Text::from(meta.seed.to_string().as_str())));
     other("lightcuts:sceneHash", AttributeValue::Text(Text::from(meta.scene_hash.as_str())));
+    for (key, value) in &film.attributes {
+        other(key, AttributeValue::Text(utf8_text(value)));
+    }
 
     let encoding =
         Encoding { compression: Compression::ZIP16, blocks: Blocks::ScanLines, line_order: LineOrder::Increasing };

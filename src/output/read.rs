@@ -61,7 +61,8 @@ pub fn read_exr(path: &Path) -> std::result::Result<ExrImage, OutputError> {
     let mut attributes = BTreeMap::new();
     for (key, value) in &layer.attributes.other {
         let text = match value {
-            AttributeValue::Text(t) => t.to_string(),
+            // OpenEXR strings are UTF-8 by convention (the writer stores them so).
+            AttributeValue::Text(t) => String::from_utf8_lossy(t.as_slice()).into_owned(),
             AttributeValue::F64(v) => v.to_string(),
             AttributeValue::F32(v) => v.to_string(),
             AttributeValue::I32(v) => v.to_string(),

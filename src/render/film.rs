@@ -59,4 +59,17 @@ pub struct Film {
     pub bounds: PixelBounds,
     /// bounds.area() pixels, row by row from (x0, y0).
     pub pixels: Vec<Pixel>,
+    /// Channels beside the beauty and the fixed AOVs, each with one value
+    /// per pixel in the order of `pixels`: the light groups'
+    /// `Combined_<group>.R/G/B`, Cryptomatte's `CryptoObject00.R`...
+    pub channels: Vec<FilmChannel>,
+    /// Header attributes those channels need (Cryptomatte's metadata).
+    pub attributes: Vec<(String, String)>,
+}
+
+/// One named channel of a film.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FilmChannel {
+    pub name: String,
+    pub values: Vec<f32>,
 }

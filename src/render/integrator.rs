@@ -40,6 +40,8 @@ pub struct Scratch {
     batch: BatchBuffers,
     cut: CutScratch,
     stochastic: StochasticScratch,
+    /// One shading point's direct light by light group.
+    point_groups: Vec<DVec3>,
 }
 
 /// Buckets of the cut-size histogram: bucket k counts cuts of 2^k to
@@ -95,39 +97,87 @@ pub struct FirstHit {
 
 pub struct SampleResult {
     pub radiance: DVec3,
+    /// The object and material names of the first hit, by index into the
+    /// scene's meshes and materials (Cryptomatte).
+    pub first_ids: Option<(usize, usize)>,
     pub first_hit: Option<FirstHit>,
     pub stats: ShadingStats,
 }
 
 pub struct Integrator<'a> {
     pub geometry: &'a Geometry<'a>,
-    pub lights: &'a Lights,
+    /// The lights of each light group (one entry when the scene names none).
+    pub lights: &'a [Lights],
     pub direct: DirectLighting<'a>,
     pub max_mirror_depth: u32,
+    /// Whether radiance is also split by light group ([`Integrator::trace`]'s
+    /// `groups`): only when the scene names groups.
+    pub split_groups: bool,
+    /// The light group of each mesh's emission (`Scene::emission_groups`).
+    pub emission_group: &'a [usize],
 }
 
 impl Integrator<'_> {
+    /// Number of light groups the radiance is split into (0: no split).
+    #[must_use]
+    pub fn group_slots(&self) -> usize {
+        if self.split_groups {
+            self.lights.len()
+        } else {
+            0
+        }
+    }
+
     /// Radiance arriving at the camera along `ray` (camera paths bounce only
-    /// off mirrors; every other surface is shaded by direct light).
-    pub fn trace(&self, mut ray: crate::embree::Ray, sample: SampleKey, scratch: &mut Scratch) -> SampleResult {
-        let mut result = SampleResult { radiance: DVec3::ZERO, first_hit: None, stats: ShadingStats::default() };
+    /// off mirrors; every other surface is shaded by direct light). Each
+    /// light group's share is added to `groups[g]` (`groups` has
+    /// [`Integrator::group_slots`] entries): emitters and the environment
+    /// seen directly count in their own groups.
+    pub fn trace(
+        &self,
+        mut ray: crate::embree::Ray,
+        sample: SampleKey,
+        scratch: &mut Scratch,
+        groups: &mut [DVec3],
+    ) -> SampleResult {
+        let mut result =
+            SampleResult { radiance: DVec3::ZERO, first_ids: None, first_hit: None, stats: ShadingStats::default() };
         let mut throughput = DVec3::ONE;
+        let scene = self.geometry.scene;
         for depth in 0..=self.max_mirror_depth {
             let Some(hit) = self.geometry.embree.intersect(&ray) else {
                 // The environment, seen directly or in a mirror.
-                if let Some(environment) = &self.geometry.scene.environment {
-                    result.radiance += throughput * environment.map.radiance(ray.direction.normalize()).as_dvec3();
+                if let Some(environment) = &scene.environment {
+                    let seen = throughput * environment.map.radiance(ray.direction.normalize()).as_dvec3();
+                    result.radiance += seen;
+                    if let Some(slot) = groups.get_mut(scene.groups.environment) {
+                        *slot += seen;
+                    }
                 }
                 break;
             };
             let sp = self.geometry.surface(&ray, &hit);
+            let mesh = self.geometry.mesh_of(&hit);
+            let material = scene.meshes[mesh].material;
             if depth == 0 {
                 result.first_hit = Some(FirstHit { albedo: sp.kd, normal: sp.n, distance: sp.distance });
+                result.first_ids = Some((mesh, material));
             }
             // Emitters are seen with their radiance (they reflect nothing).
-            result.radiance += throughput * sp.emitted.as_dvec3();
+            if sp.emitted != Vec3::ZERO {
+                let seen = throughput * sp.emitted.as_dvec3();
+                result.radiance += seen;
+                if let Some(slot) = groups.get_mut(self.emission_group[mesh]) {
+                    *slot += seen;
+                }
+            }
+            scratch.point_groups.clear();
+            scratch.point_groups.resize(groups.len(), DVec3::ZERO);
             let direct = self.direct_light(&sp, sample, depth, scratch, &mut result.stats);
             result.radiance += throughput * direct;
+            for (slot, value) in groups.iter_mut().zip(&scratch.point_groups) {
+                *slot += throughput * *value;
+            }
             if !sp.material.has_mirror() || depth == self.max_mirror_depth {
                 break;
             }
@@ -147,23 +197,35 @@ impl Integrator<'_> {
     ) -> DVec3 {
         match self.direct {
             DirectLighting::Exact => {
-                // Every light, one shadow ray each, in batches; summed in
-                // light order (omni, oriented, directional): deterministic.
-                let mut batch = LightBatch::new(&self.geometry.embree, sp, &mut scratch.batch);
-                self.lights.for_each(|light| batch.add(&light));
-                let found = batch.finish();
-                stats.record_point(found.lights, found.shadow_rays);
-                found.radiance
+                // Every light, one shadow ray each, in batches; summed group
+                // by group, in light order (omni, oriented, directional,
+                // spot) within each: deterministic.
+                let (mut radiance, mut lights, mut shadow_rays) = (DVec3::ZERO, 0, 0);
+                for (g, group) in self.lights.iter().enumerate() {
+                    let mut batch = LightBatch::new(&self.geometry.embree, sp, &mut scratch.batch);
+                    group.for_each(|light| batch.add(&light));
+                    let found = batch.finish();
+                    radiance += found.radiance;
+                    lights += found.lights;
+                    shadow_rays += found.shadow_rays;
+                    if let Some(slot) = scratch.point_groups.get_mut(g) {
+                        *slot += found.radiance;
+                    }
+                }
+                stats.record_point(lights, shadow_rays);
+                radiance
             }
             DirectLighting::Lightcuts { trees, settings } | DirectLighting::StochasticLightcuts { trees, settings } => {
                 let timed = crate::embree::timing().then(|| (Instant::now(), crate::embree::thread_timed_nanos()));
                 let embree = &self.geometry.embree;
+                let groups = &mut scratch.point_groups;
                 let found = if let DirectLighting::Lightcuts { .. } = self.direct {
-                    lightcut::evaluate(trees, sp, embree, &settings, &mut scratch.cut)
+                    lightcut::evaluate(trees, sp, embree, &settings, &mut scratch.cut, groups)
                 } else {
                     let [seed, x, y, s] = sample;
                     let mut rng = Rng::from_key(&[seed, x, y, s, u64::from(depth), STOCHASTIC_STREAM]);
-                    lightcut::stochastic::evaluate(trees, sp, embree, &settings, &mut rng, &mut scratch.stochastic)
+                    let scratch = &mut scratch.stochastic;
+                    lightcut::stochastic::evaluate(trees, sp, embree, &settings, &mut rng, scratch, groups)
                 };
                 if let Some((start, embree_before)) = timed {
                     let embree = crate::embree::thread_timed_nanos() - embree_before;

@@ -6,6 +6,7 @@
 //! tiles are assembled in a fixed order, so the image is bit-identical for any
 //! thread count, tile order and pixel window.
 
+pub mod cryptomatte;
 pub mod film;
 pub mod integrator;
 pub mod session;
@@ -16,9 +17,10 @@ use std::time::{Duration, Instant};
 use glam::DVec3;
 use rayon::prelude::*;
 
-use crate::scene::Camera;
+use crate::scene::{Camera, Scene};
 use crate::util::sampling::Rng;
-pub use film::{Film, Pixel, PixelBounds};
+use cryptomatte::{Coverage, CryptoType};
+pub use film::{Film, FilmChannel, Pixel, PixelBounds};
 use integrator::{film_value, Integrator, Scratch};
 pub use integrator::{DirectLighting, ShadingStats};
 
@@ -33,6 +35,8 @@ pub struct PassSettings {
     pub spp: u32,
     pub seed: u64,
     pub bounds: PixelBounds,
+    /// Whether to write Cryptomatte's object and material mattes.
+    pub cryptomatte: bool,
 }
 
 /// What a pass reports while it runs, through the caller's callback (the
@@ -71,6 +75,53 @@ pub fn tiles(bounds: PixelBounds, tile: u32) -> Vec<PixelBounds> {
     out
 }
 
+/// The channels a pass writes beside the beauty and the fixed AOVs, and
+/// what it needs to fill them.
+struct Extra {
+    names: Vec<String>,
+    /// Light groups the radiance is split into (0: none).
+    groups: usize,
+    /// Cryptomatte IDs of each mesh's object name and each material's
+    /// name, when the pass writes mattes.
+    ids: Option<(Vec<f32>, Vec<f32>)>,
+}
+
+impl Extra {
+    fn new(integrator: &Integrator<'_>, cryptomatte: bool) -> Self {
+        let scene = integrator.geometry.scene;
+        let groups = integrator.group_slots();
+        let mut names: Vec<String> = Vec::new();
+        for g in 0..groups {
+            let group = &scene.groups.names[g];
+            names.extend(["R", "G", "B"].map(|c| format!("Combined_{group}.{c}")));
+        }
+        let ids = cryptomatte.then(|| {
+            names.extend(CryptoType::ALL.iter().flat_map(|t| t.channels()));
+            let objects = scene.meshes.iter().map(|m| cryptomatte::id_of(&m.name)).collect();
+            let materials = scene.materials.iter().map(|m| cryptomatte::id_of(&m.name)).collect();
+            (objects, materials)
+        });
+        Self { names, groups, ids }
+    }
+
+    /// Cryptomatte's header attributes: each type's manifest lists every
+    /// name of the scene, once.
+    fn attributes(&self, scene: &Scene) -> Vec<(String, String)> {
+        if self.ids.is_none() {
+            return Vec::new();
+        }
+        let mut objects: Vec<String> = scene.meshes.iter().map(|m| m.name.clone()).collect();
+        let mut materials: Vec<String> = scene.materials.iter().map(|m| m.name.clone()).collect();
+        for names in [&mut objects, &mut materials] {
+            names.sort();
+            names.dedup();
+        }
+        let mut out = CryptoType::Object.header(&objects);
+        out.extend(CryptoType::Material.header(&materials));
+        out
+    }
+}
+
 /// Renders the window `settings.bounds` on the current rayon pool,
 /// reporting each finished tile to `progress`.
 pub fn render(
@@ -80,12 +131,13 @@ pub fn render(
     progress: &(dyn Fn(PassProgress) + Sync),
 ) -> (Film, PassStats) {
     let start = Instant::now();
+    let extra = Extra::new(integrator, settings.cryptomatte);
     let tile_list = tiles(settings.bounds, TILE);
     progress(PassProgress::Started { tiles: tile_list.len() as u64 });
-    let rendered: Vec<(Vec<Pixel>, PassStats)> = tile_list
+    let rendered: Vec<(Vec<Pixel>, Vec<f32>, PassStats)> = tile_list
         .par_iter()
         .map_init(Scratch::default, |scratch, tile| {
-            let result = render_tile(integrator, camera, settings, *tile, scratch);
+            let result = render_tile(integrator, camera, settings, &extra, *tile, scratch);
             progress(PassProgress::TileDone);
             result
         })
@@ -93,36 +145,53 @@ pub fn render(
     progress(PassProgress::Finished);
 
     let b = settings.bounds;
+    let channel_count = extra.names.len();
     let mut film = Film {
         full_width: settings.width,
         full_height: settings.height,
         bounds: b,
         pixels: vec![Pixel::default(); b.area()],
+        channels: extra
+            .names
+            .iter()
+            .map(|name| FilmChannel { name: name.clone(), values: vec![0.0; b.area()] })
+            .collect(),
+        attributes: extra.attributes(integrator.geometry.scene),
     };
     let mut stats = PassStats::default();
-    for (tile, (pixels, tile_stats)) in tile_list.iter().zip(rendered) {
+    for (tile, (pixels, values, tile_stats)) in tile_list.iter().zip(rendered) {
         stats.camera_rays += tile_stats.camera_rays;
         stats.shading.add(&tile_stats.shading);
         for (i, pixel) in pixels.into_iter().enumerate() {
             let x = tile.x0 + i as u32 % tile.width();
             let y = tile.y0 + i as u32 / tile.width();
-            film.pixels[(y - b.y0) as usize * b.width() as usize + (x - b.x0) as usize] = pixel;
+            let at = (y - b.y0) as usize * b.width() as usize + (x - b.x0) as usize;
+            film.pixels[at] = pixel;
+            for (c, channel) in film.channels.iter_mut().enumerate() {
+                channel.values[at] = values[i * channel_count + c];
+            }
         }
     }
     stats.time = start.elapsed();
     (film, stats)
 }
 
+/// A tile's pixels, its extra channels' values (pixel by pixel, each
+/// pixel's channels in `extra.names` order) and its counters.
 fn render_tile(
     integrator: &Integrator<'_>,
     camera: &Camera,
     settings: &PassSettings,
+    extra: &Extra,
     tile: PixelBounds,
     scratch: &mut Scratch,
-) -> (Vec<Pixel>, PassStats) {
+) -> (Vec<Pixel>, Vec<f32>, PassStats) {
     let mut pixels = Vec::with_capacity(tile.area());
+    let mut values = Vec::with_capacity(tile.area() * extra.names.len());
     let mut stats = PassStats::default();
     let inv_spp = 1.0 / f64::from(settings.spp);
+    let mut groups = vec![DVec3::ZERO; extra.groups];
+    let (mut objects, mut materials) = (Coverage::default(), Coverage::default());
     for y in tile.y0..tile.y1 {
         for x in tile.x0..tile.x1 {
             let mut radiance = DVec3::ZERO;
@@ -131,10 +200,14 @@ fn render_tile(
             let mut hits = 0u32;
             let mut z = f32::INFINITY;
             let mut pixel_stats = ShadingStats::default();
+            groups.fill(DVec3::ZERO);
+            objects.clear();
+            materials.clear();
             for s in 0..settings.spp {
                 let mut rng = Rng::from_key(&[settings.seed, u64::from(x), u64::from(y), u64::from(s)]);
                 let ray = camera.ray(x as f32 + rng.next_f32(), y as f32 + rng.next_f32());
-                let sample = integrator.trace(ray, [settings.seed, u64::from(x), u64::from(y), u64::from(s)], scratch);
+                let key = [settings.seed, u64::from(x), u64::from(y), u64::from(s)];
+                let sample = integrator.trace(ray, key, scratch, &mut groups);
                 stats.camera_rays += 1;
                 radiance += sample.radiance;
                 pixel_stats.add(&sample.stats);
@@ -143,6 +216,12 @@ fn render_tile(
                     albedo += hit.albedo.as_dvec3();
                     normal += hit.normal.as_dvec3();
                     z = z.min(hit.distance);
+                }
+                // Every camera sample weighs 1 / spp (the box filter the
+                // beauty uses), so coverages sum to the pixel's alpha.
+                if let (Some((object_ids, material_ids)), Some((mesh, material))) = (&extra.ids, sample.first_ids) {
+                    objects.add(object_ids[mesh], inv_spp);
+                    materials.add(material_ids[material], inv_spp);
                 }
             }
             stats.shading.add(&pixel_stats);
@@ -161,9 +240,17 @@ fn render_tile(
                 },
                 shadow_rays: pixel_stats.shadow_rays as f32,
             });
+            for group in &groups {
+                values.extend(value(*group, inv_spp));
+            }
+            if extra.ids.is_some() {
+                for coverage in [&mut objects, &mut materials] {
+                    values.extend(coverage.ranks().iter().flat_map(|&(id, weight)| [id, weight]));
+                }
+            }
         }
     }
-    (pixels, stats)
+    (pixels, values, stats)
 }
 
 /// A rayon pool of `threads` workers (0: one per CPU), each with Embree's

@@ -39,6 +39,9 @@ impl Mode {
     pub fn describe(&self) -> String {
         match self {
             Self::Exact => "exact".into(),
+            Self::Bounded(c) if c.group_error == crate::lightcut::GroupError::Pixel => {
+                format!("lightcuts error={} max_cut={} group_error=pixel", c.error, c.max_cut)
+            }
             Self::Bounded(c) => format!("lightcuts error={} max_cut={}", c.error, c.max_cut),
             Self::Stochastic(c) => format!("stochastic lightcuts error={} max_cut={}", c.error, c.max_cut),
         }
@@ -65,8 +68,9 @@ pub enum SessionError {
 
 pub struct Session<'s> {
     pub scene: &'s Scene,
-    /// The scene's lights (without the VPLs, which each pass traces).
-    pub lights: Lights,
+    /// The scene's lights by light group (one entry when it names no
+    /// group), without the VPLs, which each pass traces.
+    pub lights: Vec<Lights>,
     pub pool: rayon::ThreadPool,
     pub geometry: Geometry<'s>,
 }
@@ -91,7 +95,7 @@ impl<'s> Session<'s> {
     /// `threads`: 0 for one per CPU.
     pub fn try_new(scene: &'s Scene, threads: usize) -> Result<Self, SessionError> {
         let pool = thread_pool(threads).map_err(|source| SessionError::Threads { threads, source })?;
-        let lights = pool.install(|| Lights::from_scene(scene));
+        let lights = pool.install(|| Lights::by_group(scene));
         let device = Device::try_new()?;
         let geometry = Geometry::try_new(&device, scene, &lights)
             .map_err(|source| SessionError::Geometry { file: scene.path.clone(), source })?;
@@ -99,32 +103,60 @@ impl<'s> Session<'s> {
     }
 
     /// Renders one pass in `mode` (building the light trees first for the
-    /// lightcut modes, timed as part of the pass).
-    pub fn render(&self, settings: &PassSettings, mode: Mode, progress: &(dyn Fn(PassProgress) + Sync)) -> PassResult {
+    /// lightcut modes, timed as part of the pass). With `split_groups`, a
+    /// scene with light groups is rendered group by group as well (the
+    /// film's `Combined_<group>` channels, and the bounded cut's per-group
+    /// error control); without, as one group.
+    pub fn render(
+        &self,
+        settings: &PassSettings,
+        mode: Mode,
+        split_groups: bool,
+        progress: &(dyn Fn(PassProgress) + Sync),
+    ) -> PassResult {
         let start = Instant::now();
-        // Indirect light: VPLs for this seed, added to the scene's oriented lights.
-        let (lights, vpls) = match self.scene.indirect {
+        // Indirect light: VPLs for this seed, added to the oriented lights of
+        // the group their path started from.
+        let (mut lights, vpls) = match self.scene.indirect {
             Some(indirect) => {
                 let vpls = self.pool.install(|| vpl::trace(&self.geometry, &self.lights, indirect, settings.seed));
-                let count = vpls.len();
+                let count = vpls.iter().map(Vec::len).sum();
                 let mut lights = self.lights.clone();
-                lights.oriented.extend(vpls);
+                for (group, vpls) in lights.iter_mut().zip(vpls) {
+                    group.oriented.extend(vpls);
+                }
                 (std::borrow::Cow::Owned(lights), count)
             }
             None => (std::borrow::Cow::Borrowed(&self.lights), 0),
         };
+        let split_groups = split_groups && self.scene.groups.named();
+        if !split_groups && lights.len() > 1 {
+            // One group: every light in one set of trees, as a scene
+            // without groups.
+            let mut all = Lights::default();
+            for group in lights.iter() {
+                all.omni.extend_from_slice(&group.omni);
+                all.oriented.extend_from_slice(&group.oriented);
+                all.directional.extend_from_slice(&group.directional);
+                all.spot.extend_from_slice(&group.spot);
+            }
+            lights = std::borrow::Cow::Owned(vec![all]);
+        }
         let vpl_time = start.elapsed();
-        let trees = mode.cut().map(|_| self.pool.install(|| LightTrees::build(&lights, settings.seed)));
+        let trees = mode.cut().map(|_| self.pool.install(|| LightTrees::build_groups(&lights, settings.seed)));
         let direct = match (&trees, mode) {
             (Some(trees), Mode::Bounded(settings)) => DirectLighting::Lightcuts { trees, settings },
             (Some(trees), Mode::Stochastic(settings)) => DirectLighting::StochasticLightcuts { trees, settings },
             _ => DirectLighting::Exact,
         };
+        let emission_group = self.scene.emission_groups();
         let integrator = Integrator {
             geometry: &self.geometry,
             lights: &lights,
             direct,
             max_mirror_depth: self.scene.max_mirror_depth,
+            split_groups,
+            emission_group: &emission_group,
         };
         let camera = self.scene.camera(settings.width, settings.height);
         let (film, stats) = self.pool.install(|| render(&integrator, &camera, settings, progress));
@@ -136,7 +168,8 @@ impl<'s> Session<'s> {
             ),
             None => (Vec::new(), 0),
         };
-        let counts = [lights.omni.len(), lights.oriented.len(), lights.directional.len(), lights.spot.len()];
+        let count = |kind| lights.iter().map(|group| group.count(kind)).sum();
+        let counts = [LightKind::Omni, LightKind::Oriented, LightKind::Directional, LightKind::Spot].map(count);
         PassResult { film, stats, seconds, trees: tree_list, tree_bytes, vpls, vpl_time, lights: counts }
     }
 }
@@ -185,8 +218,9 @@ intensity = [1, 1, 1]
 
     fn pass(scene: &Scene, mode: Mode) -> crate::render::integrator::ShadingStats {
         let session = Session::try_new(scene, 1).unwrap();
-        let settings = PassSettings { width: 2, height: 2, spp: 1, seed: 0, bounds: PixelBounds::full(2, 2) };
-        let result = session.render(&settings, mode, &|_| {});
+        let settings =
+            PassSettings { width: 2, height: 2, spp: 1, seed: 0, bounds: PixelBounds::full(2, 2), cryptomatte: false };
+        let result = session.render(&settings, mode, true, &|_| {});
         assert_eq!(result.stats.camera_rays, 4);
         result.stats.shading
     }

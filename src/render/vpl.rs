@@ -65,40 +65,53 @@ fn uniform_direction(u: f32, v: f32) -> Vec3 {
     Vec3::new(r * phi.cos(), z, r * phi.sin())
 }
 
-/// Traces `settings.paths` light paths; returns their VPLs in path order.
+/// Traces `settings.paths` light paths from the lights of every group
+/// (`groups[g]`: group g's lights); returns each group's VPLs, in path
+/// order: a VPL belongs to the group of the light its path started from,
+/// so that a group's layer holds its indirect light too.
 #[must_use]
-pub fn trace(geometry: &Geometry<'_>, lights: &Lights, settings: IndirectSettings, seed: u64) -> Vec<OrientedLight> {
+pub fn trace(
+    geometry: &Geometry<'_>,
+    groups: &[Lights],
+    settings: IndirectSettings,
+    seed: u64,
+) -> Vec<Vec<OrientedLight>> {
+    let mut by_group = vec![Vec::new(); groups.len()];
     let (lo, hi) = geometry.bounds;
     if !(lo.is_finite() && hi.is_finite()) || settings.paths == 0 {
-        return Vec::new();
+        return by_group;
     }
     let centre = 0.5 * (lo + hi);
     let radius = (0.5 * (hi - lo).length()).max(geometry.ray_epsilon);
     // Emitters with their power: 4 pi I for omni, pi I for oriented (cosine
     // lobe), E times the disc's area for directional.
-    let mut sources: Vec<(Source, Vec3)> = Vec::with_capacity(lights.len());
-    lights.for_each(|light| {
-        sources.push(match light {
-            Light::Omni(l) => (Source::Omni { position: l.position }, 4.0 * PI * l.intensity),
-            Light::Oriented(l) => (Source::Oriented { position: l.position, normal: l.normal }, PI * l.intensity),
-            Light::Directional(l) => {
-                (Source::Directional { direction: l.direction }, PI * radius * radius * l.irradiance)
-            }
-            // At most I times the outer cone's solid angle (the falloff is at most 1).
-            Light::Spot(l) => (
-                Source::Spot {
-                    position: l.position,
-                    direction: l.direction,
-                    cos_inner: l.cos_inner,
-                    cos_outer: l.cos_outer,
-                },
-                2.0 * PI * (1.0 - l.cos_outer) * l.intensity,
-            ),
+    let mut sources: Vec<(Source, Vec3)> = Vec::new();
+    let mut source_group: Vec<usize> = Vec::new();
+    for (g, lights) in groups.iter().enumerate() {
+        source_group.resize(source_group.len() + lights.len(), g);
+        lights.for_each(|light| {
+            sources.push(match light {
+                Light::Omni(l) => (Source::Omni { position: l.position }, 4.0 * PI * l.intensity),
+                Light::Oriented(l) => (Source::Oriented { position: l.position, normal: l.normal }, PI * l.intensity),
+                Light::Directional(l) => {
+                    (Source::Directional { direction: l.direction }, PI * radius * radius * l.irradiance)
+                }
+                // At most I times the outer cone's solid angle (the falloff is at most 1).
+                Light::Spot(l) => (
+                    Source::Spot {
+                        position: l.position,
+                        direction: l.direction,
+                        cos_inner: l.cos_inner,
+                        cos_outer: l.cos_outer,
+                    },
+                    2.0 * PI * (1.0 - l.cos_outer) * l.intensity,
+                ),
+            });
         });
-    });
+    }
     let total: f64 = sources.iter().map(|s| f64::from(luminance(s.1))).sum();
     if total <= 0.0 {
-        return Vec::new();
+        return by_group;
     }
     let mut cdf = Vec::with_capacity(sources.len());
     let mut running = 0.0;
@@ -107,7 +120,7 @@ pub fn trace(geometry: &Geometry<'_>, lights: &Lights, settings: IndirectSetting
         cdf.push(running);
     }
     let eps = geometry.ray_epsilon;
-    let paths: Vec<Vec<OrientedLight>> = (0..settings.paths)
+    let paths: Vec<(usize, Vec<OrientedLight>)> = (0..settings.paths)
         .into_par_iter()
         .map(|k| {
             let mut rng = Rng::from_key(&[seed, 0x1b5a, k as u64]);
@@ -151,10 +164,13 @@ pub fn trace(geometry: &Geometry<'_>, lights: &Lights, settings: IndirectSetting
                 let direction = cosine_direction(sp.n, rng.next_f32(), rng.next_f32());
                 ray = Ray { origin: sp.offset_origin(), direction, t_near: 0.0, t_far: f32::INFINITY };
             }
-            vpls
+            (source_group[index], vpls)
         })
         .collect();
-    paths.into_iter().flatten().collect()
+    for (group, vpls) in paths {
+        by_group[group].extend(vpls);
+    }
+    by_group
 }
 
 #[cfg(test)]
@@ -201,9 +217,10 @@ bounces = 1
         let scene = scene();
         let lights = Lights::from_scene(&scene);
         let device = Device::try_new().unwrap();
-        let geometry = Geometry::try_new(&device, &scene, &lights).unwrap();
+        let geometry = Geometry::try_new(&device, &scene, std::slice::from_ref(&lights)).unwrap();
         let settings = scene.indirect.unwrap();
-        let vpls = trace(&geometry, &lights, settings, 7);
+        let groups = std::slice::from_ref(&lights);
+        let vpls = trace(&geometry, groups, settings, 7).remove(0);
         assert!(vpls.len() > 19_000, "nearly every path hits the floor: {}", vpls.len());
         // A VPL radiates pi * I in all (cosine lobe).
         let power: f32 = vpls.iter().map(|v| PI * v.intensity.x).sum();
@@ -213,9 +230,9 @@ bounces = 1
         let reflected = 0.5 * PI * 2.0 * 1.0;
         assert!((power - reflected).abs() <= 0.01 * reflected, "{power} vs {reflected}");
         assert!(vpls.iter().all(|v| v.normal.y > 0.99 && v.position.y > 0.0));
-        assert_eq!(vpls, trace(&geometry, &lights, settings, 7), "same seed, same VPLs");
-        assert_ne!(vpls, trace(&geometry, &lights, settings, 8), "another seed, other VPLs");
+        assert_eq!(vpls, trace(&geometry, groups, settings, 7)[0], "same seed, same VPLs");
+        assert_ne!(vpls, trace(&geometry, groups, settings, 8)[0], "another seed, other VPLs");
         let one_thread = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
-        assert_eq!(vpls, one_thread.install(|| trace(&geometry, &lights, settings, 7)), "any thread count");
+        assert_eq!(vpls, one_thread.install(|| trace(&geometry, groups, settings, 7))[0], "any thread count");
     }
 }

@@ -51,6 +51,23 @@ pub struct GltfSpec {
     /// Oriented lights each emissive mesh primitive becomes.
     #[serde(default = "emitter_samples")]
     pub emitter_samples: u32,
+    /// `[[gltf.groups]]`: which light group the file's lights join, by the
+    /// name of the light, its node or its emissive material; the first rule
+    /// that matches wins, and a light no rule matches is in `default`.
+    #[serde(default)]
+    pub groups: Vec<GroupRule>,
+}
+
+/// One `[[gltf.groups]]` rule: lights whose light, node or material name
+/// matches `light`, `node` or `material` (exactly one of them; `*` matches
+/// any run of characters) join `group`.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct GroupRule {
+    pub group: String,
+    pub light: Option<String>,
+    pub node: Option<String>,
+    pub material: Option<String>,
 }
 
 fn lumens_per_watt() -> f32 {
@@ -65,7 +82,13 @@ impl GltfSpec {
     /// Importing `file` with every default.
     #[must_use]
     pub fn file(file: String) -> Self {
-        Self { file, camera: None, lumens_per_watt: lumens_per_watt(), emitter_samples: emitter_samples() }
+        Self {
+            file,
+            camera: None,
+            lumens_per_watt: lumens_per_watt(),
+            emitter_samples: emitter_samples(),
+            groups: Vec::new(),
+        }
     }
 }
 
@@ -82,6 +105,8 @@ pub struct EnvironmentSpec {
     /// Directional lights the environment becomes.
     #[serde(default = "environment_samples")]
     pub samples: u32,
+    /// The light group of the environment's light (and of the background).
+    pub group: Option<String>,
 }
 
 fn environment_samples() -> u32 {
@@ -324,6 +349,9 @@ pub enum SpecError {
     /// `type` is not a string.
     #[error("expected a string, got {found}")]
     TypeNotAString { found: &'static str },
+    /// A string field every entry may have (`name`, `group`) is not a string.
+    #[error("expected a string, got {found}")]
+    NotAString { path: &'static str, found: &'static str },
     /// `type` names no known shape or light.
     #[error("unknown {what} type '{kind}', expected {expected}")]
     UnknownType { what: &'static str, kind: String, expected: &'static str },
@@ -345,8 +373,21 @@ impl SpecError {
         match self {
             Self::NotATable { .. } | Self::MissingType => "",
             Self::TypeNotAString { .. } | Self::UnknownType { .. } => ".type",
+            Self::NotAString { path, .. } => path,
             Self::Field { path, .. } => path,
         }
+    }
+}
+
+/// Takes the optional string field `key` out of a `[[shapes]]` or
+/// `[[lights]]` table (`name` and `group`, which every type has), leaving
+/// the rest for the type's own fields. `path` is `".name"` or `".group"`.
+pub fn take_string(value: &mut toml::Value, key: &str, path: &'static str) -> Result<Option<String>, SpecError> {
+    let toml::Value::Table(table) = value else { return Ok(None) };
+    match table.remove(key) {
+        None => Ok(None),
+        Some(toml::Value::String(s)) => Ok(Some(s)),
+        Some(other) => Err(SpecError::NotAString { path, found: other.type_str() }),
     }
 }
 

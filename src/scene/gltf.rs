@@ -17,6 +17,7 @@ use gltf::json::validation::Checked;
 use gltf::mesh::Mode;
 
 use super::file::{CameraSpec, GltfSpec};
+use super::groups::GltfLightNames;
 use super::image::{self, RgbImage};
 use super::material::{Albedo, Cutout, Material};
 use super::mesh::Mesh;
@@ -43,6 +44,9 @@ pub struct Parts<'a> {
     pub materials: &'a mut Vec<Material>,
     pub textures: &'a mut Vec<Texture>,
     pub lights: &'a mut Vec<LightSource>,
+    /// The names each of the lights this import adds is known by (for the
+    /// `[[gltf.groups]]` rules), one per light, in order.
+    pub light_names: &'a mut Vec<GltfLightNames>,
     pub inputs: &'a mut Vec<PathBuf>,
     pub warnings: &'a mut Vec<String>,
 }
@@ -252,17 +256,18 @@ impl Importer<'_, '_> {
                     format!("the world transform places it outside +/-{MAX_COORDINATE:e} m or is not finite"),
                 ));
             }
+            let node_name = node.name().map_or_else(|| location.clone(), str::to_string);
             if let Some(mesh) = node.mesh() {
                 if node.skin().is_some() {
                     self.warn(&location, "has a skin: rendered in its bind pose");
                 }
-                self.import_mesh(&mesh, &world)?;
+                self.import_mesh(&mesh, &world, &node_name)?;
             }
             if let Some(camera) = node.camera() {
                 cameras.push((camera, world, location.clone()));
             }
             if let Some(light) = node.light() {
-                self.import_light(light.index(), &world)?;
+                self.import_light(light.index(), &world, &node_name)?;
             }
             for child in node.children().collect::<Vec<_>>().into_iter().rev() {
                 stack.push((child, world, depth + 1));
@@ -316,7 +321,7 @@ impl Importer<'_, '_> {
         }))
     }
 
-    fn import_mesh(&mut self, mesh: &gltf::Mesh<'_>, world: &Mat4) -> Result<(), SceneError> {
+    fn import_mesh(&mut self, mesh: &gltf::Mesh<'_>, world: &Mat4, node_name: &str) -> Result<(), SceneError> {
         let normal_matrix = Mat3::from_mat4(*world).inverse().transpose();
         let mirrored = Mat3::from_mat4(*world).determinant() < 0.0;
         for primitive in mesh.primitives() {
@@ -396,7 +401,8 @@ impl Importer<'_, '_> {
             let material = self.material(primitive.material())?;
             let emission = self.parts.materials[material].emission;
             let both_sides = self.parts.materials[material].emits_both_sides;
-            let mesh = Mesh { positions: world_positions, normals, uvs, triangles, material };
+            let mesh =
+                Mesh { positions: world_positions, normals, uvs, triangles, material, name: node_name.to_string() };
             let has_area = mesh.triangles.iter().any(|t| {
                 let [a, b, c] = t.map(|i| mesh.positions[i as usize]);
                 (b - a).cross(c - a).length() > 0.0
@@ -411,6 +417,11 @@ impl Importer<'_, '_> {
                     seed: 0x617f_0000 + self.emitters,
                     both_sides,
                 });
+                self.parts.light_names.push(GltfLightNames {
+                    light: None,
+                    node: Some(node_name.to_string()),
+                    material: Some(self.parts.materials[material].name.clone()),
+                });
             }
         }
         Ok(())
@@ -418,7 +429,7 @@ impl Importer<'_, '_> {
 
     /// KHR_lights_punctual light `index` placed by `world`: photometric
     /// values over `lumens_per_watt` (candela to W/sr, lux to W/m^2).
-    fn import_light(&mut self, index: usize, world: &Mat4) -> Result<(), SceneError> {
+    fn import_light(&mut self, index: usize, world: &Mat4, node_name: &str) -> Result<(), SceneError> {
         let location = format!("extensions.KHR_lights_punctual.lights[{index}]");
         let light: &LightJson = self
             .doc
@@ -488,6 +499,11 @@ impl Importer<'_, '_> {
             },
         };
         self.parts.lights.push(source);
+        self.parts.light_names.push(GltfLightNames {
+            light: light.name.clone(),
+            node: Some(node_name.to_string()),
+            material: None,
+        });
         Ok(())
     }
 

@@ -17,6 +17,9 @@ pub struct Mesh {
     pub triangles: Vec<[u32; 3]>,
     /// Index into `Scene::materials`.
     pub material: usize,
+    /// The object's name (a shape's `name` or `shapes[i]`, a glTF node's
+    /// name): what Cryptomatte's object mattes are keyed by.
+    pub name: String,
 }
 
 impl Mesh {
@@ -29,6 +32,7 @@ impl Mesh {
             uvs: Some(vec![Vec2::new(0.0, 0.0), Vec2::new(1.0, 0.0), Vec2::new(1.0, 1.0), Vec2::new(0.0, 1.0)]),
             triangles: vec![[0, 1, 2], [0, 2, 3]],
             material,
+            name: String::new(),
         }
     }
 
@@ -86,7 +90,7 @@ impl Mesh {
                 }
             }
         }
-        Self { positions, normals: Some(normals), uvs: Some(uvs), triangles, material }
+        Self { positions, normals: Some(normals), uvs: Some(uvs), triangles, material, name: String::new() }
     }
 
     /// Appends another mesh's triangles (same material), keeping attributes

@@ -9,6 +9,7 @@ pub mod environment;
 pub mod error;
 pub mod file;
 pub mod gltf;
+pub mod groups;
 pub mod image;
 pub mod material;
 pub mod mesh;
@@ -26,6 +27,7 @@ use file::{
     AreaMeshSpec, AreaSpec, GridSpec, LightSpec, MeshSpec, PointSpec, QuadSpec, SceneFile, ShapeSpec, SphereSpec,
     SunSpec,
 };
+pub use groups::LightGroups;
 pub use material::{Albedo, Material};
 pub use mesh::Mesh;
 use texture::Texture;
@@ -78,8 +80,10 @@ pub struct Scene {
     pub materials: Vec<Material>,
     pub textures: Vec<Texture>,
     pub meshes: Vec<Mesh>,
-    /// The lights of `[[lights]]`, in file order.
+    /// The lights of `[[lights]]`, in file order, then the glTF file's.
     pub lights: Vec<LightSource>,
+    /// The light group of each light and of the environment.
+    pub groups: LightGroups,
     pub max_mirror_depth: u32,
     /// Radiance from infinitely far away: visible in the background, and
     /// sampled into directional lights.
@@ -279,8 +283,10 @@ impl Scene {
         let mut meshes = Vec::new();
         for (i, raw) in spec.shapes.iter().enumerate() {
             let field = |f: &str| format!("shapes[{i}].{f}");
-            let shape =
-                ShapeSpec::parse(raw).map_err(|e| v.error(&format!("shapes[{i}]{}", e.field()), &e.to_string()))?;
+            let entry_error = |e: file::SpecError| v.error(&format!("shapes[{i}]{}", e.field()), &e.to_string());
+            let mut raw = raw.clone();
+            let name = file::take_string(&mut raw, "name", ".name").map_err(entry_error)?;
+            let shape = ShapeSpec::parse(&raw).map_err(entry_error)?;
             let material_of = |name: &String| {
                 material_index
                     .get(name)
@@ -342,14 +348,22 @@ impl Scene {
                     ),
                 ));
             }
-            meshes.push(mesh);
+            meshes.push(Mesh { name: name.unwrap_or_else(|| format!("shapes[{i}]")), ..mesh });
         }
 
         let mut lights = Vec::new();
+        // The group each light asks for, with the field that names it.
+        let mut requested_groups = Vec::new();
         for (i, raw) in spec.lights.iter().enumerate() {
             let field = |f: &str| format!("lights[{i}].{f}");
-            let light =
-                LightSpec::parse(raw).map_err(|e| v.error(&format!("lights[{i}]{}", e.field()), &e.to_string()))?;
+            let entry_error = |e: file::SpecError| v.error(&format!("lights[{i}]{}", e.field()), &e.to_string());
+            let mut raw = raw.clone();
+            let name = file::take_string(&mut raw, "name", ".name").map_err(entry_error)?;
+            let group = file::take_string(&mut raw, "group", ".group").map_err(entry_error)?;
+            requested_groups.push((group, field("group")));
+            let light = LightSpec::parse(&raw).map_err(entry_error)?;
+            // An emitter's geometry is an object too (Cryptomatte).
+            let emitter_name = name.unwrap_or_else(|| format!("lights[{i}]"));
             match &light {
                 LightSpec::Point(PointSpec { position, intensity }) => {
                     let position = v.point(*position, &field("position"))?;
@@ -404,7 +418,7 @@ impl Scene {
                     })?;
                     let radiance = v.non_negative_rgb(*radiance, &field("radiance"))?;
                     v.sample_count(*samples, &field("samples"))?;
-                    let quad = Mesh::quad(c, u, w, 0);
+                    let quad = Mesh { name: emitter_name, ..Mesh::quad(c, u, w, 0) };
                     lights.push(add_emitter(&mut meshes, &mut materials, quad, radiance, *samples, i as u64));
                 }
                 LightSpec::AreaMesh(AreaMeshSpec { file, scale, translate, radiance, samples }) => {
@@ -419,7 +433,7 @@ impl Scene {
                     if !mesh_path.is_file() {
                         return Err(v.error(&field("file"), &format!("mesh file '{}' not found", mesh_path.display())));
                     }
-                    let mesh = Mesh::load_obj(&mesh_path, *scale, t, 0)?;
+                    let mesh = Mesh { name: emitter_name, ..Mesh::load_obj(&mesh_path, *scale, t, 0)? };
                     if let Some(bad) = mesh.positions.iter().position(|p| !within_limits(*p)) {
                         return Err(v.error(
                             &field("file"),
@@ -453,15 +467,22 @@ impl Scene {
         let gltf_camera = match &spec.gltf {
             None => None,
             Some(g) => {
+                let mut light_names = Vec::new();
                 let parts = gltf::Parts {
                     meshes: &mut meshes,
                     materials: &mut materials,
                     textures: &mut textures,
                     lights: &mut lights,
+                    light_names: &mut light_names,
                     inputs: &mut inputs,
                     warnings: &mut warnings,
                 };
-                gltf::import(path, base, g, spec.camera.is_none(), parts)?
+                let camera = gltf::import(path, base, g, spec.camera.is_none(), parts)?;
+                let matched = groups::apply_rules(path, &g.groups, &light_names)?;
+                for (k, group) in matched.into_iter().enumerate() {
+                    requested_groups.push((group, format!("gltf.groups (glTF light {k})")));
+                }
+                camera
             }
         };
         let (camera_spec, aspect_ratio) = match (&spec.camera, gltf_camera) {
@@ -521,6 +542,11 @@ impl Scene {
                 Some(IndirectSettings { paths: ind.paths as usize, bounces: ind.bounces })
             }
         };
+        let groups = LightGroups::assign(
+            path,
+            &requested_groups,
+            spec.environment.as_ref().map(|e| (e.group.clone(), "environment.group".to_string())),
+        )?;
         let clamp = spec.render.distance_clamp;
         v.check((0.0..=MAX_COORDINATE).contains(&clamp), "render.distance_clamp", || {
             format!("must be finite and >= 0, got {clamp}")
@@ -534,6 +560,7 @@ impl Scene {
             textures,
             meshes,
             lights,
+            groups,
             max_mirror_depth: spec.render.max_mirror_depth.min(64),
             environment,
             indirect,
@@ -579,6 +606,19 @@ impl Scene {
             })
             .sum();
         sources + self.environment.as_ref().map_or(0, |e| u64::from(e.samples))
+    }
+
+    /// The light group of each mesh's emission: an emitter's mesh is in its
+    /// light's group (group 0 for a mesh that emits nothing).
+    #[must_use]
+    pub fn emission_groups(&self) -> Vec<usize> {
+        let mut of_mesh = vec![0; self.meshes.len()];
+        for (source, &group) in self.lights.iter().zip(&self.groups.of_light) {
+            if let LightSource::Area { mesh, .. } = *source {
+                of_mesh[mesh] = group;
+            }
+        }
+        of_mesh
     }
 
     #[must_use]

@@ -29,7 +29,7 @@ pub struct Geometry<'s> {
 impl<'s> Geometry<'s> {
     /// Hands the scene's meshes to Embree. `lights` are the scene's lights:
     /// with the geometry they set the scale of the ray offset.
-    pub fn try_new(device: &Device, scene: &'s Scene, lights: &Lights) -> Result<Self, GeometryError> {
+    pub fn try_new(device: &Device, scene: &'s Scene, lights: &[Lights]) -> Result<Self, GeometryError> {
         let mut builder = device.try_new_scene()?;
         let mut mesh_of_geometry = Vec::new();
         for (i, mesh) in scene.meshes.iter().enumerate() {
@@ -48,8 +48,10 @@ impl<'s> Geometry<'s> {
             mesh_of_geometry.push(i);
         }
         let embree = builder.commit()?;
-        let (lo, hi) =
-            lights.omni.iter().fold(scene.mesh_bounds(), |(lo, hi), l| (lo.min(l.position), hi.max(l.position)));
+        let (lo, hi) = lights
+            .iter()
+            .flat_map(|group| &group.omni)
+            .fold(scene.mesh_bounds(), |(lo, hi), l| (lo.min(l.position), hi.max(l.position)));
         let magnitude = if lo.is_finite() && hi.is_finite() { lo.abs().max(hi.abs()).max_element() } else { 0.0 };
         // The floor keeps the offset positive for a scene of a single point at the origin.
         let ray_epsilon = (magnitude * (1.0 / 65536.0)).max(1e-30);
@@ -64,7 +66,12 @@ impl<'s> Geometry<'s> {
     }
 
     /// The surface point of a hit along `ray`, with normals facing the ray's origin.
+    /// The index into the scene's meshes of the mesh `hit` is on.
     #[must_use]
+    pub fn mesh_of(&self, hit: &Hit) -> usize {
+        self.mesh_of_geometry[hit.geometry as usize]
+    }
+
     pub fn surface(&self, ray: &Ray, hit: &Hit) -> SurfacePoint<'s> {
         let mesh = &self.scene.meshes[self.mesh_of_geometry[hit.geometry as usize]];
         let tri = mesh.triangles[hit.primitive as usize];

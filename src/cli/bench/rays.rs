@@ -10,6 +10,7 @@ use serde::Serialize;
 
 use crate::cli::progress::Progress;
 use crate::embree::{PacketWidth, ShadowRay};
+use crate::light::Lights;
 use crate::render::session::{Mode, Session};
 use crate::render::PassSettings;
 use crate::shading::direct::light_intensity;
@@ -63,11 +64,13 @@ fn record(session: &Session<'_>, settings: &PassSettings, stride: usize) -> Vec<
                 let mut rays = Vec::new();
                 if let Some(hit) = session.geometry.embree.intersect(&ray) {
                     let sp = session.geometry.surface(&ray, &hit);
-                    session.lights.for_each(|light| {
-                        if let Some((_, Some(r))) = light_sample(&light, &sp, light_intensity(&light)) {
-                            rays.push(r);
-                        }
-                    });
+                    for group in &session.lights {
+                        group.for_each(|light| {
+                            if let Some((_, Some(r))) = light_sample(&light, &sp, light_intensity(&light)) {
+                                rays.push(r);
+                            }
+                        });
+                    }
                 }
                 rays
             })
@@ -79,7 +82,7 @@ fn record(session: &Session<'_>, settings: &PassSettings, stride: usize) -> Vec<
 pub fn measure(session: &Session<'_>, settings: &PassSettings, mode: Mode, quiet: bool) -> RayFigures {
     let threads = session.pool.current_num_threads();
     // Pixels to record so that about MAX_RECORDED rays are kept.
-    let expected = settings.bounds.area() as f64 * session.lights.len().max(1) as f64;
+    let expected = settings.bounds.area() as f64 * session.lights.iter().map(Lights::len).sum::<usize>().max(1) as f64;
     let stride = (expected / MAX_RECORDED as f64).ceil().max(1.0) as usize;
     let rays = record(session, settings, stride);
     let embree = &session.geometry.embree;
@@ -118,9 +121,9 @@ pub fn measure(session: &Session<'_>, settings: &PassSettings, mode: Mode, quiet
         (packets(PacketWidth::Four), packets(PacketWidth::Eight), packets(PacketWidth::Sixteen));
 
     let progress = Progress::for_stderr("lightcuts", quiet);
-    let lightcuts = session.render(settings, mode, &|event| progress.report(event));
+    let lightcuts = session.render(settings, mode, true, &|event| progress.report(event));
     let progress = Progress::for_stderr("exact", quiet);
-    let exact = session.render(settings, Mode::Exact, &|event| progress.report(event));
+    let exact = session.render(settings, Mode::Exact, true, &|event| progress.report(event));
     let embree_batch = rate(rays.len(), batch_seconds);
     let (lc_rays, ex_rays) = (lightcuts.stats.shading.shadow_rays, exact.stats.shading.shadow_rays);
     let (lc_s, ex_s) = (lightcuts.stats.time.as_secs_f64(), exact.stats.time.as_secs_f64());

@@ -172,10 +172,10 @@ fn shading_points(material: &Material, count: usize) -> Vec<SurfacePoint<'_>> {
 
 /// Average cut size at 2% over the fixed shading points (no occluders).
 pub fn average_cut(tree: &LightTree, points: &[SurfacePoint<'_>], embree: &crate::embree::Scene) -> f64 {
-    let settings = CutSettings { error: 0.02, max_cut: 1_000_000 };
+    let settings = CutSettings { error: 0.02, max_cut: 1_000_000, ..CutSettings::default() };
     let mut scratch = CutScratch::default();
     let trees = LightTrees::of(tree);
-    let nodes: u64 = points.iter().map(|sp| evaluate(&trees, sp, embree, &settings, &mut scratch).nodes).sum();
+    let nodes: u64 = points.iter().map(|sp| evaluate(&trees, sp, embree, &settings, &mut scratch, &mut []).nodes).sum();
     nodes as f64 / points.len().max(1) as f64
 }
 

@@ -72,7 +72,7 @@ intensity = [0.2, 0.1, 0.05]
 fn at_shading_points(scene: &Scene, settings: CutSettings, mut check: impl FnMut(DVec3, DVec3, f64)) {
     let device = Device::try_new().unwrap();
     let lights = Lights::from_scene(scene);
-    let geometry = Geometry::try_new(&device, scene, &lights).unwrap();
+    let geometry = Geometry::try_new(&device, scene, std::slice::from_ref(&lights)).unwrap();
     let trees = LightTrees::build(&lights, 3);
     assert!(trees.trees.iter().any(|t| t.light_count() > EXHAUSTIVE_LIGHTS), "the test must exercise the cut");
     let camera = scene.camera(64, 48);
@@ -83,7 +83,7 @@ fn at_shading_points(scene: &Scene, settings: CutSettings, mut check: impl FnMut
         let ray = camera.ray(rng.range_f32(0.0, 64.0), rng.range_f32(0.0, 48.0));
         let Some(hit) = geometry.embree.intersect(&ray) else { continue };
         let sp = geometry.surface(&ray, &hit);
-        let cut = evaluate(&trees, &sp, &geometry.embree, &settings, &mut scratch);
+        let cut = evaluate(&trees, &sp, &geometry.embree, &settings, &mut scratch, &mut []);
         let mut exact = LightBatch::new(&geometry.embree, &sp, &mut batch);
         lights.for_each(|light| exact.add(&light));
         check(cut.radiance, exact.finish().radiance, cut.error_bound);
@@ -94,7 +94,7 @@ fn at_shading_points(scene: &Scene, settings: CutSettings, mut check: impl FnMut
 /// At 2%, the error of the cut at every test point of `scene` is within
 /// the sum of its bounds, and somewhere the cut does approximate.
 fn check_error_within_bounds(scene: &Scene) {
-    let settings = CutSettings { error: 0.02, max_cut: 1000 };
+    let settings = CutSettings { error: 0.02, max_cut: 1000, ..CutSettings::default() };
     let mut worst = 0.0f64;
     at_shading_points(scene, settings, |cut, exact, bound| {
         let error = (luminance64(cut) - luminance64(exact)).abs();
@@ -113,7 +113,7 @@ fn the_error_of_every_cut_is_within_the_sum_of_its_bounds() {
 #[test]
 fn error_zero_refines_to_the_exact_sum_at_every_point() {
     let scene = scene(24);
-    let settings = CutSettings { error: 0.0, max_cut: usize::MAX };
+    let settings = CutSettings { error: 0.0, max_cut: usize::MAX, ..CutSettings::default() };
     at_shading_points(&scene, settings, |cut, exact, bound| {
         assert_eq!(bound, 0.0, "error 0 refines every cluster with a non-zero bound");
         let diff = (cut - exact).abs().max_element();

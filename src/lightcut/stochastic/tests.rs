@@ -124,12 +124,12 @@ fn spots() -> String {
 fn estimates(scene: &Scene, biased: bool) -> Vec<(f64, f64, f64)> {
     let lights = Lights::from_scene(scene);
     let device = Device::try_new().unwrap();
-    let geometry = Geometry::try_new(&device, scene, &lights).unwrap();
+    let geometry = Geometry::try_new(&device, scene, std::slice::from_ref(&lights)).unwrap();
     let trees = LightTrees::build(&lights, 5);
     assert!(trees.trees.iter().all(|t| !t.blocks.is_empty()), "every tree must be big enough for a cut");
     let camera = scene.camera(32, 24);
     // A small cut, so that most of the estimate is sampled.
-    let settings = CutSettings { error: 0.1, max_cut: 8 };
+    let settings = CutSettings { error: 0.1, max_cut: 8, ..CutSettings::default() };
     let (mut scratch, mut batch) = (StochasticScratch::default(), BatchBuffers::default());
     let mut rows = Vec::new();
     let mut pixel = Rng::seeded(11);
@@ -164,6 +164,7 @@ fn estimates(scene: &Scene, biased: bool) -> Vec<(f64, f64, f64)> {
                     &mut scratch,
                     &bounds,
                     importance,
+                    &mut [],
                 );
                 luminance64(found.radiance)
             })
