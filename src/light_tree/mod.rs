@@ -273,7 +273,7 @@ impl LightTrees {
         let scale = if scale.is_finite() && scale > 0.0 { scale } else { 1.0 };
         Self {
             trees: vec![layout::CutTree::from_tree(tree)],
-            groups: vec![0..1],
+            groups: std::iter::once(0..1).collect(),
             group_of_tree: vec![0],
             build_times: vec![Duration::ZERO],
             scale,
