@@ -152,6 +152,15 @@ fn per_group_error_control_holds_the_dim_group_closer_than_the_pixel_threshold()
     let nodes = |i: &ExrImage| channel(i, "lightcuts.cut_size").iter().map(|&v| f64::from(v)).sum::<f64>();
     assert!(nodes(&per_group) > nodes(&per_pixel), "and costs more nodes");
     assert_eq!(per_pixel.attributes["lightcuts:renderMode"], "lightcuts error=0.02 max_cut=1000 group_error=pixel");
+    // The stochastic cut too: a cut per group is larger than one through all,
+    // and both split into layers that sum to the beauty.
+    let stochastic = |name: &str, error: &str| {
+        let image = render(&dir, name, &["--stochastic", "--spp", "2", "--group-error", error]);
+        assert!(sum_mismatch(&image) < 1e-5, "stochastic, --group-error {error}");
+        nodes(&image)
+    };
+    let (g, p) = (stochastic("sg.exr", "group"), stochastic("sp.exr", "pixel"));
+    assert!(g > p, "stochastic cut nodes: per group {g}, per pixel {p}");
 }
 
 #[test]

@@ -156,11 +156,11 @@ pub struct ModeArgs {
     #[arg(long)]
     pub max_cut: Option<usize>,
     /// In a scene with light groups, what each cluster's error is held to:
-    /// `group` (a cut per group, within --error of the group's own light:
-    /// every group layer as accurate as the beauty) or `pixel` (one cut,
-    /// within --error of the pixel's total: cheaper, dim groups' layers
-    /// less accurate). Bounded mode only.
-    #[arg(long, value_name = "group|pixel", value_parser = parse_group_error, conflicts_with_all = ["exact", "stochastic"])]
+    /// `group` (a cut per group, relative to the group's own light: every
+    /// group layer as accurate as the beauty) or `pixel` (one cut through
+    /// every group's trees, relative to the pixel's total: cheaper, dim
+    /// groups' layers less accurate). Both cut modes.
+    #[arg(long, value_name = "group|pixel", value_parser = parse_group_error, conflicts_with = "exact")]
     pub group_error: Option<GroupError>,
 }
 
@@ -381,8 +381,9 @@ pub fn run(args: &RenderArgs) -> Result<(), CliError> {
         settings.spp
     );
     println!("  mode             {mode}");
-    for (kind, lights, time) in &trees {
-        println!("  tree build       {} {lights} lights in {:.3} s", kind.name(), time.as_secs_f64());
+    for (group, kind, lights, time) in &trees {
+        let group = group.as_ref().map_or_else(String::new, |g| format!("{g}: "));
+        println!("  tree build       {group}{} {lights} lights in {:.3} s", kind.name(), time.as_secs_f64());
     }
     println!("  render time      {seconds:.3} s (including tree build)");
     println!("  camera rays      {}", stats.camera_rays);

@@ -329,17 +329,19 @@ pub(super) fn exhaustive(
     exhaustive.finish()
 }
 
-/// The exhaustive part of a cut through several groups' trees, group by
-/// group: each group's sum added to `groups[g]`, and the total.
+/// The exhaustive part of a cut through the trees `within` (whole groups'),
+/// group by group: each group's sum added to `groups[g]`, and the total.
 pub(super) fn exhaustive_by_group(
     trees: &LightTrees,
+    within: &std::ops::Range<usize>,
     sp: &SurfacePoint<'_>,
     embree: &EmbreeScene,
     batch: &mut BatchBuffers,
     groups: &mut [DVec3],
 ) -> BatchResult {
     let mut total = BatchResult::default();
-    for (g, range) in trees.groups.iter().enumerate() {
+    let inside = |r: &&std::ops::Range<usize>| within.start <= r.start && r.end <= within.end;
+    for (g, range) in trees.groups.iter().enumerate().filter(|(_, r)| inside(r)) {
         let found = exhaustive(&trees.trees[range.clone()], sp, embree, batch);
         groups[g] += found.radiance;
         total.radiance += found.radiance;
@@ -397,7 +399,7 @@ fn cut_through(
     // Small trees first, light by light with the exact renderer's code; their
     // sum is exact and counts in the total the threshold is relative to.
     let fixed = match groups.as_deref_mut() {
-        Some(groups) => exhaustive_by_group(all, sp, embree, &mut scratch.batch, groups),
+        Some(groups) => exhaustive_by_group(all, &range, sp, embree, &mut scratch.batch, groups),
         None => exhaustive(trees, sp, embree, &mut scratch.batch),
     };
     let mut result =

@@ -84,9 +84,9 @@ pub type Importance<'f> = &'f dyn Fn(&CutTree, [usize; 2]) -> [[f32; 2]; 2];
 /// choose the cut: a node is split while its bound is above `error` times
 /// the cut's summed bounds and the cut has fewer than `max_cut` nodes.
 /// When `groups` is not empty (one slot per light group), every drawn
-/// light's contribution is also added to its group's slot: each group's sum
-/// is an unbiased estimate of that group's light (one cut through every
-/// group's trees; `settings.group_error` is for the bounded cut).
+/// light's contribution is also added to its group's slot, so each group's
+/// sum is an unbiased estimate of that group's light; the cut is chosen per
+/// group or through every group's trees as `settings.group_error` says.
 pub fn evaluate(
     trees: &LightTrees,
     sp: &SurfacePoint<'_>,
@@ -118,17 +118,66 @@ pub(crate) fn evaluate_with(
     importance: Importance<'_>,
     groups: &mut [DVec3],
 ) -> CutResult {
+    let all = 0..trees.trees.len();
+    if groups.is_empty() {
+        return cut_through(trees, all, sp, embree, settings, rng, scratch, bounds, importance, None);
+    }
+    match settings.group_error {
+        GroupError::Pixel => {
+            cut_through(trees, all, sp, embree, settings, rng, scratch, bounds, importance, Some(groups))
+        }
+        GroupError::Group => {
+            let mut total = CutResult::default();
+            for range in &trees.groups {
+                let found = cut_through(
+                    trees,
+                    range.clone(),
+                    sp,
+                    embree,
+                    settings,
+                    rng,
+                    scratch,
+                    bounds,
+                    importance,
+                    Some(&mut *groups),
+                );
+                total.radiance += found.radiance;
+                total.nodes += found.nodes;
+                total.shadow_rays += found.shadow_rays;
+            }
+            total
+        }
+    }
+}
+
+/// One stochastic cut through `trees.trees[range]`, its threshold relative
+/// to their summed bounds; with `groups`, each drawn light's contribution
+/// is also added to its tree's group's slot.
+#[allow(clippy::too_many_arguments)]
+fn cut_through(
+    trees: &LightTrees,
+    range: std::ops::Range<usize>,
+    sp: &SurfacePoint<'_>,
+    embree: &EmbreeScene,
+    settings: &CutSettings,
+    rng: &mut Rng,
+    scratch: &mut StochasticScratch,
+    bounds: &PointBounds,
+    importance: Importance<'_>,
+    groups: Option<&mut [DVec3]>,
+) -> CutResult {
+    let groups = groups.unwrap_or_default();
     let fixed = if groups.is_empty() {
-        exhaustive(&trees.trees, sp, embree, &mut scratch.batch)
+        exhaustive(&trees.trees[range.clone()], sp, embree, &mut scratch.batch)
     } else {
-        exhaustive_by_group(trees, sp, embree, &mut scratch.batch, groups)
+        exhaustive_by_group(trees, &range, sp, embree, &mut scratch.batch, groups)
     };
     let mut result =
         CutResult { radiance: fixed.radiance, error_bound: 0.0, nodes: fixed.lights, shadow_rays: fixed.shadow_rays };
-    if trees.trees.iter().all(|t| t.blocks.is_empty()) {
+    if trees.trees[range.clone()].iter().all(|t| t.blocks.is_empty()) {
         return result;
     }
-    let cut_nodes = choose_cut(trees, settings, bounds, scratch);
+    let cut_nodes = choose_cut(trees, range, settings, bounds, scratch);
     result.nodes += cut_nodes as u64;
 
     // Draw one light per cut node: all walks step down together, level by
@@ -250,6 +299,7 @@ fn key(bound: f32, node: usize) -> u64 {
 /// the cut is smaller than `max_cut`. Returns the cut's size.
 fn choose_cut(
     trees: &LightTrees,
+    range: std::ops::Range<usize>,
     settings: &CutSettings,
     bounds: &PointBounds,
     scratch: &mut StochasticScratch,
@@ -259,8 +309,8 @@ fn choose_cut(
     // The cut's summed importance and size.
     let mut total = 0.0f64;
     let mut size = 0usize;
-    for (i, tree) in trees.trees.iter().enumerate() {
-        if !tree.blocks.is_empty() {
+    for i in range {
+        if !trees.trees[i].blocks.is_empty() {
             (total, size) = add_slots(trees, bounds, scratch, i as u8, 0, &[0], (total, size));
         }
     }

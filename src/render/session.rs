@@ -34,16 +34,22 @@ impl Mode {
         }
     }
 
+    /// A cut's settings as the header shows them (`group_error` only when
+    /// it is not the default).
+    fn settings(c: &CutSettings) -> String {
+        match c.group_error {
+            crate::lightcut::GroupError::Group => format!("error={} max_cut={}", c.error, c.max_cut),
+            crate::lightcut::GroupError::Pixel => format!("error={} max_cut={} group_error=pixel", c.error, c.max_cut),
+        }
+    }
+
     /// The mode as the EXR header and the reports name it.
     #[must_use]
     pub fn describe(&self) -> String {
         match self {
             Self::Exact => "exact".into(),
-            Self::Bounded(c) if c.group_error == crate::lightcut::GroupError::Pixel => {
-                format!("lightcuts error={} max_cut={} group_error=pixel", c.error, c.max_cut)
-            }
-            Self::Bounded(c) => format!("lightcuts error={} max_cut={}", c.error, c.max_cut),
-            Self::Stochastic(c) => format!("stochastic lightcuts error={} max_cut={}", c.error, c.max_cut),
+            Self::Bounded(c) => format!("lightcuts {}", Self::settings(c)),
+            Self::Stochastic(c) => format!("stochastic lightcuts {}", Self::settings(c)),
         }
     }
 }
@@ -81,8 +87,9 @@ pub struct PassResult {
     pub stats: PassStats,
     /// Wall time of the pass including the tree build, seconds.
     pub seconds: f64,
-    /// Per tree built: kind, lights, build time.
-    pub trees: Vec<(LightKind, usize, Duration)>,
+    /// Per tree built: its light group's name (None when the pass renders
+    /// one group), kind, lights, build time.
+    pub trees: Vec<(Option<String>, LightKind, usize, Duration)>,
     pub tree_bytes: usize,
     /// Virtual point lights traced for indirect light, and the time it took.
     pub vpls: usize,
@@ -163,7 +170,15 @@ impl<'s> Session<'s> {
         let seconds = start.elapsed().as_secs_f64();
         let (tree_list, tree_bytes) = match &trees {
             Some(t) => (
-                t.trees.iter().zip(&t.build_times).map(|(tree, time)| (tree.kind, tree.light_count(), *time)).collect(),
+                t.trees
+                    .iter()
+                    .zip(&t.build_times)
+                    .zip(&t.group_of_tree)
+                    .map(|((tree, time), &g)| {
+                        let group = split_groups.then(|| self.scene.groups.names[g].clone());
+                        (group, tree.kind, tree.light_count(), *time)
+                    })
+                    .collect(),
                 t.memory_bytes(),
             ),
             None => (Vec::new(), 0),
