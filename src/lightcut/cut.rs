@@ -363,16 +363,31 @@ pub fn evaluate(
     scratch: &mut CutScratch,
     groups: &mut [DVec3],
 ) -> CutResult {
+    by_group(trees, groups, settings.group_error, |range, groups| {
+        cut_through(trees, range, sp, embree, settings, scratch, groups)
+    })
+}
+
+/// Runs `cut` (one cut through the trees of a range, crediting each tree's
+/// group's slot when given the slots) as `group_error` says: through every
+/// tree at once when there are no slots or with [`GroupError::Pixel`],
+/// else once per group, summing the results. Shared by both cut modes.
+pub(super) fn by_group(
+    trees: &LightTrees,
+    groups: &mut [DVec3],
+    group_error: GroupError,
+    mut cut: impl FnMut(std::ops::Range<usize>, Option<&mut [DVec3]>) -> CutResult,
+) -> CutResult {
+    let all = 0..trees.trees.len();
     if groups.is_empty() {
-        return cut_through(trees, 0..trees.trees.len(), sp, embree, settings, scratch, None);
+        return cut(all, None);
     }
-    match settings.group_error {
-        GroupError::Pixel => cut_through(trees, 0..trees.trees.len(), sp, embree, settings, scratch, Some(groups)),
+    match group_error {
+        GroupError::Pixel => cut(all, Some(groups)),
         GroupError::Group => {
             let mut total = CutResult::default();
-            for (g, range) in trees.groups.iter().enumerate() {
-                let found = cut_through(trees, range.clone(), sp, embree, settings, scratch, None);
-                groups[g] += found.radiance;
+            for range in &trees.groups {
+                let found = cut(range.clone(), Some(&mut *groups));
                 total.radiance += found.radiance;
                 total.error_bound += found.error_bound;
                 total.nodes += found.nodes;

@@ -20,7 +20,7 @@ use std::collections::BinaryHeap;
 use glam::{DVec3, Vec3};
 
 use super::bounds::PointBounds;
-use super::cut::{exhaustive, exhaustive_by_group, CutResult, CutSettings, GroupError};
+use super::cut::{by_group, exhaustive, exhaustive_by_group, CutResult, CutSettings, GroupError};
 use crate::embree::{PacketWidth, Scene as EmbreeScene, ShadowRay};
 use crate::light_tree::layout::CutTree;
 use crate::light_tree::LightTrees;
@@ -118,36 +118,9 @@ pub(crate) fn evaluate_with(
     importance: Importance<'_>,
     groups: &mut [DVec3],
 ) -> CutResult {
-    let all = 0..trees.trees.len();
-    if groups.is_empty() {
-        return cut_through(trees, all, sp, embree, settings, rng, scratch, bounds, importance, None);
-    }
-    match settings.group_error {
-        GroupError::Pixel => {
-            cut_through(trees, all, sp, embree, settings, rng, scratch, bounds, importance, Some(groups))
-        }
-        GroupError::Group => {
-            let mut total = CutResult::default();
-            for range in &trees.groups {
-                let found = cut_through(
-                    trees,
-                    range.clone(),
-                    sp,
-                    embree,
-                    settings,
-                    rng,
-                    scratch,
-                    bounds,
-                    importance,
-                    Some(&mut *groups),
-                );
-                total.radiance += found.radiance;
-                total.nodes += found.nodes;
-                total.shadow_rays += found.shadow_rays;
-            }
-            total
-        }
-    }
+    by_group(trees, groups, settings.group_error, |range, groups| {
+        cut_through(trees, range, sp, embree, settings, rng, scratch, bounds, importance, groups)
+    })
 }
 
 /// One stochastic cut through `trees.trees[range]`, its threshold relative
