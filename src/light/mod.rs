@@ -275,6 +275,14 @@ impl Lights {
         lights
     }
 
+    /// Adds `other`'s lights after these, kind by kind.
+    pub fn append(&mut self, other: &Self) {
+        self.omni.extend_from_slice(&other.omni);
+        self.oriented.extend_from_slice(&other.oriented);
+        self.directional.extend_from_slice(&other.directional);
+        self.spot.extend_from_slice(&other.spot);
+    }
+
     #[must_use]
     pub fn len(&self) -> usize {
         self.omni.len() + self.oriented.len() + self.directional.len() + self.spot.len()

@@ -329,24 +329,31 @@ pub(super) fn exhaustive(
     exhaustive.finish()
 }
 
-/// The exhaustive part of a cut through the trees `within` (whole groups'),
-/// group by group: each group's sum added to `groups[g]`, and the total.
-pub(super) fn exhaustive_by_group(
+/// The exact part of a cut through `trees.trees[range]` (every light of its
+/// trees too small for a cut, by [`exhaustive`]) as the start of the cut's
+/// result. With `groups`, group by group (the range holds whole groups'
+/// trees), each group's sum also added to its slot.
+pub(super) fn exhaustive_part(
     trees: &LightTrees,
-    within: &std::ops::Range<usize>,
+    range: &std::ops::Range<usize>,
     sp: &SurfacePoint<'_>,
     embree: &EmbreeScene,
     batch: &mut BatchBuffers,
-    groups: &mut [DVec3],
-) -> BatchResult {
-    let mut total = BatchResult::default();
-    let inside = |r: &&std::ops::Range<usize>| within.start <= r.start && r.end <= within.end;
-    for (g, range) in trees.groups.iter().enumerate().filter(|(_, r)| inside(r)) {
-        let found = exhaustive(&trees.trees[range.clone()], sp, embree, batch);
-        groups[g] += found.radiance;
-        total.radiance += found.radiance;
-        total.lights += found.lights;
-        total.shadow_rays += found.shadow_rays;
+    groups: Option<&mut [DVec3]>,
+) -> CutResult {
+    let found = |trees: &[CutTree], batch: &mut BatchBuffers| {
+        let f = exhaustive(trees, sp, embree, batch);
+        CutResult { radiance: f.radiance, error_bound: 0.0, nodes: f.lights, shadow_rays: f.shadow_rays }
+    };
+    let Some(groups) = groups else { return found(&trees.trees[range.clone()], batch) };
+    let mut total = CutResult::default();
+    let inside = |r: &&std::ops::Range<usize>| range.start <= r.start && r.end <= range.end;
+    for (g, group) in trees.groups.iter().enumerate().filter(|(_, r)| inside(r)) {
+        let part = found(&trees.trees[group.clone()], batch);
+        groups[g] += part.radiance;
+        total.radiance += part.radiance;
+        total.nodes += part.nodes;
+        total.shadow_rays += part.shadow_rays;
     }
     total
 }
@@ -413,12 +420,8 @@ fn cut_through(
     let trees = &all.trees[range.clone()];
     // Small trees first, light by light with the exact renderer's code; their
     // sum is exact and counts in the total the threshold is relative to.
-    let fixed = match groups.as_deref_mut() {
-        Some(groups) => exhaustive_by_group(all, &range, sp, embree, &mut scratch.batch, groups),
-        None => exhaustive(trees, sp, embree, &mut scratch.batch),
-    };
-    let mut result =
-        CutResult { radiance: fixed.radiance, error_bound: 0.0, nodes: fixed.lights, shadow_rays: fixed.shadow_rays };
+    let mut result = exhaustive_part(all, &range, sp, embree, &mut scratch.batch, groups.as_deref_mut());
+    let fixed = result.radiance;
     if trees.iter().all(|t| t.blocks.is_empty()) {
         return result;
     }
@@ -434,7 +437,7 @@ fn cut_through(
         bounds: PointBounds::new(sp, scale),
         embree,
         scratch,
-        total: fixed.radiance,
+        total: fixed,
         cut_nodes: 0,
         shadow_rays: 0,
     };
@@ -470,7 +473,7 @@ fn cut_through(
         }
         cut.flush();
     }
-    let (mut radiance, mut bound) = (fixed.radiance, 0.0f64);
+    let (mut radiance, mut bound) = (fixed, 0.0f64);
     for entry in cut.scratch.entries.iter().filter(|e| e.in_cut) {
         radiance += entry.estimate();
         bound += f64::from(entry.bound);

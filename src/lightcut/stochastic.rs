@@ -20,7 +20,7 @@ use std::collections::BinaryHeap;
 use glam::{DVec3, Vec3};
 
 use super::bounds::PointBounds;
-use super::cut::{by_group, exhaustive, exhaustive_by_group, CutResult, CutSettings, GroupError};
+use super::cut::{by_group, exhaustive_part, CutResult, CutSettings, GroupError};
 use crate::embree::{PacketWidth, Scene as EmbreeScene, ShadowRay};
 use crate::light_tree::layout::CutTree;
 use crate::light_tree::LightTrees;
@@ -137,16 +137,11 @@ fn cut_through(
     scratch: &mut StochasticScratch,
     bounds: &PointBounds,
     importance: Importance<'_>,
-    groups: Option<&mut [DVec3]>,
+    mut groups: Option<&mut [DVec3]>,
 ) -> CutResult {
+    let mut result = exhaustive_part(trees, &range, sp, embree, &mut scratch.batch, groups.as_deref_mut());
+    let fixed = result.radiance;
     let groups = groups.unwrap_or_default();
-    let fixed = if groups.is_empty() {
-        exhaustive(&trees.trees[range.clone()], sp, embree, &mut scratch.batch)
-    } else {
-        exhaustive_by_group(trees, &range, sp, embree, &mut scratch.batch, groups)
-    };
-    let mut result =
-        CutResult { radiance: fixed.radiance, error_bound: 0.0, nodes: fixed.lights, shadow_rays: fixed.shadow_rays };
     if trees.trees[range.clone()].iter().all(|t| t.blocks.is_empty()) {
         return result;
     }
@@ -247,7 +242,7 @@ fn cut_through(
     }
     embree.occluded_packets(&scratch.rays, &mut scratch.occluded, PacketWidth::Sixteen);
     result.shadow_rays += scratch.rays.len() as u64;
-    let mut radiance = fixed.radiance + unshadowed;
+    let mut radiance = fixed + unshadowed;
     for ((value, &occluded), &tree) in scratch.values.iter().zip(&scratch.occluded).zip(&scratch.value_trees) {
         if !occluded {
             radiance += *value;

@@ -142,10 +142,7 @@ impl<'s> Session<'s> {
             // without groups.
             let mut all = Lights::default();
             for group in lights.iter() {
-                all.omni.extend_from_slice(&group.omni);
-                all.oriented.extend_from_slice(&group.oriented);
-                all.directional.extend_from_slice(&group.directional);
-                all.spot.extend_from_slice(&group.spot);
+                all.append(group);
             }
             lights = std::borrow::Cow::Owned(vec![all]);
         }
@@ -184,7 +181,7 @@ impl<'s> Session<'s> {
             None => (Vec::new(), 0),
         };
         let count = |kind| lights.iter().map(|group| group.count(kind)).sum();
-        let counts = [LightKind::Omni, LightKind::Oriented, LightKind::Directional, LightKind::Spot].map(count);
+        let counts = LightKind::ALL.map(count);
         PassResult { film, stats, seconds, trees: tree_list, tree_bytes, vpls, vpl_time, lights: counts }
     }
 }
