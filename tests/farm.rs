@@ -5,6 +5,13 @@
 mod common;
 use common::*;
 
+/// Renders tile `tile` (I/N) of `scene` quietly into `dir`/`out`, with `extra` flags.
+fn render_tile(dir: &TempDir, scene: &std::path::Path, out: &str, tile: &str, extra: &[&str]) -> std::path::PathBuf {
+    let out = dir.path(out);
+    lightcuts_ok(&[&["render", s(scene), "-o", s(&out), "--tile", tile, "--quiet"][..], extra].concat());
+    out
+}
+
 fn same_pixels(a: &ExrImage, b: &ExrImage) {
     assert_eq!(a.channels.keys().collect::<Vec<_>>(), b.channels.keys().collect::<Vec<_>>());
     for (name, values) in &a.channels {
@@ -46,21 +53,7 @@ fn assemble_refuses_gaps_overlaps_and_tiles_of_other_renders() {
     let dir = TempDir::new("farm-refuse");
     let scene = dir.write("s.toml", &small_scene(16));
     let render = |out: &str, tile: &str, seed: &str| {
-        let out = dir.path(out);
-        lightcuts_ok(&[
-            "render",
-            s(&scene),
-            "-o",
-            s(&out),
-            "--tile",
-            tile,
-            "--seed",
-            seed,
-            "--resolution",
-            "16x12",
-            "--quiet",
-        ]);
-        out
+        render_tile(&dir, &scene, out, tile, &["--seed", seed, "--resolution", "16x12"])
     };
     let (a, b, c) = (render("a.exr", "0/3", "0"), render("b.exr", "1/3", "0"), render("c.exr", "2/3", "0"));
     let other_seed = render("d.exr", "2/3", "7");
@@ -129,21 +122,7 @@ fn assemble_refuses_tiles_through_different_cameras() {
     g.node(json!({ "camera": side, "translation": [0.0, 1.0, 8.0] }), true);
     let scene = dir.write("s.gltf", &g.embedded());
     let render = |out: &str, tile: &str, camera: &str| {
-        let out = dir.path(out);
-        lightcuts_ok(&[
-            "render",
-            s(&scene),
-            "-o",
-            s(&out),
-            "--tile",
-            tile,
-            "--camera",
-            camera,
-            "--resolution",
-            "12x8",
-            "--quiet",
-        ]);
-        out
+        render_tile(&dir, &scene, out, tile, &["--camera", camera, "--resolution", "12x8"])
     };
     let (a, b) = (render("a.exr", "0/2", "top"), render("b.exr", "1/2", "side"));
     let stderr = lightcuts_fails(&["assemble", s(&dir.path("f.exr")), s(&a), s(&b)]);
