@@ -125,11 +125,16 @@ pub fn assemble(output: &Path, tiles: &[PathBuf]) -> Result<Assembled, OutputErr
             missing: shown.join("; ") + &more + &files,
         });
     }
+    // Each frame pixel's tile and its index in that tile's window.
+    let sources: Vec<(&ExrImage, usize)> = (0..width * height)
+        .map(|i| {
+            let image = &images[owner[i].expect("every pixel is covered")];
+            let (x, y) = (i % width, i / width);
+            (image, (y - image.y0 as usize) * image.width + (x - image.x0 as usize))
+        })
+        .collect();
     let mut pixels = vec![Pixel::default(); width * height];
-    for (i, pixel) in pixels.iter_mut().enumerate() {
-        let image = &images[owner[i].expect("every pixel is covered")];
-        let (x, y) = (i % width, i / width);
-        let at = (y - image.y0 as usize) * image.width + (x - image.x0 as usize);
+    for (pixel, &(image, at)) in pixels.iter_mut().zip(&sources) {
         let value = |name: &str| image.channels.get(name).map_or(0.0, |c| c[at]);
         *pixel = Pixel {
             rgb: [value("R"), value("G"), value("B")],
@@ -148,13 +153,7 @@ pub fn assemble(output: &Path, tiles: &[PathBuf]) -> Result<Assembled, OutputErr
         .filter(|name| !FIXED_CHANNELS.contains(&name.as_str()))
         .map(|name| FilmChannel {
             name: name.clone(),
-            values: (0..width * height)
-                .map(|i| {
-                    let image = &images[owner[i].expect("every pixel is covered")];
-                    let (x, y) = (i % width, i / width);
-                    image.channels[name][(y - image.y0 as usize) * image.width + (x - image.x0 as usize)]
-                })
-                .collect(),
+            values: sources.iter().map(|&(image, at)| image.channels[name][at]).collect(),
         })
         .collect();
     let attributes = first

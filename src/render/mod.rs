@@ -110,12 +110,9 @@ impl Extra {
         if self.ids.is_none() {
             return Vec::new();
         }
-        let mut objects: Vec<String> = scene.meshes.iter().map(|m| m.name.clone()).collect();
-        let mut materials: Vec<String> = scene.materials.iter().map(|m| m.name.clone()).collect();
-        for names in [&mut objects, &mut materials] {
-            names.sort();
-            names.dedup();
-        }
+        // The manifests are maps: each name once, however many meshes share it.
+        let objects: Vec<String> = scene.meshes.iter().map(|m| m.name.clone()).collect();
+        let materials: Vec<String> = scene.materials.iter().map(|m| m.name.clone()).collect();
         let mut out = CryptoType::Object.header(&objects);
         out.extend(CryptoType::Material.header(&materials));
         out
