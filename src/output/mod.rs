@@ -112,6 +112,12 @@ impl OutputError {
 /// Writes a file through `write` into a temporary file beside `path`, then
 /// renames it into place; on any failure (or a SIGINT meanwhile) the
 /// temporary file is removed and nothing appears under `path`.
+///
+/// The file gets the permissions a plain `File::create` would give it:
+/// 0666 less the process's umask (the temporary file is created with that
+/// mode, which the kernel masks, and the rename keeps it). A temporary
+/// file's usual 0600 would lock the compositing user out of a frame the
+/// farm's render user wrote.
 pub fn write_atomically(
     path: &Path,
     write: impl FnOnce(&mut File) -> Result<(), OutputError>,
@@ -127,6 +133,7 @@ pub fn write_atomically(
     let mut partial = tempfile::Builder::new()
         .prefix(&format!(".{name}."))
         .suffix(".partial")
+        .permissions(plain_create_permissions())
         .tempfile_in(&directory)
         .map_err(OutputError::io(path, "create the temporary file"))?;
     let partial_path = partial.path().to_path_buf();
@@ -141,4 +148,11 @@ pub fn write_atomically(
     });
     temporary::unregister(&partial_path);
     result
+}
+
+/// The mode `File::create` asks the kernel for; the kernel applies the
+/// umask to it at creation, as to any `open(O_CREAT)`.
+fn plain_create_permissions() -> std::fs::Permissions {
+    use std::os::unix::fs::PermissionsExt as _;
+    std::fs::Permissions::from_mode(0o666)
 }
