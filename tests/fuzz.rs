@@ -217,8 +217,15 @@ fn render_small(scene: &Scene) {
     let device = Device::try_new().unwrap();
     let Ok(geometry) = Geometry::try_new(&device, scene, &lights) else { return };
     let camera = scene.camera(4, 3);
-    let settings =
-        PassSettings { width: 4, height: 3, spp: 1, seed: 1, bounds: PixelBounds::full(4, 3), cryptomatte: true };
+    let settings = PassSettings {
+        width: 4,
+        height: 3,
+        spp: 1,
+        seed: 1,
+        bounds: PixelBounds::full(4, 3),
+        cryptomatte: true,
+        transparent: false,
+    };
     let trees = LightTrees::build_groups(&lights, 1);
     let emission_group = scene.emission_groups();
     for direct in [DirectLighting::Exact, DirectLighting::Lightcuts { trees: &trees, settings: CutSettings::default() }]

@@ -41,6 +41,12 @@ pub struct RenderArgs {
     /// (CryptoObject00..02, CryptoMaterial00..02).
     #[arg(long)]
     pub cryptomatte: bool,
+    /// A transparent background: where a camera ray hits nothing the pixel
+    /// gets RGB 0 and alpha 0 (premultiplied, ready for "over" onto a
+    /// plate) instead of the environment with alpha 1. The environment
+    /// still lights the scene and shows in mirrors.
+    #[arg(long)]
+    pub transparent: bool,
     /// Also write a tone-mapped sRGB PNG preview.
     #[arg(long, value_name = "PREVIEW.png")]
     pub png: Option<PathBuf>,
@@ -266,7 +272,7 @@ pub fn pass_settings(
             PixelBounds { x0, x1, y0, y1 }
         }
     };
-    Ok(PassSettings { width, height, spp, seed, bounds, cryptomatte: false })
+    Ok(PassSettings { width, height, spp, seed, bounds, cryptomatte: false, transparent: false })
 }
 
 /// The cut settings of a lightcuts render, validated.
@@ -313,6 +319,7 @@ pub fn run(args: &RenderArgs) -> Result<(), CliError> {
     let mut aovs = args.aovs.unwrap_or(Aovs::all(mode.cut().is_some()));
     aovs.cryptomatte |= args.cryptomatte;
     settings.cryptomatte = aovs.cryptomatte;
+    settings.transparent = args.transparent;
     if aovs.lightcuts && mode.cut().is_none() {
         return Err(CliError::Usage {
             flag: "--aovs",

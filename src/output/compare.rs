@@ -13,6 +13,7 @@ use serde::Serialize;
 
 use super::read::{read_exr, ExrImage};
 use super::OutputError;
+use crate::render::BACKGROUND_DEPTH;
 use crate::util::color::luminance64;
 
 /// Fraction of the reference's mean luminance used as the denominator floor.
@@ -76,9 +77,10 @@ pub struct BlockComparison {
     pub max_relative_error: f64,
 }
 
-/// Whether depth `z` (the Z channel: 0 where the camera ray hit nothing) is a surface.
+/// Whether depth `z` (the Z channel) is a surface: the background is
+/// [`BACKGROUND_DEPTH`] (Cycles' value too), or 0 in files written before it.
 fn is_surface(z: f32) -> bool {
-    z.is_finite() && z > 0.0
+    z.is_finite() && z > 0.0 && z < BACKGROUND_DEPTH
 }
 
 /// Compares the block averages of two luminance images (see

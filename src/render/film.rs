@@ -1,5 +1,11 @@
 //! The rendered window: beauty and AOVs per pixel, in scanline order.
 
+/// The depth (`Z`) of a pixel where no camera sample hit a surface: far
+/// away, as Cycles writes it (1e10), so that depth-based compositing
+/// (defocus, fog, depth mattes) puts the background behind everything. 0
+/// would read as the nearest possible depth.
+pub const BACKGROUND_DEPTH: f32 = 1e10;
+
 /// Half-open pixel window [x0, x1) x [y0, y1) in pixels of the full frame.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct PixelBounds {
@@ -37,12 +43,14 @@ impl PixelBounds {
 pub struct Pixel {
     /// Radiance, W/(m^2 sr) per channel.
     pub rgb: [f32; 3],
-    /// Coverage: the fraction of samples that hit geometry.
+    /// Coverage: the fraction of samples that hit geometry or, unless the
+    /// film is transparent, saw the environment.
     pub alpha: f32,
     pub albedo: [f32; 3],
     /// Shading normal (world space, facing the camera), averaged over hits.
     pub normal: [f32; 3],
-    /// Distance from the eye to the nearest hit, metres; 0 where nothing was hit.
+    /// Distance from the eye to the nearest hit, metres; [`BACKGROUND_DEPTH`]
+    /// where no sample hit a surface.
     pub z: f32,
     /// Nodes in the lightcut, averaged over the pixel's shading points.
     pub cut_size: f32,

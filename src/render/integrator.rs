@@ -97,6 +97,9 @@ pub struct FirstHit {
 
 pub struct SampleResult {
     pub radiance: DVec3,
+    /// Whether the sample counts in the pixel's alpha: it hit a surface,
+    /// or saw the environment through an opaque film.
+    pub opaque: bool,
     /// The object and material names of the first hit, by index into the
     /// scene's meshes and materials (Cryptomatte).
     pub first_ids: Option<(usize, usize)>,
@@ -132,22 +135,32 @@ impl Integrator<'_> {
     /// off mirrors; every other surface is shaded by direct light). Each
     /// light group's share is added to `groups[g]` (`groups` has
     /// [`Integrator::group_slots`] entries): emitters and the environment
-    /// seen directly count in their own groups.
+    /// seen directly count in their own groups. With `transparent`, the
+    /// environment is not seen where the camera ray itself hits nothing
+    /// (the film's background is RGB 0, alpha 0); mirrors still show it.
     pub fn trace(
         &self,
         mut ray: crate::embree::Ray,
         sample: SampleKey,
+        transparent: bool,
         scratch: &mut Scratch,
         groups: &mut [DVec3],
     ) -> SampleResult {
-        let mut result =
-            SampleResult { radiance: DVec3::ZERO, first_ids: None, first_hit: None, stats: ShadingStats::default() };
+        let mut result = SampleResult {
+            radiance: DVec3::ZERO,
+            opaque: false,
+            first_ids: None,
+            first_hit: None,
+            stats: ShadingStats::default(),
+        };
         let mut throughput = DVec3::ONE;
         let scene = self.geometry.scene;
         for depth in 0..=self.max_mirror_depth {
             let Some(hit) = self.geometry.embree.intersect(&ray) else {
                 // The environment, seen directly or in a mirror.
-                if let Some(environment) = &scene.environment {
+                let seen_directly = depth == 0;
+                if let Some(environment) = scene.environment.as_ref().filter(|_| !(seen_directly && transparent)) {
+                    result.opaque |= seen_directly;
                     let seen = throughput * environment.map.radiance(ray.direction.normalize()).as_dvec3();
                     result.radiance += seen;
                     if let Some(slot) = groups.get_mut(scene.groups.environment) {
@@ -160,6 +173,7 @@ impl Integrator<'_> {
             let mesh = self.geometry.mesh_of(&hit);
             let material = scene.meshes[mesh].material;
             if depth == 0 {
+                result.opaque = true;
                 result.first_hit = Some(FirstHit { albedo: sp.kd, normal: sp.n, distance: sp.distance });
                 result.first_ids = Some((mesh, material));
             }

@@ -20,7 +20,7 @@ use rayon::prelude::*;
 use crate::scene::{Camera, Scene};
 use crate::util::sampling::Rng;
 use cryptomatte::{Coverage, CryptoType};
-pub use film::{Film, FilmChannel, Pixel, PixelBounds};
+pub use film::{Film, FilmChannel, Pixel, PixelBounds, BACKGROUND_DEPTH};
 use integrator::{film_value, Integrator, Scratch};
 pub use integrator::{DirectLighting, ShadingStats};
 
@@ -37,6 +37,10 @@ pub struct PassSettings {
     pub bounds: PixelBounds,
     /// Whether to write Cryptomatte's object and material mattes.
     pub cryptomatte: bool,
+    /// A transparent film (`render --transparent`): camera rays that hit
+    /// nothing give RGB 0 and alpha 0 instead of the environment and
+    /// alpha 1. The environment still lights the scene and shows in mirrors.
+    pub transparent: bool,
 }
 
 /// What a pass reports while it runs, through the caller's callback (the
@@ -195,6 +199,7 @@ fn render_tile(
             let mut albedo = DVec3::ZERO;
             let mut normal = DVec3::ZERO;
             let mut hits = 0u32;
+            let mut opaque = 0u32;
             let mut z = f32::INFINITY;
             let mut pixel_stats = ShadingStats::default();
             groups.fill(DVec3::ZERO);
@@ -204,9 +209,10 @@ fn render_tile(
                 let mut rng = Rng::from_key(&[settings.seed, u64::from(x), u64::from(y), u64::from(s)]);
                 let ray = camera.ray(x as f32 + rng.next_f32(), y as f32 + rng.next_f32());
                 let key = [settings.seed, u64::from(x), u64::from(y), u64::from(s)];
-                let sample = integrator.trace(ray, key, scratch, &mut groups);
+                let sample = integrator.trace(ray, key, settings.transparent, scratch, &mut groups);
                 stats.camera_rays += 1;
                 radiance += sample.radiance;
+                opaque += u32::from(sample.opaque);
                 pixel_stats.add(&sample.stats);
                 if let Some(hit) = sample.first_hit {
                     hits += 1;
@@ -226,10 +232,10 @@ fn render_tile(
             let hit_scale = if hits > 0 { 1.0 / f64::from(hits) } else { 0.0 };
             pixels.push(Pixel {
                 rgb: value(radiance, inv_spp),
-                alpha: (f64::from(hits) * inv_spp) as f32,
+                alpha: (f64::from(opaque) * inv_spp) as f32,
                 albedo: value(albedo, hit_scale),
                 normal: value(normal, hit_scale),
-                z: if z.is_finite() { z } else { 0.0 },
+                z: if z.is_finite() { z } else { BACKGROUND_DEPTH },
                 cut_size: if pixel_stats.shading_points > 0 {
                     (pixel_stats.cut_nodes as f64 / pixel_stats.shading_points as f64) as f32
                 } else {

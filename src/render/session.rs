@@ -230,8 +230,15 @@ intensity = [1, 1, 1]
 
     fn pass(scene: &Scene, mode: Mode) -> crate::render::integrator::ShadingStats {
         let session = Session::try_new(scene, 1).unwrap();
-        let settings =
-            PassSettings { width: 2, height: 2, spp: 1, seed: 0, bounds: PixelBounds::full(2, 2), cryptomatte: false };
+        let settings = PassSettings {
+            width: 2,
+            height: 2,
+            spp: 1,
+            seed: 0,
+            bounds: PixelBounds::full(2, 2),
+            cryptomatte: false,
+            transparent: false,
+        };
         let result = session.render(&settings, mode, true, &|_| {});
         assert_eq!(result.stats.camera_rays, 4);
         result.stats.shading

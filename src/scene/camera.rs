@@ -43,17 +43,22 @@ impl Camera {
         )
     }
 
-    /// World to normalised device coordinates (OpenEXR's `worldToNDC`):
-    /// after the division by w (= the camera-space depth z), x and y run
-    /// from -1 to 1 across the display window (y up) and z = 1 - 1/z, a
-    /// depth that grows with distance (its near plane at 1 scene unit).
+    /// World to normalised device coordinates, as OpenEXR's standard
+    /// attribute `worldToNDC` defines them (RenderMan's NDC): after the
+    /// division by w (= the camera-space depth z), (x, y) = (0, 0) at the
+    /// display window's upper-left corner and (1, 1) at its lower-right (y
+    /// down, as the image's rows), and z = 1 - 1/z, a depth that grows with
+    /// distance (its near plane at 1 scene unit). Column vectors; the EXR
+    /// stores the transpose (see [`Camera::world_to_camera`]).
     #[must_use]
     pub fn world_to_ndc(&self) -> Mat4 {
         let aspect = self.width as f32 / self.height as f32;
+        // Screen coordinates s in [-1, 1] (y up) become 0.5 + 0.5 s in x
+        // and 0.5 - 0.5 s in y; the 0.5 offsets are multiplied by w = z.
         let projection = Mat4::from_cols(
-            Vec4::new(1.0 / (self.tan_half_fov_y * aspect), 0.0, 0.0, 0.0),
-            Vec4::new(0.0, 1.0 / self.tan_half_fov_y, 0.0, 0.0),
-            Vec4::new(0.0, 0.0, 1.0, 1.0),
+            Vec4::new(0.5 / (self.tan_half_fov_y * aspect), 0.0, 0.0, 0.0),
+            Vec4::new(0.0, -0.5 / self.tan_half_fov_y, 0.0, 0.0),
+            Vec4::new(0.5, 0.5, 1.0, 1.0),
             Vec4::new(0.0, 0.0, -1.0, 0.0),
         );
         projection * self.world_to_camera()
@@ -90,10 +95,13 @@ mod tests {
         assert!(
             (c.transform_point3(glam::Vec3::new(1.0, 2.0, -7.0)) - glam::Vec3::new(0.0, 0.0, 10.0)).length() < 1e-5
         );
-        // The top-right corner ray's points land at NDC (1, 1).
-        let ray = camera.ray(200.0, 0.0);
-        let p = camera.world_to_ndc().project_point3(ray.origin + 5.0 * ray.direction);
-        assert!((p.x - 1.0).abs() < 1e-5 && (p.y - 1.0).abs() < 1e-5, "{p}");
+        // A film position (x, y) in pixels lands at NDC (x / width, y /
+        // height): (0, 0) upper left, (1, 1) lower right.
+        for (x, y) in [(200.0, 0.0), (0.0, 0.0), (0.0, 100.0), (50.0, 75.0)] {
+            let ray = camera.ray(x, y);
+            let p = camera.world_to_ndc().project_point3(ray.origin + 5.0 * ray.direction);
+            assert!((p.x - x / 200.0).abs() < 1e-5 && (p.y - y / 100.0).abs() < 1e-5, "({x}, {y}): {p}");
+        }
     }
 
     use super::*;
