@@ -238,7 +238,7 @@ fn render_small(scene: &Scene) {
             split_groups: scene.groups.named(),
             emission_group: &emission_group,
         };
-        let (film, _) = render::render(&integrator, &camera, &settings, &|_| {});
+        let (film, _) = render::render(&integrator, &camera, &settings, &|_| {}).unwrap();
         for channel in &film.channels {
             assert!(channel.values.iter().all(|v| v.is_finite()), "non-finite {}", channel.name);
         }

@@ -11,17 +11,27 @@ pub fn cpu_seconds() -> Option<f64> {
     Some((stat.utime + stat.stime) as f64 / procfs::ticks_per_second() as f64)
 }
 
-/// Resident memory now (VmRSS), MiB.
-#[must_use]
-pub fn resident_mib() -> Option<f64> {
-    Some(Process::myself().ok()?.status().ok()?.vmrss? as f64 / 1024.0)
+/// Resident memory now and at its peak, from one read of
+/// /proc/self/status.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Memory {
+    /// VmRSS, MiB.
+    pub resident_mib: f64,
+    /// VmHWM (the largest resident memory so far, or since the last
+    /// [`reset_peak_resident`]), MiB. The kernel computes it as the larger
+    /// of its recorded peak and the VmRSS of the same read, so within one
+    /// read it is never below VmRSS. Across two reads it can be: the
+    /// kernel records the peak only at certain events (unmapping memory),
+    /// and the VmRSS of an earlier read may exceed both that record and a
+    /// later VmRSS; a test that compared two reads failed about one run in six.
+    pub peak_resident_mib: f64,
 }
 
-/// The largest resident memory so far (VmHWM, or since the last
-/// [`reset_peak_resident`]), MiB.
+/// This process's memory now, None where /proc is unavailable.
 #[must_use]
-pub fn peak_resident_mib() -> Option<f64> {
-    Some(Process::myself().ok()?.status().ok()?.vmhwm? as f64 / 1024.0)
+pub fn memory() -> Option<Memory> {
+    let status = Process::myself().ok()?.status().ok()?;
+    Some(Memory { resident_mib: status.vmrss? as f64 / 1024.0, peak_resident_mib: status.vmhwm? as f64 / 1024.0 })
 }
 
 /// Resets the peak to the current resident memory (Linux 4.0 and later);
@@ -46,11 +56,12 @@ mod tests {
         assert!(cpu_seconds().unwrap() > before, "100 ms of spinning shows as CPU time");
         assert!(reset_peak_resident());
         // Other tests allocate and free in this process meanwhile, so only
-        // orderings that always hold are checked.
+        // orderings that always hold are checked: within one read.
         let block = vec![1u8; 64 << 20];
         std::hint::black_box(&block);
-        let now = resident_mib().unwrap();
-        assert!(now >= 64.0, "a touched 64 MiB block is resident: {now} MiB");
-        assert!(peak_resident_mib().unwrap() >= now);
+        let now = memory().unwrap();
+        assert!(now.resident_mib >= 64.0, "a touched 64 MiB block is resident: {now:?}");
+        assert!(now.peak_resident_mib >= now.resident_mib, "{now:?}");
+        assert!(now.peak_resident_mib >= 64.0, "{now:?}");
     }
 }

@@ -333,8 +333,14 @@ pub fn run(args: &RenderArgs) -> Result<(), CliError> {
     let progress = Progress::for_stderr("render", args.quiet);
     crate::embree::set_timing(args.stats);
     let cpu_before = super::process::cpu_seconds();
-    let PassResult { film, stats, seconds, trees, tree_bytes, vpls, vpl_time, lights } =
-        session.render(&settings, mode, aovs.groups, &|event| progress.report(event));
+    let PassResult { film, stats, seconds, trees, tree_bytes, vpls, vpl_time, lights, refused_rays } =
+        session.render(&settings, mode, aovs.groups, &|event| progress.report(event))?;
+    if refused_rays > 0 {
+        eprintln!(
+            "warning: {refused_rays} rays had a non-finite or out-of-range component and were not traced \
+             (shadow rays among them counted as blocked): the scene holds a degenerate value"
+        );
+    }
     let cpu_seconds = super::process::cpu_seconds().zip(cpu_before).map(|(after, before)| after - before);
     let cut = mode.cut();
     let mode = mode.describe();
@@ -433,8 +439,8 @@ fn print_full_stats(stats: &crate::render::PassStats, cpu_seconds: Option<f64>, 
         );
     }
     println!("    tree memory    {:.1} MiB", tree_bytes as f64 / (1024.0 * 1024.0));
-    if let Some(peak) = super::process::peak_resident_mib() {
-        println!("    peak memory    {peak:.1} MiB resident");
+    if let Some(memory) = super::process::memory() {
+        println!("    peak memory    {:.1} MiB resident", memory.peak_resident_mib);
     }
     println!("    cut size       shading points");
     let total = stats.shading.shading_points.max(1) as f64;

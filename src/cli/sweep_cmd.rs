@@ -189,7 +189,7 @@ fn reference(
         }
     }
     let progress = Progress::for_stderr("exact", quiet);
-    let result = session.render(settings, Mode::Exact, true, &|event| progress.report(event));
+    let result = session.render(settings, Mode::Exact, true, &|event| progress.report(event))?;
     let meta = metadata(session.scene, key, settings, "exact".into(), &result);
     write_exr(&exr_path, &result.film, ExrChannels { half_beauty: false, aovs: Aovs::all(false) }, &meta)?;
     let record =
@@ -243,7 +243,7 @@ pub fn run(args: &SweepArgs) -> Result<(), CliError> {
                 let mode = sweep_mode.mode(cut);
                 let progress =
                     Progress::for_stderr(&format!("{} {spp} spp error {error}", sweep_mode.name()), args.quiet);
-                let result = session.render(&settings, mode, true, &|event| progress.report(event));
+                let result = session.render(&settings, mode, true, &|event| progress.report(event))?;
                 let comparison =
                     compare_rgb(&rgb(&result.film), &reference_rgb, b.width() as usize, b.height() as usize).summary;
                 let path = args.out.join(format!("{}-spp{spp}-error-{error}.exr", sweep_mode.name()));

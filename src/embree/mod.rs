@@ -181,6 +181,16 @@ impl Device {
         }
     }
 
+    /// Makes Embree report an error on this device through its own API (a
+    /// geometry of a type that does not exist), as a failure while tracing
+    /// would: for tests of the renderer's error checks.
+    #[doc(hidden)]
+    pub fn provoke_error_for_tests(&self) {
+        // SAFETY: the device pointer is live for as long as self; the shim
+        // releases whatever Embree returns.
+        unsafe { sys::lc_device_provoke_error(self.handle.0.as_ptr()) }
+    }
+
     /// Starts a new scene on this device.
     pub fn try_new_scene(&self) -> Result<SceneBuilder, EmbreeError> {
         // SAFETY: the device pointer is live for as long as self.
@@ -397,6 +407,26 @@ impl SceneBuilder {
     }
 }
 
+/// The alignments (valid mask, ray packet, what Embree requires) of the
+/// structures the shim hands to `rtcOccluded<width>`, in bytes.
+#[must_use]
+pub fn packet_alignment(width: PacketWidth) -> (u32, u32, u32) {
+    // SAFETY: a pure function of its argument.
+    let a = unsafe { sys::lc_packet_alignment(width as i32) };
+    (a.valid_mask, a.packet, a.required)
+}
+
+static REFUSED_RAYS: AtomicU64 = AtomicU64::new(0);
+
+/// How many rays were not handed to Embree because [`Ray::is_valid`] refused
+/// them (a non-finite or out-of-range component), since the process began:
+/// a shadow ray refused reads as blocked, a closest-hit query as a miss.
+/// The renderer reports a non-zero count.
+#[must_use]
+pub fn refused_rays() -> u64 {
+    REFUSED_RAYS.load(Ordering::Relaxed)
+}
+
 /// A ray: origin, direction and the parametric interval `[t_near, t_far]`
 /// measured in lengths of `direction`.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -425,9 +455,17 @@ impl Ray {
             && self.t_near <= self.t_far
     }
 
-    fn to_sys(self) -> sys::LcRay {
-        debug_assert!(self.is_valid(), "invalid ray for Embree: {self:?}");
-        sys::LcRay { org: self.origin.to_array(), tnear: self.t_near, dir: self.direction.to_array(), tfar: self.t_far }
+    /// The ray in the shim's layout, or None (counted in [`refused_rays`])
+    /// when Embree must not see it: Debian's Embree is built with
+    /// assertions and aborts the process on such a ray, and another build
+    /// would trace garbage. Checked in every build, at about a nanosecond a
+    /// ray against Embree's tens.
+    fn to_sys(self) -> Option<sys::LcRay> {
+        if !self.is_valid() {
+            REFUSED_RAYS.fetch_add(1, Ordering::Relaxed);
+            return None;
+        }
+        Some(sys::LcRay { org: self.origin.to_array(), tnear: self.t_near, dir: self.direction.to_array(), tfar: self.t_far })
     }
 }
 
@@ -455,7 +493,7 @@ impl Scene {
     /// The closest hit along `ray`, or `None`.
     #[must_use]
     pub fn intersect(&self, ray: &Ray) -> Option<Hit> {
-        let ray = ray.to_sys();
+        let ray = ray.to_sys()?;
         let mut hit = sys::LcHit::default();
         // SAFETY: the scene is committed and live; ray and hit are valid for the call.
         let found = timed(|| unsafe { sys::lc_intersect1(self.raw.ptr.as_ptr(), &ray, &mut hit) });
@@ -464,7 +502,8 @@ impl Scene {
 
     /// Closest hits of many rays in one call into Embree.
     pub fn intersect_batch(&self, rays: &[Ray], hits: &mut Vec<Option<Hit>>) {
-        let raw_rays: Vec<sys::LcRay> = rays.iter().map(|r| r.to_sys()).collect();
+        // A refused ray becomes one that misses everything: an empty interval.
+        let raw_rays: Vec<sys::LcRay> = rays.iter().map(|r| r.to_sys().unwrap_or(ShadowRay::BLOCKED.0)).collect();
         let mut raw_hits = vec![sys::LcHit::default(); rays.len()];
         // SAFETY: both arrays hold rays.len() elements; the scene is committed.
         unsafe { sys::lc_intersect_batch(self.raw.ptr.as_ptr(), raw_rays.as_ptr(), raw_hits.as_mut_ptr(), rays.len()) };
@@ -475,9 +514,23 @@ impl Scene {
     /// Whether anything blocks `ray` inside `[t_near, t_far]`.
     #[must_use]
     pub fn occluded(&self, ray: &Ray) -> bool {
-        let ray = ray.to_sys();
+        let Some(ray) = ray.to_sys() else { return true };
         // SAFETY: the scene is committed and live; ray is valid for the call.
         timed(|| unsafe { sys::lc_occluded1(self.raw.ptr.as_ptr(), &ray) != 0 })
+    }
+
+    /// The first error Embree reported on this scene's device since the
+    /// last check, as an error saying what lightcuts was doing. Embree's ray
+    /// queries report nothing themselves (a failing query leaves the ray as
+    /// if unoccluded), so the renderer checks after every tile and pass.
+    pub fn take_error(&self, context: &'static str) -> Result<(), EmbreeError> {
+        self.raw.device.check(context)
+    }
+
+    /// The device this scene was made on.
+    #[must_use]
+    pub fn device(&self) -> &Device {
+        &self.raw.device
     }
 
     /// Occlusion of many rays in one call into Embree (what the renderer
@@ -549,9 +602,18 @@ fn from_sys_hit(hit: &sys::LcHit) -> Hit {
 pub struct ShadowRay(sys::LcRay);
 
 impl ShadowRay {
+    /// A ray Embree skips (its interval is empty: t_far = -inf < t_near)
+    /// and whose t_far reads back as Embree's mark of an occluded ray: what
+    /// a refused ray becomes, so that it blocks its light instead of
+    /// letting it leak.
+    const BLOCKED: Self =
+        Self(sys::LcRay { org: [0.0; 3], tnear: 0.0, dir: [0.0, 0.0, 1.0], tfar: f32::NEG_INFINITY });
+
+    /// The shadow ray, or [`ShadowRay::BLOCKED`] when Embree must not see
+    /// it (see [`refused_rays`]).
     #[must_use]
     pub fn new(ray: Ray) -> Self {
-        Self(ray.to_sys())
+        ray.to_sys().map_or(Self::BLOCKED, Self)
     }
 
     /// The ray back in our own type.

@@ -4,6 +4,7 @@
  * the types of shim.h. LC_EMBREE_MAJOR is set by build.rs. */
 #include "shim.h"
 
+#include <assert.h>
 #include <math.h>
 #include <pthread.h>
 #include <stdlib.h>
@@ -81,11 +82,11 @@ void lc_device_take_error(LcDevice* device, LcError* error) {
     *error = device->first_error;
     memset(&device->first_error, 0, sizeof device->first_error);
     pthread_mutex_unlock(&device->lock);
-    if (error->code == 0) {
-        /* Errors raised before the callback was set, or on a path that skips it. */
-        enum RTCError code = rtcGetDeviceError(device->device);
-        if (code != RTC_ERROR_NONE) copy_message(error, code, "Embree device error");
-    }
+    /* Embree also keeps the code of the calling thread's last error, which
+     * its callback has reported already: read it always, so that it is
+     * cleared and never blamed on a later call. */
+    enum RTCError code = rtcGetDeviceError(device->device);
+    if (error->code == 0 && code != RTC_ERROR_NONE) copy_message(error, code, "Embree device error");
 }
 
 LcScene* lc_scene_new(LcDevice* device) {
@@ -262,15 +263,30 @@ void lc_occluded_batch(LcScene* scene, const LcRay* rays, uint8_t* occluded, siz
     for (size_t i = 0; i < n; ++i) occluded[i] = (uint8_t)occluded_one(scene->scene, &rays[i]);
 }
 
+/* A packet's valid mask: one int per lane (-1 active, 0 inactive), aligned
+ * as its packet must be (4 W bytes: rtcOccluded4/8/16 require 16, 32 and 64;
+ * Embree's RTCRay4/8/16 declare the same alignment themselves). */
+#define LC_VALID_MASK(W)                                                               \
+    typedef struct LcValid##W {                                                        \
+        _Alignas(4 * W) int lane[W];                                                   \
+    } LcValid##W;                                                                      \
+    _Static_assert(_Alignof(LcValid##W) == 4 * W, "valid mask alignment");            \
+    _Static_assert(_Alignof(struct RTCRay##W) >= 4 * W, "ray packet alignment");
+
+LC_VALID_MASK(4)
+LC_VALID_MASK(8)
+LC_VALID_MASK(16)
+
 /* One packet of up to W rays (W = 4, 8, 16): copied into Embree's SoA
  * layout, lanes past `count` invalid; occlusion read back from tfar. */
 #define LC_PACKET(W)                                                                   \
     static void occluded_packet##W(RTCScene scene, const LcRay* in, uint8_t* out, size_t count) { \
         struct RTCRay##W packet;                                                       \
-        int valid[W];                                                                  \
+        LcValid##W valid;                                                              \
+        assert(((uintptr_t)&packet | (uintptr_t)&valid) % (4 * W) == 0);               \
         for (int i = 0; i < W; ++i) {                                                  \
             const LcRay* r = &in[(size_t)i < count ? (size_t)i : 0];                   \
-            valid[i] = (size_t)i < count ? -1 : 0;                                     \
+            valid.lane[i] = (size_t)i < count ? -1 : 0;                                \
             packet.org_x[i] = r->org[0];                                               \
             packet.org_y[i] = r->org[1];                                               \
             packet.org_z[i] = r->org[2];                                               \
@@ -284,7 +300,7 @@ void lc_occluded_batch(LcScene* scene, const LcRay* rays, uint8_t* occluded, siz
             packet.id[i] = (unsigned)i;                                                \
             packet.flags[i] = 0;                                                       \
         }                                                                              \
-        LC_OCCLUDED_PACKET(W, valid, scene, &packet);                                  \
+        LC_OCCLUDED_PACKET(W, valid.lane, scene, &packet);                             \
         for (size_t i = 0; i < count; ++i)                                             \
             out[i] = packet.tfar[i] < 0.0f && isinf(packet.tfar[i]);                   \
     }
@@ -317,6 +333,24 @@ int32_t lc_occluded_packets(LcScene* scene, const LcRay* rays, uint8_t* occluded
         trace(scene->scene, &rays[start], &occluded[start], count);
     }
     return 0;
+}
+
+LcPacketAlignment lc_packet_alignment(int32_t width) {
+    LcPacketAlignment a = {0, 0, 0};
+    switch (width) {
+    case 4: a = (LcPacketAlignment){_Alignof(LcValid4), _Alignof(struct RTCRay4), 16}; break;
+    case 8: a = (LcPacketAlignment){_Alignof(LcValid8), _Alignof(struct RTCRay8), 32}; break;
+    case 16: a = (LcPacketAlignment){_Alignof(LcValid16), _Alignof(struct RTCRay16), 64}; break;
+    default: break;
+    }
+    return a;
+}
+
+void lc_device_provoke_error(LcDevice* device) {
+    /* Embree reports "invalid geometry type" through the device's error
+     * callback and returns NULL. */
+    RTCGeometry geometry = rtcNewGeometry(device->device, (enum RTCGeometryType)0x7fff);
+    if (geometry != NULL) rtcReleaseGeometry(geometry);
 }
 
 void lc_set_flush_denormals(void) {

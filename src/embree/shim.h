@@ -101,6 +101,22 @@ void lc_occluded_batch(LcScene* scene, const LcRay* rays, uint8_t* occluded, siz
  * with inactive lanes). Returns 0, or -1 for an unsupported width. */
 int32_t lc_occluded_packets(LcScene* scene, const LcRay* rays, uint8_t* occluded, size_t n, int32_t width);
 
+/* The alignments, in bytes, of the structures lc_occluded_packets hands
+ * to rtcOccluded<width> (its valid mask and its ray packet), and the
+ * alignment Embree requires of both: 16, 32 and 64 bytes for widths 4, 8
+ * and 16 (rtcOccluded4/8/16's documentation). Zeros for another width. */
+typedef struct LcPacketAlignment {
+    uint32_t valid_mask;
+    uint32_t packet;
+    uint32_t required;
+} LcPacketAlignment;
+LcPacketAlignment lc_packet_alignment(int32_t width);
+
+/* Makes Embree itself report an error on the device (a geometry of a type
+ * that does not exist), as a failure while tracing would: for the tests of
+ * the renderer's error checks. */
+void lc_device_provoke_error(LcDevice* device);
+
 /* Sets flush-to-zero and denormals-are-zero on the calling thread, as Embree's
  * documentation recommends for every thread that traces rays. */
 void lc_set_flush_denormals(void);

@@ -208,3 +208,67 @@ fn version_is_the_major_build_rs_found() {
         assert_eq!(major.to_string(), expected);
     }
 }
+
+#[test]
+fn packet_structures_are_aligned_as_embree_requires() {
+    for width in [PacketWidth::Four, PacketWidth::Eight, PacketWidth::Sixteen] {
+        let (valid_mask, packet, required) = packet_alignment(width);
+        assert_eq!(required, 4 * width as u32, "{width:?}: rtcOccluded{} needs {required} bytes", width as u32);
+        assert!(valid_mask >= required, "{width:?}: the valid mask is aligned to {valid_mask} bytes of {required}");
+        assert!(packet >= required, "{width:?}: the ray packet is aligned to {packet} bytes of {required}");
+    }
+}
+
+/// A triangle in the plane z = 1, and a ray towards it from the origin.
+fn wall() -> (Scene, Ray) {
+    let device = Device::try_new().unwrap();
+    let mut builder = device.try_new_scene().unwrap();
+    let v = [Vec3::new(-10.0, -10.0, 1.0), Vec3::new(10.0, -10.0, 1.0), Vec3::new(0.0, 10.0, 1.0)];
+    builder.attach_triangles(&v, &[[0, 1, 2]]).unwrap();
+    (builder.commit().unwrap(), Ray { origin: Vec3::ZERO, direction: Vec3::Z, t_near: 0.0, t_far: 0.5 })
+}
+
+#[test]
+fn rays_embree_must_not_see_are_refused_in_every_build_and_block_their_light() {
+    let (scene, clear) = wall();
+    assert!(!scene.occluded(&clear), "the ray stops short of the wall");
+    let bad = [
+        Ray { origin: Vec3::new(f32::NAN, 0.0, 0.0), ..clear },
+        Ray { direction: Vec3::new(0.0, f32::INFINITY, 1.0), ..clear },
+        Ray { origin: Vec3::splat(1e19), ..clear },
+        Ray { t_far: f32::NAN, ..clear },
+        Ray { t_near: -1.0, ..clear },
+    ];
+    let before = refused_rays();
+    for ray in &bad {
+        assert!(!ray.is_valid(), "{ray:?}");
+        assert!(scene.intersect(ray).is_none(), "{ray:?}: no hit");
+        assert!(scene.occluded(ray), "{ray:?}: a refused shadow ray blocks its light");
+    }
+    assert_eq!(refused_rays() - before, 2 * bad.len() as u64);
+    // In batches and packets, among valid rays: only the refused ones read
+    // as blocked, the others are traced.
+    let mut rays: Vec<ShadowRay> = bad.iter().map(|r| ShadowRay::new(*r)).collect();
+    rays.insert(2, ShadowRay::new(clear));
+    let mut occluded = Vec::new();
+    scene.occluded_batch(&rays, &mut occluded);
+    assert_eq!(occluded, [true, true, false, true, true, true]);
+    for width in [PacketWidth::Four, PacketWidth::Eight, PacketWidth::Sixteen] {
+        scene.occluded_packets(&rays, &mut occluded, width);
+        assert_eq!(occluded, [true, true, false, true, true, true], "{width:?}");
+    }
+    let mut hits = Vec::new();
+    scene.intersect_batch(&[bad[0], Ray { t_far: 2.0, ..clear }], &mut hits);
+    assert!(hits[0].is_none() && hits[1].is_some_and(|h| h.t == 1.0));
+}
+
+#[test]
+fn an_error_embree_reports_is_taken_once_and_names_what_was_being_done() {
+    let (scene, _) = wall();
+    assert_eq!(scene.take_error("tracing"), Ok(()));
+    scene.device().provoke_error_for_tests();
+    let error = scene.take_error("tracing a tile's rays").unwrap_err();
+    assert!(error.to_string().contains("while tracing a tile's rays"), "{error}");
+    assert_ne!(error.code, 0);
+    assert_eq!(scene.take_error("tracing"), Ok(()), "the error is taken, not reported again");
+}

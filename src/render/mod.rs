@@ -17,6 +17,7 @@ use std::time::{Duration, Instant};
 use glam::DVec3;
 use rayon::prelude::*;
 
+use crate::embree::EmbreeError;
 use crate::scene::{Camera, Scene};
 use crate::util::sampling::Rng;
 use cryptomatte::{Coverage, CryptoType};
@@ -124,25 +125,30 @@ impl Extra {
 }
 
 /// Renders the window `settings.bounds` on the current rayon pool,
-/// reporting each finished tile to `progress`.
+/// reporting each finished tile to `progress`. Fails when Embree reported
+/// an error while a tile was traced: its ray queries report none
+/// themselves, and a failed query reads as "not occluded", so each tile
+/// checks the device once it is done and the pass stops at the first error.
 pub fn render(
     integrator: &Integrator<'_>,
     camera: &Camera,
     settings: &PassSettings,
     progress: &(dyn Fn(PassProgress) + Sync),
-) -> (Film, PassStats) {
+) -> Result<(Film, PassStats), EmbreeError> {
     let start = Instant::now();
     let extra = Extra::new(integrator, settings.cryptomatte);
     let tile_list = tiles(settings.bounds, TILE);
     progress(PassProgress::Started { tiles: tile_list.len() as u64 });
+    let embree = &integrator.geometry.embree;
     let rendered: Vec<(Vec<Pixel>, Vec<f32>, PassStats)> = tile_list
         .par_iter()
         .map_init(Scratch::default, |scratch, tile| {
             let result = render_tile(integrator, camera, settings, &extra, *tile, scratch);
+            embree.take_error("tracing a tile's rays")?;
             progress(PassProgress::TileDone);
-            result
+            Ok(result)
         })
-        .collect();
+        .collect::<Result<_, EmbreeError>>()?;
     progress(PassProgress::Finished);
 
     let b = settings.bounds;
@@ -174,7 +180,7 @@ pub fn render(
         }
     }
     stats.time = start.elapsed();
-    (film, stats)
+    Ok((film, stats))
 }
 
 /// A tile's pixels, its extra channels' values (pixel by pixel, each

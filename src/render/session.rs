@@ -96,6 +96,11 @@ pub struct PassResult {
     pub vpl_time: Duration,
     /// Lights of the pass, by kind (the scene's plus the VPLs): omni, oriented, directional, spot.
     pub lights: [usize; 4],
+    /// Rays of the pass that Embree was not given because a component was
+    /// not finite or out of its range (see [`crate::embree::refused_rays`]):
+    /// shadow rays among them counted as blocked. 0 in every scene the
+    /// loader accepts; the command line warns otherwise.
+    pub refused_rays: u64,
 }
 
 impl<'s> Session<'s> {
@@ -120,13 +125,15 @@ impl<'s> Session<'s> {
         mode: Mode,
         split_groups: bool,
         progress: &(dyn Fn(PassProgress) + Sync),
-    ) -> PassResult {
+    ) -> Result<PassResult, SessionError> {
         let start = Instant::now();
+        let refused_before = crate::embree::refused_rays();
         // Indirect light: VPLs for this seed, added to the oriented lights of
         // the group their path started from.
         let (mut lights, vpls) = match self.scene.indirect {
             Some(indirect) => {
                 let vpls = self.pool.install(|| vpl::trace(&self.geometry, &self.lights, indirect, settings.seed));
+                self.geometry.embree.take_error("tracing the light paths of the VPLs")?;
                 let count = vpls.iter().map(Vec::len).sum();
                 let mut lights = self.lights.clone();
                 for (group, vpls) in lights.iter_mut().zip(vpls) {
@@ -163,7 +170,7 @@ impl<'s> Session<'s> {
             emission_group: &emission_group,
         };
         let camera = self.scene.camera(settings.width, settings.height);
-        let (film, stats) = self.pool.install(|| render(&integrator, &camera, settings, progress));
+        let (film, stats) = self.pool.install(|| render(&integrator, &camera, settings, progress))?;
         let seconds = start.elapsed().as_secs_f64();
         let (tree_list, tree_bytes) = match &trees {
             Some(t) => (
@@ -182,7 +189,8 @@ impl<'s> Session<'s> {
         };
         let count = |kind| lights.iter().map(|group| group.count(kind)).sum();
         let counts = LightKind::ALL.map(count);
-        PassResult { film, stats, seconds, trees: tree_list, tree_bytes, vpls, vpl_time, lights: counts }
+        let refused_rays = crate::embree::refused_rays() - refused_before;
+        Ok(PassResult { film, stats, seconds, trees: tree_list, tree_bytes, vpls, vpl_time, lights: counts, refused_rays })
     }
 }
 
@@ -239,7 +247,7 @@ intensity = [1, 1, 1]
             cryptomatte: false,
             transparent: false,
         };
-        let result = session.render(&settings, mode, true, &|_| {});
+        let result = session.render(&settings, mode, true, &|_| {}).unwrap();
         assert_eq!(result.stats.camera_rays, 4);
         result.stats.shading
     }
@@ -270,5 +278,40 @@ intensity = [1, 1, 1]
         let mut histogram = [0; crate::render::integrator::CUT_HISTOGRAM_BUCKETS];
         histogram[0] = 4;
         assert_eq!(stats.cut_histogram, histogram);
+    }
+
+    #[test]
+    fn an_error_embree_reports_during_the_pass_fails_the_render() {
+        // 64 x 48 pixels: 12 tiles of 16 x 16.
+        let scene = scene(COINCIDENT);
+        let session = Session::try_new(&scene, 1).unwrap();
+        let settings = PassSettings {
+            width: 64,
+            height: 48,
+            spp: 1,
+            seed: 0,
+            bounds: PixelBounds::full(64, 48),
+            cryptomatte: false,
+            transparent: false,
+        };
+        let tiles = std::sync::atomic::AtomicUsize::new(0);
+        // Embree reports an error after the third tile, as a failure inside
+        // a ray query would (its queries report none themselves).
+        let progress = |event: PassProgress| {
+            if event == PassProgress::TileDone && tiles.fetch_add(1, std::sync::atomic::Ordering::Relaxed) == 2 {
+                session.geometry.embree.device().provoke_error_for_tests();
+            }
+        };
+        for mode in [Mode::Exact, Mode::Bounded(CutSettings::default())] {
+            tiles.store(0, std::sync::atomic::Ordering::Relaxed);
+            match session.render(&settings, mode, true, &progress) {
+                Err(SessionError::Embree(e)) => assert!(e.to_string().contains("while tracing a tile's rays"), "{e}"),
+                Err(e) => panic!("{mode:?}: another error: {e}"),
+                Ok(_) => panic!("{mode:?}: the render succeeded after Embree reported an error"),
+            }
+            assert!(tiles.load(std::sync::atomic::Ordering::Relaxed) < 12, "the pass stops at the error");
+        }
+        // The error was taken: the next pass renders.
+        assert!(session.render(&settings, Mode::Exact, true, &|_| {}).is_ok());
     }
 }

@@ -113,7 +113,7 @@ fn rays(args: &RaysArgs) -> Result<(), CliError> {
         });
     }
     let session = crate::render::session::Session::try_new(&scene, args.pass.threads)?;
-    let f = rays::measure(&session, &settings, mode, args.quiet);
+    let f = rays::measure(&session, &settings, mode, args.quiet)?;
     if args.json {
         println!("{}", serde_json::to_string_pretty(&f).expect("plain data serialises"));
         return Ok(());

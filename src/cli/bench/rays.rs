@@ -11,7 +11,7 @@ use serde::Serialize;
 use crate::cli::progress::Progress;
 use crate::embree::{PacketWidth, ShadowRay};
 use crate::light::Lights;
-use crate::render::session::{Mode, Session};
+use crate::render::session::{Mode, Session, SessionError};
 use crate::render::PassSettings;
 use crate::shading::direct::light_intensity;
 use crate::shading::{light_sample, SHADOW_BATCH};
@@ -79,7 +79,12 @@ fn record(session: &Session<'_>, settings: &PassSettings, stride: usize) -> Vec<
 }
 
 /// `mode`: the lightcut mode of the pass (b).
-pub fn measure(session: &Session<'_>, settings: &PassSettings, mode: Mode, quiet: bool) -> RayFigures {
+pub fn measure(
+    session: &Session<'_>,
+    settings: &PassSettings,
+    mode: Mode,
+    quiet: bool,
+) -> Result<RayFigures, SessionError> {
     let threads = session.pool.current_num_threads();
     // Pixels to record so that about MAX_RECORDED rays are kept.
     let expected = settings.bounds.area() as f64 * session.lights.iter().map(Lights::len).sum::<usize>().max(1) as f64;
@@ -119,15 +124,16 @@ pub fn measure(session: &Session<'_>, settings: &PassSettings, mode: Mode, quiet
     };
     let (packet4, packet8, packet16) =
         (packets(PacketWidth::Four), packets(PacketWidth::Eight), packets(PacketWidth::Sixteen));
+    embree.take_error("tracing the recorded shadow rays")?;
 
     let progress = Progress::for_stderr("lightcuts", quiet);
-    let lightcuts = session.render(settings, mode, true, &|event| progress.report(event));
+    let lightcuts = session.render(settings, mode, true, &|event| progress.report(event))?;
     let progress = Progress::for_stderr("exact", quiet);
-    let exact = session.render(settings, Mode::Exact, true, &|event| progress.report(event));
+    let exact = session.render(settings, Mode::Exact, true, &|event| progress.report(event))?;
     let embree_batch = rate(rays.len(), batch_seconds);
     let (lc_rays, ex_rays) = (lightcuts.stats.shading.shadow_rays, exact.stats.shading.shadow_rays);
     let (lc_s, ex_s) = (lightcuts.stats.time.as_secs_f64(), exact.stats.time.as_secs_f64());
-    RayFigures {
+    Ok(RayFigures {
         recorded_rays: rays.len(),
         embree_single_mrays_per_s: rate(rays.len(), single_seconds),
         embree_batch_mrays_per_s: embree_batch,
@@ -144,5 +150,5 @@ pub fn measure(session: &Session<'_>, settings: &PassSettings, mode: Mode, quiet
         lightcuts_over_embree_packets: rate(lc_rays as usize, lc_s) / packet8,
         exact_over_embree: rate(ex_rays as usize, ex_s) / embree_batch,
         threads,
-    }
+    })
 }

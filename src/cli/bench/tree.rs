@@ -118,11 +118,11 @@ pub fn measure_build(
     seed: u64,
 ) -> (BuildFigure, LightTree) {
     let reset = process::reset_peak_resident();
-    let before = process::resident_mib();
+    let before = process::memory().map(|m| m.resident_mib);
     let start = Instant::now();
     let tree = ploc::build(kind, lights, seed);
     let build_seconds = start.elapsed().as_secs_f64();
-    let peak = process::peak_resident_mib();
+    let peak = process::memory().map(|m| m.peak_resident_mib);
     let start = Instant::now();
     let layout = CutTree::from_tree(&tree);
     let layout_seconds = start.elapsed().as_secs_f64();
