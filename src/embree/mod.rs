@@ -465,7 +465,12 @@ impl Ray {
             REFUSED_RAYS.fetch_add(1, Ordering::Relaxed);
             return None;
         }
-        Some(sys::LcRay { org: self.origin.to_array(), tnear: self.t_near, dir: self.direction.to_array(), tfar: self.t_far })
+        Some(sys::LcRay {
+            org: self.origin.to_array(),
+            tnear: self.t_near,
+            dir: self.direction.to_array(),
+            tfar: self.t_far,
+        })
     }
 }
 
@@ -606,8 +611,7 @@ impl ShadowRay {
     /// and whose t_far reads back as Embree's mark of an occluded ray: what
     /// a refused ray becomes, so that it blocks its light instead of
     /// letting it leak.
-    const BLOCKED: Self =
-        Self(sys::LcRay { org: [0.0; 3], tnear: 0.0, dir: [0.0, 0.0, 1.0], tfar: f32::NEG_INFINITY });
+    const BLOCKED: Self = Self(sys::LcRay { org: [0.0; 3], tnear: 0.0, dir: [0.0, 0.0, 1.0], tfar: f32::NEG_INFINITY });
 
     /// The shadow ray, or [`ShadowRay::BLOCKED`] when Embree must not see
     /// it (see [`refused_rays`]).

@@ -22,7 +22,7 @@ use glam::{DVec3, Vec3};
 use super::bounds::PointBounds;
 use super::cut::{by_group, exhaustive_part, CutResult, CutSettings, GroupError};
 use crate::embree::{PacketWidth, Scene as EmbreeScene, ShadowRay};
-use crate::light_tree::layout::CutTree;
+use crate::light_tree::layout::{Child, CutTree};
 use crate::light_tree::LightTrees;
 use crate::shading::{BatchBuffers, Lanes, LightEvaluator, SurfacePoint};
 use crate::util::color::luminance;
@@ -75,9 +75,22 @@ pub struct StochasticScratch {
 
 /// How a walk down a subtree chooses between two children: the weights of
 /// the two slots of each of two blocks of a tree (non-negative; a child of
-/// weight 0 is never taken). The renderer passes
-/// [`PointBounds::importance_quad`]; tests pass deliberately wrong ones.
-pub type Importance<'f> = &'f dyn Fn(&CutTree, [usize; 2]) -> [[f32; 2]; 2];
+/// weight 0 is never taken). The renderer uses [`walk_importance`]; tests
+/// also pass deliberately wrong ones.
+pub trait Importance: Fn(&CutTree, [usize; 2]) -> [[f32; 2]; 2] {}
+impl<F: Fn(&CutTree, [usize; 2]) -> [[f32; 2]; 2]> Importance for F {}
+
+/// The walk's importance at a shading point, as the renderer uses it: each
+/// slot's [`PointBounds::importance_quad`] (the bound with G estimated at
+/// the box's centre). A block's weights do not depend on the block it is
+/// paired with (each lane is computed on its own).
+pub fn walk_importance(bounds: &PointBounds) -> impl Importance + '_ {
+    move |tree: &CutTree, [a, b]: [usize; 2]| {
+        let cones = tree.cones_of(a).zip(tree.cones_of(b)).map(|(x, y)| [x, y]);
+        let [a0, a1, b0, b1] = bounds.importance_quad(tree.kind, [&tree.blocks[a], &tree.blocks[b]], cones);
+        [[a0, a1], [b0, b1]]
+    }
+}
 
 /// Direct light at `sp` from every tree, by a stochastic lightcut whose
 /// random choices come from `rng`. `settings.error` and `settings.max_cut`
@@ -97,11 +110,7 @@ pub fn evaluate(
     groups: &mut [DVec3],
 ) -> CutResult {
     let bounds = PointBounds::new(sp, trees.scale);
-    let importance = |tree: &CutTree, [a, b]: [usize; 2]| {
-        let cones = tree.cones_of(a).zip(tree.cones_of(b)).map(|(x, y)| [x, y]);
-        let [a0, a1, b0, b1] = bounds.importance_quad(tree.kind, [&tree.blocks[a], &tree.blocks[b]], cones);
-        [[a0, a1], [b0, b1]]
-    };
+    let importance = walk_importance(&bounds);
     evaluate_with(trees, sp, embree, settings, rng, scratch, &bounds, &importance, groups)
 }
 
@@ -115,7 +124,7 @@ pub(crate) fn evaluate_with(
     rng: &mut Rng,
     scratch: &mut StochasticScratch,
     bounds: &PointBounds,
-    importance: Importance<'_>,
+    importance: &impl Importance,
     groups: &mut [DVec3],
 ) -> CutResult {
     by_group(trees, groups, settings.group_error, |range, groups| {
@@ -136,7 +145,7 @@ fn cut_through(
     rng: &mut Rng,
     scratch: &mut StochasticScratch,
     bounds: &PointBounds,
-    importance: Importance<'_>,
+    importance: &impl Importance,
     mut groups: Option<&mut [DVec3]>,
 ) -> CutResult {
     let mut result = exhaustive_part(trees, &range, sp, embree, &mut scratch.batch, groups.as_deref_mut());
@@ -148,8 +157,65 @@ fn cut_through(
     let cut_nodes = choose_cut(trees, range, settings, bounds, scratch);
     result.nodes += cut_nodes as u64;
 
-    // Draw one light per cut node: all walks step down together, level by
-    // level, so that their reads of the tree overlap in memory.
+    draw(trees, rng, scratch, importance);
+    // Group the draws by tree (the walks finish in any order).
+    scratch.drawn.sort_by_key(|d| d.tree);
+    // Evaluate them four at a time, trace their shadow rays in packets.
+    let evaluator = LightEvaluator::new(sp);
+    scratch.values.clear();
+    scratch.value_trees.clear();
+    scratch.rays.clear();
+    let mut unshadowed = DVec3::ZERO;
+    for group in scratch.drawn.chunk_by(|a, b| a.tree == b.tree) {
+        let tree = &trees.trees[group[0].tree as usize];
+        for quad in group.chunks(4) {
+            let mut lanes = Lanes::default();
+            for d in quad {
+                let light = tree.representative(d.block as usize, d.slot as usize);
+                lanes.push(&light);
+            }
+            for (d, found) in quad.iter().zip(evaluator.terms(tree.kind, &lanes)) {
+                let value = found.term * d.weight;
+                if value == DVec3::ZERO {
+                    continue;
+                }
+                match found.ray {
+                    Some(ray) => {
+                        scratch.rays.push(ray);
+                        scratch.values.push(value);
+                        scratch.value_trees.push(d.tree);
+                    }
+                    None => {
+                        unshadowed += value;
+                        if let Some(slot) = groups.get_mut(trees.group_of_tree[d.tree as usize]) {
+                            *slot += value;
+                        }
+                    }
+                }
+            }
+        }
+    }
+    embree.occluded_packets(&scratch.rays, &mut scratch.occluded, PacketWidth::Sixteen);
+    result.shadow_rays += scratch.rays.len() as u64;
+    let mut radiance = fixed + unshadowed;
+    for ((value, &occluded), &tree) in scratch.values.iter().zip(&scratch.occluded).zip(&scratch.value_trees) {
+        if !occluded {
+            radiance += *value;
+            if let Some(slot) = groups.get_mut(trees.group_of_tree[tree as usize]) {
+                *slot += *value;
+            }
+        }
+    }
+    result.radiance = radiance;
+    result
+}
+
+/// Draws one light per cut node of `scratch.nodes` into `scratch.drawn`,
+/// its weight the light's intensity over the probability of drawing it:
+/// all walks step down together, level by level, so that their reads of
+/// the tree overlap in memory. Each walk draws from its own stream, split
+/// off `rng` in the order of the cut's nodes.
+fn draw(trees: &LightTrees, rng: &mut Rng, scratch: &mut StochasticScratch, importance: &impl Importance) {
     scratch.drawn.clear();
     scratch.walks.clear();
     for node in scratch.nodes.iter().filter(|n| n.in_cut) {
@@ -203,56 +269,6 @@ fn cut_through(
             k += count - ended;
         }
     }
-    // Group the draws by tree (the walks finish in any order).
-    scratch.drawn.sort_by_key(|d| d.tree);
-    // Evaluate them four at a time, trace their shadow rays in packets.
-    let evaluator = LightEvaluator::new(sp);
-    scratch.values.clear();
-    scratch.value_trees.clear();
-    scratch.rays.clear();
-    let mut unshadowed = DVec3::ZERO;
-    for group in scratch.drawn.chunk_by(|a, b| a.tree == b.tree) {
-        let tree = &trees.trees[group[0].tree as usize];
-        for quad in group.chunks(4) {
-            let mut lanes = Lanes::default();
-            for d in quad {
-                let light = tree.representative(d.block as usize, d.slot as usize);
-                lanes.push(&light);
-            }
-            for (d, found) in quad.iter().zip(evaluator.terms(tree.kind, &lanes)) {
-                let value = found.term * d.weight;
-                if value == DVec3::ZERO {
-                    continue;
-                }
-                match found.ray {
-                    Some(ray) => {
-                        scratch.rays.push(ray);
-                        scratch.values.push(value);
-                        scratch.value_trees.push(d.tree);
-                    }
-                    None => {
-                        unshadowed += value;
-                        if let Some(slot) = groups.get_mut(trees.group_of_tree[d.tree as usize]) {
-                            *slot += value;
-                        }
-                    }
-                }
-            }
-        }
-    }
-    embree.occluded_packets(&scratch.rays, &mut scratch.occluded, PacketWidth::Sixteen);
-    result.shadow_rays += scratch.rays.len() as u64;
-    let mut radiance = fixed + unshadowed;
-    for ((value, &occluded), &tree) in scratch.values.iter().zip(&scratch.occluded).zip(&scratch.value_trees) {
-        if !occluded {
-            radiance += *value;
-            if let Some(slot) = groups.get_mut(trees.group_of_tree[tree as usize]) {
-                *slot += *value;
-            }
-        }
-    }
-    result.radiance = radiance;
-    result
 }
 
 /// The heap key of a node: its bound's bits above the complement of its
@@ -350,15 +366,8 @@ enum Step {
 /// the weights of the block the walk is at.
 fn step(tree: &CutTree, walk: &mut Walk, weights: [f32; 2]) -> Step {
     let b = walk.below as usize;
-    let [w0, w1] = finite_weights(tree, b, weights);
-    let sum = f64::from(w0) + f64::from(w1);
-    if sum <= 0.0 {
-        return Step::Nothing;
-    }
-    // The probability of child 0 is exactly p0 (u is uniform on a 2^-53
-    // grid): child 1's is 1 - p0, whatever w1 / sum rounds to. No branch on
-    // the random number: it would be mispredicted half of the time.
-    let p0 = f64::from(w0) / sum;
+    let Some(p0) = first_child_probability(tree, b, weights) else { return Step::Nothing };
+    // No branch on the random number: it would be mispredicted half of the time.
     let k = usize::from(walk.stream.next_f64() >= p0);
     walk.probability *= [p0, 1.0 - p0][k];
     let child = tree.blocks[b].child[k];
@@ -368,6 +377,41 @@ fn step(tree: &CutTree, walk: &mut Walk, weights: [f32; 2]) -> Step {
     }
     walk.below = child.index() as u32;
     Step::Down
+}
+
+/// The probability that a walk at block `b` takes child 0, w_0 / (w_0 +
+/// w_1) of the block's weights; child 1's is 1 - p0 exactly (u is uniform
+/// on a 2^-53 grid), whatever w_1 / (w_0 + w_1) rounds to. None when no
+/// child can be taken (both weights 0).
+fn first_child_probability(tree: &CutTree, b: usize, weights: [f32; 2]) -> Option<f64> {
+    let [w0, w1] = finite_weights(tree, b, weights);
+    let sum = f64::from(w0) + f64::from(w1);
+    (sum > 0.0).then(|| f64::from(w0) / sum)
+}
+
+/// The probability that a walk started below a cut node (at block `below`,
+/// which holds the node's children) ends at slot `target` = (block, slot),
+/// a leaf or an exact node, with the weights `importance` gives: the
+/// product of the probabilities [`step`] takes on the way down, by the same
+/// code. pbrt-v4's `PMF` of its light samplers; for tests and diagnostics
+/// (it searches the subtree: time linear in its size). 0 when the walk
+/// cannot reach `target` or `target` is not below the node.
+pub fn pmf(tree: &CutTree, importance: &impl Importance, below: usize, target: (usize, usize)) -> f64 {
+    let [weights, _] = importance(tree, [below, below]);
+    let Some(p0) = first_child_probability(tree, below, weights) else { return 0.0 };
+    (0..2)
+        .map(|k| {
+            let p = [p0, 1.0 - p0][k];
+            let child = tree.blocks[below].child[k];
+            if (below, k) == target {
+                p
+            } else if child.is_exact() || child == Child::EMPTY || p == 0.0 {
+                0.0
+            } else {
+                p * pmf(tree, importance, child.index(), target)
+            }
+        })
+        .sum()
 }
 
 /// The weights, or the slots' intensities' luminance where a weight is not

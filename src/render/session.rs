@@ -190,7 +190,17 @@ impl<'s> Session<'s> {
         let count = |kind| lights.iter().map(|group| group.count(kind)).sum();
         let counts = LightKind::ALL.map(count);
         let refused_rays = crate::embree::refused_rays() - refused_before;
-        Ok(PassResult { film, stats, seconds, trees: tree_list, tree_bytes, vpls, vpl_time, lights: counts, refused_rays })
+        Ok(PassResult {
+            film,
+            stats,
+            seconds,
+            trees: tree_list,
+            tree_bytes,
+            vpls,
+            vpl_time,
+            lights: counts,
+            refused_rays,
+        })
     }
 }
 

@@ -6,7 +6,7 @@ use super::*;
 use crate::embree::Device;
 use crate::light::Lights;
 use crate::scene::Scene;
-use crate::shading::{Geometry, LightBatch};
+use crate::shading::{Geometry, LightBatch, SurfacePoint};
 use crate::util::color::luminance64;
 
 // 256 seeds were too few for the spots: near a cone's edge the falloff
@@ -117,62 +117,68 @@ fn spots() -> String {
     text
 }
 
-/// For each of 16 shading points seen through fixed pixels: the exact sum's
-/// luminance, and the mean and standard error of the stochastic estimate's
-/// luminance over `SEEDS` seeds. `biased`: child 1 of every third block
-/// gets probability 0 (the lights below it are never drawn).
-fn estimates(scene: &Scene, biased: bool) -> Vec<(f64, f64, f64)> {
+/// The shading points of the tests: `count` points seen through seeded
+/// pixels, with the scene's lights, Embree geometry and light trees.
+fn with_points(
+    scene: &Scene,
+    count: usize,
+    mut check: impl FnMut(&Lights, &Geometry<'_>, &LightTrees, &SurfacePoint<'_>),
+) {
     let lights = Lights::from_scene(scene);
     let device = Device::try_new().unwrap();
     let geometry = Geometry::try_new(&device, scene, std::slice::from_ref(&lights)).unwrap();
     let trees = LightTrees::build(&lights, 5);
     assert!(trees.trees.iter().all(|t| !t.blocks.is_empty()), "every tree must be big enough for a cut");
     let camera = scene.camera(32, 24);
+    let mut pixel = Rng::seeded(11);
+    let mut found = 0;
+    while found < count {
+        let ray = camera.ray(pixel.range_f32(0.0, 32.0), pixel.range_f32(0.0, 24.0));
+        let Some(hit) = geometry.embree.intersect(&ray) else { continue };
+        check(&lights, &geometry, &trees, &geometry.surface(&ray, &hit));
+        found += 1;
+    }
+}
+
+/// For each of 16 shading points seen through fixed pixels: the exact sum's
+/// luminance, and the mean and standard error of the stochastic estimate's
+/// luminance over `SEEDS` seeds: the renderer's own [`evaluate`], or with
+/// `biased` its walk made wrong (child 1 of every third block gets
+/// probability 0: the lights below it are never drawn).
+fn estimates(scene: &Scene, biased: bool) -> Vec<(f64, f64, f64)> {
     // A small cut, so that most of the estimate is sampled.
     let settings = CutSettings { error: 0.1, max_cut: 8, ..CutSettings::default() };
     let (mut scratch, mut batch) = (StochasticScratch::default(), BatchBuffers::default());
     let mut rows = Vec::new();
-    let mut pixel = Rng::seeded(11);
-    while rows.len() < 16 {
-        let ray = camera.ray(pixel.range_f32(0.0, 32.0), pixel.range_f32(0.0, 24.0));
-        let Some(hit) = geometry.embree.intersect(&ray) else { continue };
-        let sp = geometry.surface(&ray, &hit);
-        let mut exact = LightBatch::new(&geometry.embree, &sp, &mut batch);
+    with_points(scene, 16, |lights, geometry, trees, sp| {
+        let mut exact = LightBatch::new(&geometry.embree, sp, &mut batch);
         lights.for_each(|light| exact.add(&light));
         let exact = luminance64(exact.finish().radiance);
-        let bounds = PointBounds::new(&sp, trees.scale);
-        let production = |tree: &CutTree, blocks: [usize; 2]| {
-            blocks.map(|b| bounds.importance(tree.kind, &tree.blocks[b], tree.cones_of(b)))
-        };
+        let bounds = PointBounds::new(sp, trees.scale);
+        let shipped = walk_importance(&bounds);
         let wrong = |tree: &CutTree, blocks: [usize; 2]| {
-            let weights = production(tree, blocks);
+            let weights = shipped(tree, blocks);
             [0, 1].map(|i| {
                 let [w0, w1] = weights[i];
                 [w0, if blocks[i] % 3 == 0 && w0 > 0.0 { 0.0 } else { w1 }]
             })
         };
-        let importance: Importance<'_> = if biased { &wrong } else { &production };
         let values: Vec<f64> = (0..SEEDS)
             .map(|seed| {
                 let mut rng = Rng::from_key(&[seed, rows.len() as u64]);
-                let found = evaluate_with(
-                    &trees,
-                    &sp,
-                    &geometry.embree,
-                    &settings,
-                    &mut rng,
-                    &mut scratch,
-                    &bounds,
-                    importance,
-                    &mut [],
-                );
+                let embree = &geometry.embree;
+                let found = if biased {
+                    evaluate_with(trees, sp, embree, &settings, &mut rng, &mut scratch, &bounds, &wrong, &mut [])
+                } else {
+                    evaluate(trees, sp, embree, &settings, &mut rng, &mut scratch, &mut [])
+                };
                 luminance64(found.radiance)
             })
             .collect();
         let mean = values.iter().sum::<f64>() / SEEDS as f64;
         let variance = values.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (SEEDS - 1) as f64;
         rows.push((exact, mean, (variance / SEEDS as f64).sqrt()));
-    }
+    });
     rows
 }
 
@@ -212,5 +218,93 @@ fn a_variant_that_never_takes_some_children_is_caught() {
     for lights in [OMNI, ORIENTED, DIRECTIONAL, &spots()] {
         let rows = estimates(&scene(lights), true);
         assert!(biased_points(&rows) >= 8, "the bias must show at most points: {rows:?}");
+    }
+}
+
+/// Walks draws from the root of each tree at 4 shading points, and checks
+/// the walk against its [`pmf`] as pbrt-v4's light-sampler tests do: each
+/// draw's weight is the light's intensity over exactly pmf(its slot); the
+/// pmf sums to 1 over the slots a walk can end at; and over the draws, each
+/// slot's count over (pmf x draws) is within a few percent of 1.
+fn check_pmf(lights: &str) {
+    const DRAWS: u64 = 1 << 20;
+    with_points(&scene(lights), 4, |_, _, trees, sp| {
+        let bounds = PointBounds::new(sp, trees.scale);
+        let importance = walk_importance(&bounds);
+        for (t, tree) in trees.trees.iter().enumerate() {
+            let below = tree.blocks[0].child[0].index();
+            // Every slot a walk can end at, and its pmf.
+            let mut ends = Vec::new();
+            let mut pending = vec![below];
+            while let Some(b) = pending.pop() {
+                for k in 0..2 {
+                    let child = tree.blocks[b].child[k];
+                    if child.is_exact() {
+                        ends.push(((b, k), pmf(tree, &importance, below, (b, k))));
+                    } else if child != Child::EMPTY {
+                        pending.push(child.index());
+                    }
+                }
+            }
+            let total: f64 = ends.iter().map(|e| e.1).sum();
+            if total == 0.0 {
+                continue; // no light of the tree reaches this point
+            }
+            // A walk ends without a light where both children of a block it
+            // reaches have weight 0 (no light below can reach the point,
+            // although the block's own bound is not 0): the rest of the mass.
+            assert!(total <= 1.0 + 1e-9, "tree {t}: the pmf sums to {total}");
+            ends.push(((usize::MAX, 0), (1.0 - total).max(0.0)));
+            let pmf_of: std::collections::HashMap<(usize, usize), f64> = ends.iter().copied().collect();
+            let mut counts: std::collections::HashMap<(usize, usize), u64> = std::collections::HashMap::new();
+            let mut scratch = StochasticScratch::default();
+            let mut rng = Rng::seeded(3);
+            for _ in 0..DRAWS {
+                scratch.nodes.clear();
+                scratch.nodes.push(Node { importance: 1.0, block: 0, slot: 0, tree: t as u8, in_cut: true });
+                draw(trees, &mut rng, &mut scratch, &importance);
+                let Some(d) = scratch.drawn.first() else {
+                    *counts.entry((usize::MAX, 0)).or_default() += 1;
+                    continue;
+                };
+                let end = (d.block as usize, usize::from(d.slot));
+                let intensity = luminance64(slot_intensity(tree, end.0, end.1).as_dvec3());
+                let probability = intensity / luminance64(d.weight);
+                let expected = pmf_of[&end];
+                assert!(
+                    (probability - expected).abs() <= 1e-12 * expected,
+                    "tree {t}, slot {end:?}: drawn with {probability}, pmf {expected}"
+                );
+                *counts.entry(end).or_default() += 1;
+            }
+            // Per slot: the sum of 1 / (pmf x draws) over its draws is 1 up
+            // to its standard error, 1 / sqrt(expected count). Each slot
+            // likely enough is checked to 5 standard errors, and the mean
+            // square of the deviations in standard errors (a chi-square per
+            // slot, 1 on average) catches a distortion spread over many.
+            let (mut checked, mut chi_square) = (0, 0.0);
+            for (end, p) in &ends {
+                let expected = p * DRAWS as f64;
+                let count = counts.get(end).copied().unwrap_or(0) as f64;
+                if *p == 0.0 {
+                    assert_eq!(count, 0.0, "tree {t}, slot {end:?}: drawn with pmf 0");
+                } else if expected >= 1_000.0 {
+                    let deviation = (count / expected - 1.0) * expected.sqrt();
+                    assert!(deviation.abs() < 5.0, "tree {t}, slot {end:?}: {count} draws, {expected} expected");
+                    chi_square += deviation * deviation;
+                    checked += 1;
+                }
+            }
+            let mass: f64 = ends.iter().filter(|e| e.1 * DRAWS as f64 >= 1_000.0).map(|e| e.1).sum();
+            assert!(mass >= 0.75, "tree {t}: the slots checked hold only {mass} of the pmf");
+            assert!(chi_square / f64::from(checked) < 1.5, "tree {t}: chi-square {chi_square} over {checked} slots");
+        }
+    });
+}
+
+#[test]
+fn the_walk_draws_with_its_pmf_for_every_kind() {
+    for lights in [OMNI, ORIENTED, DIRECTIONAL, &spots()] {
+        check_pmf(lights);
     }
 }
