@@ -150,55 +150,174 @@ fn cos_bound_is_tight_for_a_single_direction() {
     }
 }
 
+/// A random cluster of lights of one kind near (sometimes around) `sp`:
+/// each light's position (a direction for directional lights), normal (a
+/// spot's direction) and spread (a spot's inner and outer cosines), with
+/// the cluster's box, cone of normals and widest outer cosine.
+struct RandomCluster {
+    lights: Vec<(Vec3, Vec3, [f32; 2])>,
+    lo: Vec3,
+    hi: Vec3,
+    cone: Cone,
+    min_cos_outer: f32,
+}
+
+impl RandomCluster {
+    fn new(rng: &mut Rng, kind: LightKind, sp: &SurfacePoint<'_>) -> Self {
+        let count = 1 + rng.below(8) as usize;
+        // Lights near a random centre, sometimes around the shading point itself.
+        let centre = if rng.next_f32() < 0.2 {
+            sp.p
+        } else {
+            Vec3::new(rng.range_f32(-4.0, 4.0), rng.range_f32(-4.0, 4.0), rng.range_f32(-4.0, 4.0))
+        };
+        let spread = [0.0, 0.01, 0.5, 3.0][rng.below(4) as usize];
+        let base_normal = unit(rng);
+        let lights: Vec<(Vec3, Vec3, [f32; 2])> = (0..count)
+            .map(|_| {
+                let position = match kind {
+                    LightKind::Directional => (base_normal + spread * unit(rng)).normalize_or(base_normal),
+                    _ => {
+                        centre
+                            + spread
+                                * Vec3::new(
+                                    rng.range_f32(-1.0, 1.0),
+                                    rng.range_f32(-1.0, 1.0),
+                                    rng.range_f32(-1.0, 1.0),
+                                )
+                    }
+                };
+                let normal = if rng.next_f32() < 0.5 { (base_normal + 0.4 * unit(rng)).normalize() } else { unit(rng) };
+                // Spots: outer half-angles from 1 to 90 degrees, inner below them.
+                let outer = rng.range_f32(1.0, 90.0).to_radians();
+                let spread = [(outer * rng.next_f32()).cos(), outer.cos()];
+                (position, normal, spread)
+            })
+            .collect();
+        let (lo, hi) =
+            lights.iter().fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), l| (lo.min(l.0), hi.max(l.0)));
+        let cone = lights.iter().skip(1).fold(Cone::of_direction(lights[0].1), |c, l| c.union(Cone::of_direction(l.1)));
+        let min_cos_outer = lights.iter().map(|l| l.2[1]).fold(1.0f32, f32::min);
+        Self { lights, lo, hi, cone, min_cos_outer }
+    }
+
+    /// The largest M * G of the cluster's lights in channel `c`, times that
+    /// channel's luminance weight: what the luminance bound against a unit
+    /// intensity in channel c must be at least.
+    fn largest(&self, kind: LightKind, sp: &SurfacePoint<'_>, c: usize) -> f64 {
+        let weight = [0.2126, 0.7152, 0.0722][c];
+        self.lights.iter().map(|(p, n, spread)| weight * term(kind, sp, *p, *n, *spread)[c]).fold(0.0, f64::max)
+    }
+
+    /// Writes the cluster into slot `slot` of a block (as an internal node,
+    /// its intensity a unit in channel `c`) and of its cone and spot blocks.
+    fn write(&self, slot: usize, c: usize, block: &mut Block, cones: &mut ConeBlock, spots: &mut SpotBlock) {
+        let (centre, half) = centre_half(self.lo, self.hi);
+        block.child[slot] = Child::internal(1, false);
+        let (sin, cos) = self.cone.half_angle.sin_cos();
+        for axis in 0..3 {
+            block.centre[axis][slot] = centre[axis];
+            block.half[axis][slot] = half[axis];
+            block.intensity[axis][slot] = if axis == c { 1.0 } else { 0.0 };
+            cones.axis[axis][slot] = self.cone.axis[axis];
+        }
+        cones.cos_half_angle[slot] = if self.cone.half_angle == 0.0 { 1.0 } else { cos };
+        cones.sin_half_angle[slot] = if self.cone.half_angle == 0.0 { 0.0 } else { sin };
+        spots.min_cos_outer[slot] = self.min_cos_outer;
+    }
+}
+
+/// The blocks of `clusters` (two per block), as the cut lays them out, for
+/// channel `c`.
+fn blocks_of(clusters: &[RandomCluster], c: usize) -> Vec<(Block, ConeBlock, SpotBlock)> {
+    clusters
+        .chunks(2)
+        .map(|pair| {
+            let (mut block, mut cones, mut spots) = (Block::default(), ConeBlock::default(), SpotBlock::default());
+            block.child = [Child::leaf(0), Child::leaf(1)];
+            for (slot, cluster) in pair.iter().enumerate() {
+                cluster.write(slot, c, &mut block, &mut cones, &mut spots);
+            }
+            (block, cones, spots)
+        })
+        .collect()
+}
+
+fn cones_of<'a>(kind: LightKind, b: &'a (Block, ConeBlock, SpotBlock)) -> Option<Cones<'a>> {
+    kind.has_cone().then_some(Cones { cone: &b.1, spot: (kind == LightKind::Spot).then_some(&b.2) })
+}
+
 /// The kernel of the property test: one random cluster of one kind.
 fn check_random_cluster(rng: &mut Rng, kind: LightKind) {
     let m = material(rng);
     let sp = surface(rng, &m);
-    let count = 1 + rng.below(8) as usize;
-    // Lights near a random centre, sometimes around the shading point itself.
-    let centre = if rng.next_f32() < 0.2 {
-        sp.p
-    } else {
-        Vec3::new(rng.range_f32(-4.0, 4.0), rng.range_f32(-4.0, 4.0), rng.range_f32(-4.0, 4.0))
-    };
-    let spread = [0.0, 0.01, 0.5, 3.0][rng.below(4) as usize];
-    let base_normal = unit(rng);
-    let lights: Vec<(Vec3, Vec3, [f32; 2])> = (0..count)
-        .map(|_| {
-            let position = match kind {
-                LightKind::Directional => (base_normal + spread * unit(rng)).normalize_or(base_normal),
-                _ => {
-                    centre
-                        + spread
-                            * Vec3::new(rng.range_f32(-1.0, 1.0), rng.range_f32(-1.0, 1.0), rng.range_f32(-1.0, 1.0))
-                }
-            };
-            let normal = if rng.next_f32() < 0.5 { (base_normal + 0.4 * unit(rng)).normalize() } else { unit(rng) };
-            // Spots: outer half-angles from 1 to 90 degrees, inner below them.
-            let outer = rng.range_f32(1.0, 90.0).to_radians();
-            let spread = [(outer * rng.next_f32()).cos(), outer.cos()];
-            (position, normal, spread)
-        })
-        .collect();
-    let (lo, hi) = lights.iter().fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), l| (lo.min(l.0), hi.max(l.0)));
-    let cone = lights.iter().skip(1).fold(Cone::of_direction(lights[0].1), |c, l| c.union(Cone::of_direction(l.1)));
-    let min_cos_outer = lights.iter().map(|l| l.2[1]).fold(1.0f32, f32::min);
+    let cluster = RandomCluster::new(rng, kind, &sp);
     let slot = rng.below(2) as usize;
     // Channel by channel: the luminance bound against a unit intensity in
     // channel c bounds that channel's M * G, weighted by its luminance weight.
-    for (c, weight) in [0.2126, 0.7152, 0.0722].into_iter().enumerate() {
+    for c in 0..3 {
         let mut intensity = Vec3::ZERO;
         intensity[c] = 1.0;
-        let bound = cluster_bound(kind, &sp, lo, hi, cone, min_cos_outer, intensity, slot);
+        let bound =
+            cluster_bound(kind, &sp, cluster.lo, cluster.hi, cluster.cone, cluster.min_cos_outer, intensity, slot);
         assert!(bound.is_finite(), "bound {bound} not finite");
-        for (position, normal, spread) in &lights {
-            let value = weight * term(kind, &sp, *position, *normal, *spread)[c];
+        let value = cluster.largest(kind, &sp, c);
+        assert!(
+            value <= f64::from(bound) * (1.0 + 1e-6),
+            "{kind:?}: channel {c}'s light term {value} exceeds bound {bound} at p={} n={} lights={:?}",
+            sp.p,
+            sp.n,
+            cluster.lights
+        );
+    }
+}
+
+/// The kernel of the property test of the four-lane forms the cut and the
+/// walk use when two nodes of one tree are refined or walked together:
+/// four random clusters in two blocks. `quad` bounds every slot (and equals
+/// `pair` of each block, bit for bit: the lanes are independent);
+/// `importance_quad`, the walk's weight, is 0 exactly where the bound is
+/// (a child of weight 0 must contribute nothing) and finite or infinite,
+/// never NaN.
+fn check_random_quad(rng: &mut Rng, kind: LightKind) {
+    let m = material(rng);
+    let sp = surface(rng, &m);
+    let clusters: Vec<RandomCluster> = (0..4).map(|_| RandomCluster::new(rng, kind, &sp)).collect();
+    let bounds = PointBounds::new(&sp, 1.0);
+    for c in 0..3 {
+        let blocks = blocks_of(&clusters, c);
+        let quad_cones = cones_of(kind, &blocks[0]).zip(cones_of(kind, &blocks[1])).map(|(a, b)| [a, b]);
+        let quad = bounds.quad(kind, [&blocks[0].0, &blocks[1].0], quad_cones);
+        let importance = bounds.importance_quad(kind, [&blocks[0].0, &blocks[1].0], quad_cones);
+        for (k, cluster) in clusters.iter().enumerate() {
+            let pair = bounds.pair(kind, &blocks[k / 2].0, cones_of(kind, &blocks[k / 2]))[k % 2];
+            assert_eq!(quad[k].to_bits(), pair.to_bits(), "{kind:?}: slot {k}'s quad bound {} vs pair {pair}", quad[k]);
+            let value = cluster.largest(kind, &sp, c);
             assert!(
-                value <= f64::from(bound) * (1.0 + 1e-6),
-                "{kind:?}: channel {c}'s light term {value} exceeds bound {bound} at p={} n={} lights={lights:?}",
+                value <= f64::from(quad[k]) * (1.0 + 1e-6),
+                "{kind:?}: slot {k}, channel {c}: light term {value} exceeds the quad bound {} at p={} lights={:?}",
+                quad[k],
                 sp.p,
-                sp.n
+                cluster.lights
             );
+            assert!(!importance[k].is_nan() && importance[k] >= 0.0, "{kind:?}: weight {}", importance[k]);
+            assert_eq!(
+                importance[k] == 0.0,
+                quad[k] == 0.0,
+                "{kind:?}: slot {k}, channel {c}: weight {} where the bound is {} (light term {value})",
+                importance[k],
+                quad[k]
+            );
+        }
+    }
+}
+
+#[test]
+fn quad_bounds_and_walk_weights_hold_at_random_points() {
+    for (seed, kind) in LightKind::ALL.into_iter().enumerate() {
+        let mut rng = Rng::seeded(20 + seed as u64);
+        for _ in 0..5_000 {
+            check_random_quad(&mut rng, kind);
         }
     }
 }
