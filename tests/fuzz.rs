@@ -5,8 +5,12 @@
 //! Each iteration mutates a valid scene (or OBJ) with byte flips, deletions,
 //! duplications and splices of a dictionary of troublesome tokens, loads it
 //! in-process under `catch_unwind`, and for scenes that still load, renders a
-//! 4x3 image in both modes and checks every value is finite. A panic or a
-//! non-finite pixel fails the test and prints the input.
+//! 4x3 image in every mode (exact, bounded, stochastic) and checks every
+//! value is finite. A panic or a non-finite pixel fails the test and prints
+//! the input. The counts say how many mutants were rendered, how many
+//! loaded but were not rendered (too big for an iteration, or geometry
+//! Embree refuses: an error the command line reports) and how many were
+//! rejected by the loader.
 //!
 //! The suite runs 300 iterations of each. For a long run (10 minutes by
 //! default; LIGHTCUTS_FUZZ_ITERATIONS and LIGHTCUTS_FUZZ_SEED also apply):
@@ -20,6 +24,7 @@ use std::path::Path;
 use lightcuts::embree::Device;
 use lightcuts::light::Lights;
 use lightcuts::light_tree::LightTrees;
+use lightcuts::lightcut::stochastic::STOCHASTIC_DEFAULTS;
 use lightcuts::lightcut::CutSettings;
 use lightcuts::render::integrator::Integrator;
 use lightcuts::render::{self, DirectLighting, PassSettings, PixelBounds};
@@ -208,14 +213,47 @@ fn mutate(rng: &mut Rng, input: &[u8]) -> Vec<u8> {
     data
 }
 
-/// Renders a loaded scene at 4x3 in both modes; panics on a non-finite value.
-fn render_small(scene: &Scene) {
+/// What became of a mutant.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Outcome {
+    /// Loaded and rendered in every mode, every value finite.
+    Rendered,
+    /// Loaded, but too big for a fuzz iteration.
+    TooBig,
+    /// Loaded, but Embree refused its geometry (an error the command line reports).
+    GeometryRefused,
+    /// Refused by the loader with a one-line message naming the file.
+    Rejected,
+}
+
+/// Tallies of outcomes.
+#[derive(Debug, Default, Clone, Copy)]
+struct Counts {
+    rendered: u64,
+    too_big: u64,
+    geometry_refused: u64,
+    rejected: u64,
+}
+
+impl Counts {
+    fn add(&mut self, outcome: Outcome) {
+        match outcome {
+            Outcome::Rendered => self.rendered += 1,
+            Outcome::TooBig => self.too_big += 1,
+            Outcome::GeometryRefused => self.geometry_refused += 1,
+            Outcome::Rejected => self.rejected += 1,
+        }
+    }
+}
+
+/// Renders a loaded scene at 4x3 in every mode; panics on a non-finite value.
+fn render_small(scene: &Scene) -> Outcome {
     if scene.light_count_bound() > 20_000 || scene.triangle_count() > 200_000 {
-        return; // Valid but too slow for a fuzz iteration.
+        return Outcome::TooBig; // Valid but too slow for a fuzz iteration.
     }
     let lights = Lights::by_group(scene);
     let device = Device::try_new().unwrap();
-    let Ok(geometry) = Geometry::try_new(&device, scene, &lights) else { return };
+    let Ok(geometry) = Geometry::try_new(&device, scene, &lights) else { return Outcome::GeometryRefused };
     let camera = scene.camera(4, 3);
     let settings = PassSettings {
         width: 4,
@@ -228,8 +266,11 @@ fn render_small(scene: &Scene) {
     };
     let trees = LightTrees::build_groups(&lights, 1);
     let emission_group = scene.emission_groups();
-    for direct in [DirectLighting::Exact, DirectLighting::Lightcuts { trees: &trees, settings: CutSettings::default() }]
-    {
+    for direct in [
+        DirectLighting::Exact,
+        DirectLighting::Lightcuts { trees: &trees, settings: CutSettings::default() },
+        DirectLighting::StochasticLightcuts { trees: &trees, settings: STOCHASTIC_DEFAULTS },
+    ] {
         let integrator = Integrator {
             geometry: &geometry,
             lights: &lights,
@@ -253,17 +294,34 @@ fn render_small(scene: &Scene) {
             assert!(values.iter().all(|v| v.is_finite()), "non-finite pixel {p:?}");
         }
     }
+    Outcome::Rendered
 }
 
-fn fuzz(iterations: u64, seed: u64, deadline: Option<std::time::Instant>) -> (u64, u64) {
+/// Loads `path` under `catch_unwind` and renders what loads; the outcome,
+/// or None on a panic. A loader's error must name `file` on one line.
+fn try_input(path: &Path, file: &str) -> Option<Outcome> {
+    catch_unwind(AssertUnwindSafe(|| match Scene::load(path) {
+        Ok(scene) => render_small(&scene),
+        Err(e) => {
+            let m = e.to_string();
+            assert!(m.contains(file) || m.contains("m.obj"), "error names no file: {m}");
+            assert!(!m.contains('\n'), "multi-line error: {m}");
+            Outcome::Rejected
+        }
+    }))
+    .ok()
+}
+
+/// Runs the fuzzer; the outcomes of the scene (TOML) mutants and of the
+/// glTF mutants.
+fn fuzz(iterations: u64, seed: u64, deadline: Option<std::time::Instant>) -> (Counts, Counts) {
     let temporary = tempfile::tempdir().unwrap();
     let dir = temporary.path();
     std::fs::write(dir.join("m.obj"), OBJ).unwrap();
     let scene_path = dir.join("scene.toml");
     let mut rng = Rng::seeded(seed);
-    let (mut loaded, mut rejected) = (0, 0);
+    let (mut scenes, mut gltfs) = (Counts::default(), Counts::default());
     let (gltf_text, glb) = small_gltf();
-    let (mut gltf_loaded, mut gltf_rejected) = (0u64, 0u64);
     for i in 0..iterations {
         if deadline.is_some_and(|d| std::time::Instant::now() >= d) {
             break;
@@ -271,45 +329,19 @@ fn fuzz(iterations: u64, seed: u64, deadline: Option<std::time::Instant>) -> (u6
         // Scene mutants (the OBJ stays valid).
         let input = mutate(&mut rng, SCENE.as_bytes());
         std::fs::write(&scene_path, &input).unwrap();
-        let outcome = catch_unwind(AssertUnwindSafe(|| match Scene::load(&scene_path) {
-            Ok(scene) => {
-                render_small(&scene);
-                true
-            }
-            Err(e) => {
-                let m = e.to_string();
-                assert!(m.contains("scene.toml") || m.contains("m.obj"), "error names no file: {m}");
-                assert!(!m.contains('\n'), "multi-line error: {m}");
-                false
-            }
-        }));
-        match outcome {
-            Ok(true) => loaded += 1,
-            Ok(false) => rejected += 1,
-            Err(_) => panic!("iteration {i}: panic on scene input:\n{}", String::from_utf8_lossy(&input)),
-        }
+        let Some(outcome) = try_input(&scene_path, "scene.toml") else {
+            panic!("iteration {i}: panic on scene input:\n{}", String::from_utf8_lossy(&input))
+        };
+        scenes.add(outcome);
         // glTF mutants: the JSON text and the GLB bytes.
         for (name, valid) in [("fuzz.gltf", &gltf_text), ("fuzz.glb", &glb)] {
             let input = mutate(&mut rng, valid);
             let path = dir.join(name);
             std::fs::write(&path, &input).unwrap();
-            let outcome = catch_unwind(AssertUnwindSafe(|| match Scene::load(&path) {
-                Ok(scene) => {
-                    render_small(&scene);
-                    true
-                }
-                Err(e) => {
-                    let m = e.to_string();
-                    assert!(m.contains(name), "error names no file: {m}");
-                    assert!(!m.contains('\n'), "multi-line error: {m}");
-                    false
-                }
-            }));
-            match outcome {
-                Ok(true) => gltf_loaded += 1,
-                Ok(false) => gltf_rejected += 1,
-                Err(_) => panic!("iteration {i}: panic on {name}:\n{}", String::from_utf8_lossy(&input)),
-            }
+            let Some(outcome) = try_input(&path, name) else {
+                panic!("iteration {i}: panic on {name}:\n{}", String::from_utf8_lossy(&input))
+            };
+            gltfs.add(outcome);
         }
         // OBJ mutants.
         let obj = mutate(&mut rng, OBJ.as_bytes());
@@ -319,11 +351,7 @@ fn fuzz(iterations: u64, seed: u64, deadline: Option<std::time::Instant>) -> (u6
             panic!("iteration {i}: panic on OBJ input:\n{}", String::from_utf8_lossy(&obj));
         }
     }
-    assert!(
-        iterations < 100 || (gltf_loaded > 10 && gltf_rejected > 10),
-        "glTF mutants: {gltf_loaded} loaded, {gltf_rejected} rejected"
-    );
-    (loaded, rejected)
+    (scenes, gltfs)
 }
 
 /// The glTF the fuzzer mutates: a floor, a point light, a spot, a sun, an
@@ -350,9 +378,13 @@ fn small_gltf() -> (Vec<u8>, Vec<u8>) {
 
 #[test]
 fn scene_and_obj_mutants_never_panic() {
-    let (loaded, rejected) = fuzz(300, 1, None);
-    // Both paths must be exercised.
-    assert!(loaded > 10 && rejected > 10, "loaded {loaded}, rejected {rejected}");
+    let (scenes, gltfs) = fuzz(300, 1, None);
+    println!("TOML mutants: {scenes:?}\nglTF mutants: {gltfs:?}");
+    // Every path must be exercised: mutants rendered in every mode, and
+    // mutants rejected with a message.
+    for (what, counts) in [("TOML", scenes), ("glTF", gltfs)] {
+        assert!(counts.rendered > 10 && counts.rejected > 10, "{what} mutants: {counts:?}");
+    }
 }
 
 /// The long run; see the module documentation. Stops after
@@ -367,11 +399,21 @@ fn long_fuzz_run() {
         env("LIGHTCUTS_FUZZ_SEED", 2),
     );
     let start = std::time::Instant::now();
-    let (loaded, rejected) = fuzz(iterations, seed, Some(start + std::time::Duration::from_secs(seconds)));
+    let (scenes, gltfs) = fuzz(iterations, seed, Some(start + std::time::Duration::from_secs(seconds)));
+    let iterations = scenes.rendered + scenes.too_big + scenes.geometry_refused + scenes.rejected;
     println!(
-        "{} scene and as many OBJ mutants (seed {seed}) in {:.0} s: {loaded} scenes loaded and rendered in both modes, \
-         {rejected} rejected with a message, no panic",
-        loaded + rejected,
-        start.elapsed().as_secs_f64()
+        "{iterations} iterations (seed {seed}) in {:.0} s, each a TOML, a glTF, a GLB and an OBJ mutant; no panic, \
+         every rendered value finite.\n  TOML: {} rendered in every mode, {} loaded but too big to render, {} loaded \
+         but refused by Embree, {} rejected by the loader\n  glTF and GLB: {} rendered, {} too big, {} refused by \
+         Embree, {} rejected",
+        start.elapsed().as_secs_f64(),
+        scenes.rendered,
+        scenes.too_big,
+        scenes.geometry_refused,
+        scenes.rejected,
+        gltfs.rendered,
+        gltfs.too_big,
+        gltfs.geometry_refused,
+        gltfs.rejected
     );
 }
