@@ -7,7 +7,6 @@
 use criterion::{criterion_group, criterion_main, Criterion};
 use lightcuts::embree::Device;
 use lightcuts::light::Lights;
-use lightcuts::light_tree::LightTrees;
 use lightcuts::lightcut::bounds::PointBounds;
 use lightcuts::lightcut::{evaluate, CutScratch, CutSettings};
 use lightcuts::scene::Scene;
@@ -20,7 +19,7 @@ fn cut(c: &mut Criterion) {
     let device = Device::try_new().expect("Embree device");
     let lights = Lights::from_scene(&scene);
     let geometry = Geometry::try_new(&device, &scene, std::slice::from_ref(&lights)).expect("geometry");
-    let trees = LightTrees::build(&lights, 0);
+    let trees = lightcuts::lightcut::build_trees(std::slice::from_ref(&lights), 0);
     let camera = scene.camera(64, 48);
     let points: Vec<_> = (0..48)
         .flat_map(|y| (0..64).map(move |x| (x, y)))

@@ -1,8 +1,10 @@
 #!/usr/bin/env bash
-# Renders the measuring scenes (ci/measure.sh's set, plus cornell and atrium)
-# in both modes with one binary, or checks that two such sets are bit-identical.
+# Renders the measuring scenes (ci/measure.sh's set, plus cornell, atrium,
+# the light groups' scene and the glTF lobby) in every mode with one binary,
+# or checks that two such sets are bit-identical.
 #
-#   ci/same-images.sh render BIN OUTDIR    renders every scene, exact and lightcuts
+#   ci/same-images.sh render BIN OUTDIR    renders every scene, exact, bounded
+#                                          and stochastic
 #   ci/same-images.sh compare DIR_A DIR_B  exits non-zero unless every channel
 #                                          of every pair is identical (idiff -fail 0)
 #
@@ -17,8 +19,11 @@ declare -A WINDOWS=(
     [grid100k]="280,360,210,270"
     [cornell]="224,288,224,288"
     [atrium]="300,340,225,255"
+    [groups]="180,300,100,180"
+    [lobby]="40,120,30,90"
 )
-SCENES=${SCENES:-few4 grid100 grid10k grid100k cornell atrium}
+SCENES=${SCENES:-few4 grid100 grid10k grid100k cornell atrium groups lobby}
+MODES="exact bounded stochastic"
 
 case "${1:-}" in
 render)
@@ -27,8 +32,9 @@ render)
     for scene in $SCENES; do
         window=()
         if [ -n "${WINDOWS[$scene]:-}" ]; then window=(--pixel-bounds "${WINDOWS[$scene]}"); fi
-        "$bin" render "scenes/$scene.toml" -o "$out/$scene-exact.exr" --exact --quiet "${window[@]}" >/dev/null
-        "$bin" render "scenes/$scene.toml" -o "$out/$scene-lightcuts.exr" --quiet "${window[@]}" >/dev/null
+        for mode in $MODES; do
+            "$bin" render "scenes/$scene.toml" -o "$out/$scene-$mode.exr" "--$mode" --quiet "${window[@]}" >/dev/null
+        done
         echo "rendered $scene" >&2
     done
     ;;
@@ -36,7 +42,7 @@ compare)
     a=$2 b=$3 status=0
     command -v idiff >/dev/null || { echo "ci/same-images.sh: needs idiff (ci/setup.sh --test)" >&2; exit 1; }
     for scene in $SCENES; do
-        for mode in exact lightcuts; do
+        for mode in $MODES; do
             if idiff -q -fail 0 -failpercent 0 -warn 0 "$a/$scene-$mode.exr" "$b/$scene-$mode.exr" >/dev/null; then
                 echo "identical  $scene $mode"
             else

@@ -23,9 +23,8 @@ use std::path::Path;
 
 use lightcuts::embree::Device;
 use lightcuts::light::Lights;
-use lightcuts::light_tree::LightTrees;
 use lightcuts::lightcut::stochastic::STOCHASTIC_DEFAULTS;
-use lightcuts::lightcut::CutSettings;
+use lightcuts::lightcut::{self, CutSettings};
 use lightcuts::render::integrator::Integrator;
 use lightcuts::render::{self, DirectLighting, PassSettings, PixelBounds};
 use lightcuts::scene::mesh::Mesh;
@@ -264,7 +263,7 @@ fn render_small(scene: &Scene) -> Outcome {
         cryptomatte: true,
         transparent: false,
     };
-    let trees = LightTrees::build_groups(&lights, 1);
+    let trees = lightcut::build_trees(&lights, 1);
     let emission_group = scene.emission_groups();
     for direct in [
         DirectLighting::Exact,

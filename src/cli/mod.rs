@@ -1,9 +1,11 @@
 //! The command line. This is the only place an error becomes an exit code:
 //! everything below returns `Result`s.
 
+pub mod args;
 mod assemble_cmd;
 pub mod bench;
 mod compare_cmd;
+mod farm;
 mod process;
 mod progress;
 mod render_cmd;
@@ -94,44 +96,4 @@ fn ctrlc_cleanup() {
         eprintln!("interrupted: no output written");
         std::process::exit(130);
     });
-}
-
-/// Parses `WxH`.
-pub fn parse_resolution(s: &str) -> Result<(u32, u32), String> {
-    let (w, h) = s.split_once(['x', 'X']).ok_or_else(|| format!("expected WIDTHxHEIGHT, got '{s}'"))?;
-    let w: u32 = w.trim().parse().map_err(|_| format!("width '{w}' is not a positive integer"))?;
-    let h: u32 = h.trim().parse().map_err(|_| format!("height '{h}' is not a positive integer"))?;
-    if w == 0 || h == 0 {
-        return Err(format!("width and height must be at least 1, got {w}x{h}"));
-    }
-    Ok((w, h))
-}
-
-/// Parses `x0,x1,y0,y1`.
-pub fn parse_pixel_bounds(s: &str) -> Result<[u32; 4], String> {
-    let parts: Vec<&str> = s.split(',').collect();
-    if parts.len() != 4 {
-        return Err(format!("expected x0,x1,y0,y1, got '{s}'"));
-    }
-    let mut out = [0u32; 4];
-    for (o, p) in out.iter_mut().zip(&parts) {
-        *o = p.trim().parse().map_err(|_| format!("'{p}' is not a non-negative integer"))?;
-    }
-    Ok(out)
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn resolution_and_bounds_parse_and_reject_garbage() {
-        assert_eq!(parse_resolution("640x480"), Ok((640, 480)));
-        assert!(parse_resolution("640").is_err());
-        assert!(parse_resolution("0x480").is_err());
-        assert!(parse_resolution("-3x4").is_err());
-        assert_eq!(parse_pixel_bounds("1,2,3,4"), Ok([1, 2, 3, 4]));
-        assert!(parse_pixel_bounds("1,2,3").is_err());
-        assert!(parse_pixel_bounds("1,2,3,x").is_err());
-    }
 }

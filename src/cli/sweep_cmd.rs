@@ -12,8 +12,8 @@ use clap::{Args, ValueEnum};
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
 
+use super::args::{cut_settings, PassArgs};
 use super::progress::Progress;
-use super::render_cmd::{cut_settings, PassArgs};
 use super::CliError;
 use crate::lightcut::stochastic::STOCHASTIC_DEFAULTS;
 use crate::lightcut::CutSettings;
@@ -122,9 +122,8 @@ pub struct SweepRow {
     pub fraction_above_2_percent: f64,
 }
 
-pub(super) fn hash_file(path: &Path) -> Result<u64, OutputError> {
-    let bytes = std::fs::read(path).map_err(OutputError::io(path, "read the file to hash it"))?;
-    Ok(crate::util::hash::hash_bytes(&bytes))
+fn hash_file(path: &Path) -> Result<u64, OutputError> {
+    crate::util::hash::hash_file(path).map_err(OutputError::io(path, "read the file to hash it"))
 }
 
 /// `lightcuts VERSION EXE-HASH`: the running binary, exactly.

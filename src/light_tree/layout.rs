@@ -113,7 +113,8 @@ pub struct Cones<'a> {
 /// A tree in the cut's layout. `blocks[0]` holds the root in slot 0 (and
 /// `Child::EMPTY` in slot 1); `blocks[k]` for k >= 1 holds the children of
 /// the internal node whose index is k. Oriented trees have a `cones` entry
-/// beside every block. A tree of at most [`super::EXHAUSTIVE_LIGHTS`] lights
+/// beside every block. A tree the cut evaluates light by light (see
+/// `LightTrees::build`)
 /// has no blocks, only its `lights`, which the cut evaluates one by one.
 #[derive(Debug, Clone)]
 pub struct CutTree {

@@ -203,11 +203,6 @@ impl LightTree {
     }
 }
 
-/// A tree with at most this many lights is evaluated light by light: for so
-/// few lights the bounds cannot save a shadow ray worth their cost, and the
-/// renderer must never be slower than `--exact` (measured: few4 in the README).
-pub const EXHAUSTIVE_LIGHTS: usize = 200;
-
 /// The light trees of a scene, laid out for the cut: one per light group
 /// and light kind the scene has, no more (clusters never span groups).
 pub struct LightTrees {
@@ -227,16 +222,19 @@ pub struct LightTrees {
 
 impl LightTrees {
     /// Builds a tree for each kind of light present (on the current rayon
-    /// pool; the trees do not depend on its thread count).
+    /// pool; the trees do not depend on its thread count); a kind of at
+    /// most `exhaustive_lights` lights is kept as a list of lights for the
+    /// cut to evaluate one by one (the cut's policy: see
+    /// `lightcut::EXHAUSTIVE_LIGHTS`).
     #[must_use]
-    pub fn build(lights: &Lights, seed: u64) -> Self {
-        Self::build_groups(std::slice::from_ref(lights), seed)
+    pub fn build(lights: &Lights, seed: u64, exhaustive_lights: usize) -> Self {
+        Self::build_groups(std::slice::from_ref(lights), seed, exhaustive_lights)
     }
 
     /// Builds a tree for each light group (`groups[g]`: group g's lights)
     /// and each kind present in it.
     #[must_use]
-    pub fn build_groups(groups: &[Lights], seed: u64) -> Self {
+    pub fn build_groups(groups: &[Lights], seed: u64, exhaustive_lights: usize) -> Self {
         let mut trees = Vec::new();
         let mut ranges = Vec::with_capacity(groups.len());
         let mut build_times = Vec::new();
@@ -250,7 +248,7 @@ impl LightTrees {
                 let start = Instant::now();
                 let leaves = lights.tree_lights(kind);
                 total += leaves.iter().map(|l| f64::from(luminance(l.intensity))).sum::<f64>();
-                trees.push(if leaves.len() <= EXHAUSTIVE_LIGHTS {
+                trees.push(if leaves.len() <= exhaustive_lights {
                     layout::CutTree::exhaustive(kind, leaves)
                 } else {
                     layout::CutTree::from_tree(&ploc::build(kind, &leaves, seed))

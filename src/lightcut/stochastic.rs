@@ -20,7 +20,7 @@ use std::collections::BinaryHeap;
 use glam::{DVec3, Vec3};
 
 use super::bounds::PointBounds;
-use super::cut::{by_group, exhaustive_part, CutResult, CutSettings, GroupError};
+use super::{by_group, exhaustive_part, CutResult, CutSettings, GroupError};
 use crate::embree::{PacketWidth, Scene as EmbreeScene, ShadowRay};
 use crate::light_tree::layout::{Child, CutTree};
 use crate::light_tree::LightTrees;

@@ -8,7 +8,6 @@ use super::integrator::{DirectLighting, Integrator};
 use super::{render, thread_pool, vpl, Film, PassProgress, PassSettings, PassStats};
 use crate::embree::{Device, EmbreeError};
 use crate::light::{LightKind, Lights};
-use crate::light_tree::LightTrees;
 use crate::lightcut::CutSettings;
 use crate::scene::Scene;
 use crate::shading::{Geometry, GeometryError};
@@ -154,7 +153,7 @@ impl<'s> Session<'s> {
             lights = std::borrow::Cow::Owned(vec![all]);
         }
         let vpl_time = start.elapsed();
-        let trees = mode.cut().map(|_| self.pool.install(|| LightTrees::build_groups(&lights, settings.seed)));
+        let trees = mode.cut().map(|_| self.pool.install(|| crate::lightcut::build_trees(&lights, settings.seed)));
         let direct = match (&trees, mode) {
             (Some(trees), Mode::Bounded(settings)) => DirectLighting::Lightcuts { trees, settings },
             (Some(trees), Mode::Stochastic(settings)) => DirectLighting::StochasticLightcuts { trees, settings },

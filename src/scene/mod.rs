@@ -621,6 +621,21 @@ impl Scene {
         of_mesh
     }
 
+    /// A hash of every file the scene read (its `inputs`, in order), as 16
+    /// hex digits: what names a render's scene in its EXR (`lightcuts:sceneHash`)
+    /// and what `assemble` requires its tiles to share.
+    pub fn content_hash(&self) -> Result<String, SceneError> {
+        let hashes = self
+            .inputs
+            .iter()
+            .map(|p| {
+                crate::util::hash::hash_file(p)
+                    .map_err(|e| SceneError::new(p, "file", format!("cannot read it to hash it: {e}")))
+            })
+            .collect::<Result<Vec<_>, _>>()?;
+        Ok(crate::util::hash::combined_hex(hashes))
+    }
+
     #[must_use]
     pub fn triangle_count(&self) -> usize {
         self.meshes.iter().map(|m| m.triangles.len()).sum()

@@ -11,6 +11,11 @@ pub fn hash_bytes(bytes: &[u8]) -> u64 {
     })
 }
 
+/// The hash of a file's bytes.
+pub fn hash_file(path: &std::path::Path) -> std::io::Result<u64> {
+    Ok(hash_bytes(&std::fs::read(path)?))
+}
+
 /// One hash of several (a scene's input files, in order), as 16 hex digits.
 #[must_use]
 pub fn combined_hex(hashes: impl IntoIterator<Item = u64>) -> String {

@@ -32,12 +32,12 @@ pub struct RaysArgs {
     pub scene: std::path::PathBuf,
     /// The lightcut mode whose pass is measured (--exact is the pass (c)).
     #[command(flatten)]
-    pub mode: super::render_cmd::ModeArgs,
+    pub mode: super::args::ModeArgs,
     /// Samples per pixel, overriding the scene's.
     #[arg(long, value_name = "N")]
     pub spp: Option<u32>,
     #[command(flatten)]
-    pub pass: super::render_cmd::PassArgs,
+    pub pass: super::args::PassArgs,
     #[arg(long)]
     pub json: bool,
     #[arg(long, short)]

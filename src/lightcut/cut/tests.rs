@@ -2,9 +2,10 @@
 use super::*;
 use crate::embree::Device;
 use crate::light::Lights;
-use crate::light_tree::LightTrees;
+use crate::lightcut::EXHAUSTIVE_LIGHTS;
 use crate::scene::Scene;
 use crate::shading::Geometry;
+use crate::shading::LightBatch;
 use crate::util::sampling::Rng;
 
 /// A floor, two occluding spheres (one glossy) and `n x n` lights of mixed
@@ -73,7 +74,7 @@ fn at_shading_points(scene: &Scene, settings: CutSettings, mut check: impl FnMut
     let device = Device::try_new().unwrap();
     let lights = Lights::from_scene(scene);
     let geometry = Geometry::try_new(&device, scene, std::slice::from_ref(&lights)).unwrap();
-    let trees = LightTrees::build(&lights, 3);
+    let trees = crate::lightcut::build_trees(std::slice::from_ref(&lights), 3);
     assert!(trees.trees.iter().any(|t| t.light_count() > EXHAUSTIVE_LIGHTS), "the test must exercise the cut");
     let camera = scene.camera(64, 48);
     let mut rng = Rng::seeded(5);

@@ -127,7 +127,7 @@ fn with_points(
     let lights = Lights::from_scene(scene);
     let device = Device::try_new().unwrap();
     let geometry = Geometry::try_new(&device, scene, std::slice::from_ref(&lights)).unwrap();
-    let trees = LightTrees::build(&lights, 5);
+    let trees = crate::lightcut::build_trees(std::slice::from_ref(&lights), 5);
     assert!(trees.trees.iter().all(|t| !t.blocks.is_empty()), "every tree must be big enough for a cut");
     let camera = scene.camera(32, 24);
     let mut pixel = Rng::seeded(11);

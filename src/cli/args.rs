@@ -1,0 +1,218 @@
+//! The command line's flags turned into validated settings, once (as
+//! ripgrep's `flags/` does): the render mode and its cut settings with their
+//! defaults and conflicts, the pass (film, samples, window, seed, threads,
+//! camera), and the parsers of the flags' values. `render`, `sweep` and
+//! `bench` take what this module resolves and never import each other.
+
+use std::path::Path;
+
+use clap::Args;
+
+use super::CliError;
+use crate::lightcut::stochastic::{STOCHASTIC_DEFAULTS, STOCHASTIC_FROM_SPP};
+use crate::lightcut::{CutSettings, GroupError};
+use crate::render::session::Mode;
+use crate::render::{PassSettings, PixelBounds};
+use crate::scene::{check_resolution, Scene};
+
+/// How direct light is computed. Without a mode flag, the mode that gave
+/// the smaller error for the time at the samples per pixel asked for (see
+/// [`default_mode`]).
+#[derive(Debug, Args)]
+pub struct ModeArgs {
+    /// Reference mode: every light, one shadow ray each.
+    #[arg(long, conflicts_with_all = ["bounded", "stochastic", "error", "max_cut"])]
+    pub exact: bool,
+    /// Lightcuts [LC05]: each cluster's error is bounded, its representative
+    /// fixed when the tree is built.
+    #[arg(long, conflicts_with = "stochastic")]
+    pub bounded: bool,
+    /// Stochastic lightcuts [SLC19]: each cut node's light is drawn per
+    /// sample, so the error falls with samples per pixel.
+    #[arg(long)]
+    pub stochastic: bool,
+    /// Relative error threshold: a cluster is split while its bound exceeds
+    /// this fraction of the point's total (bounded: of the estimate, default
+    /// 0.02; stochastic: of the summed bounds, default in `lightcut::stochastic`).
+    /// 0 splits every cluster, reproducing --exact (bounded) when max-cut allows.
+    #[arg(long)]
+    pub error: Option<f64>,
+    /// Largest cut per shading point, in nodes (bounded default 1000; per
+    /// light group with --group-error group).
+    #[arg(long)]
+    pub max_cut: Option<usize>,
+    /// In a scene with light groups, what each cluster's error is held to:
+    /// `group` (a cut per group, relative to the group's own light: every
+    /// group layer as accurate as the beauty) or `pixel` (one cut through
+    /// every group's trees, relative to the pixel's total: cheaper, dim
+    /// groups' layers less accurate). Both cut modes.
+    #[arg(long, value_name = "group|pixel", value_parser = parse_group_error, conflicts_with = "exact")]
+    pub group_error: Option<GroupError>,
+}
+
+/// Parses `--group-error`.
+pub fn parse_group_error(s: &str) -> Result<GroupError, String> {
+    match s {
+        "group" => Ok(GroupError::Group),
+        "pixel" => Ok(GroupError::Pixel),
+        _ => Err(format!("expected group or pixel, got '{s}'")),
+    }
+}
+
+impl ModeArgs {
+    /// The mode these flags ask for, at `spp` samples per pixel.
+    pub fn mode(&self, spp: u32) -> Result<Mode, CliError> {
+        let stochastic = if self.exact {
+            return Ok(Mode::Exact);
+        } else if self.bounded || self.stochastic {
+            self.stochastic
+        } else {
+            matches!(default_mode(spp), Mode::Stochastic(_))
+        };
+        let defaults = if stochastic { STOCHASTIC_DEFAULTS } else { CutSettings::default() };
+        let mut cut = cut_settings(self.error.unwrap_or(defaults.error), self.max_cut.unwrap_or(defaults.max_cut))?;
+        cut.group_error = self.group_error.unwrap_or(defaults.group_error);
+        Ok(if stochastic { Mode::Stochastic(cut) } else { Mode::Bounded(cut) })
+    }
+}
+
+/// The mode a render uses when no mode flag is given, at `spp` samples per
+/// pixel, with its default settings.
+#[must_use]
+pub fn default_mode(spp: u32) -> Mode {
+    if spp >= STOCHASTIC_FROM_SPP {
+        Mode::Stochastic(STOCHASTIC_DEFAULTS)
+    } else {
+        Mode::Bounded(CutSettings::default())
+    }
+}
+
+/// The options every rendering command shares (pbrt-style overrides).
+#[derive(Debug, Args)]
+pub struct PassArgs {
+    /// Film size, overriding the scene's.
+    #[arg(long, value_name = "WxH", value_parser = parse_resolution)]
+    pub resolution: Option<(u32, u32)>,
+    /// Seed of every random choice (sample positions, representatives, VPLs).
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// Worker threads (0: one per CPU). The image does not depend on it.
+    #[arg(long, default_value_t = 0)]
+    pub threads: usize,
+    /// Render only this half-open window of the full frame, in pixels.
+    #[arg(long, value_name = "x0,x1,y0,y1", value_parser = parse_pixel_bounds)]
+    pub pixel_bounds: Option<[u32; 4]>,
+    /// Render through the glTF camera of this name (the scene's first camera
+    /// otherwise; overrides a TOML's [camera]).
+    #[arg(long, value_name = "NAME")]
+    pub camera: Option<String>,
+}
+
+impl PassArgs {
+    /// Loads the scene (through `--camera` when given) and prints its
+    /// warnings, one line each.
+    pub fn load(&self, path: &Path) -> Result<Scene, CliError> {
+        let scene = Scene::load_with_camera(path, self.camera.as_deref())?;
+        for warning in &scene.warnings {
+            eprintln!("warning: {warning}");
+        }
+        Ok(scene)
+    }
+
+    /// The pass these options describe for `scene`, at `spp` samples per
+    /// pixel (None: the scene's).
+    pub fn settings(&self, scene: &Scene, spp: Option<u32>) -> Result<PassSettings, CliError> {
+        pass_settings(scene, self.resolution, spp, self.seed, self.pixel_bounds)
+    }
+}
+
+/// Film size, samples and window after applying the command-line overrides.
+pub fn pass_settings(
+    scene: &Scene,
+    resolution: Option<(u32, u32)>,
+    spp: Option<u32>,
+    seed: u64,
+    pixel_bounds: Option<[u32; 4]>,
+) -> Result<PassSettings, CliError> {
+    let (width, height) = resolution.unwrap_or((scene.film.width, scene.film.height));
+    check_resolution(&scene.path, "--resolution", width, height)?;
+    let spp = spp.unwrap_or(scene.film.spp);
+    if spp == 0 {
+        return Err(CliError::Usage { flag: "--spp", message: "must be at least 1".into() });
+    }
+    let bounds = match pixel_bounds {
+        None => PixelBounds::full(width, height),
+        Some([x0, x1, y0, y1]) => {
+            if x0 >= x1 || y0 >= y1 || x1 > width || y1 > height {
+                return Err(CliError::Usage {
+                    flag: "--pixel-bounds",
+                    message: format!("{x0},{x1},{y0},{y1} is not a non-empty window inside the {width}x{height} frame"),
+                });
+            }
+            PixelBounds { x0, x1, y0, y1 }
+        }
+    };
+    Ok(PassSettings { width, height, spp, seed, bounds, cryptomatte: false, transparent: false })
+}
+
+/// The cut settings of a lightcuts render, validated.
+pub fn cut_settings(error: f64, max_cut: usize) -> Result<CutSettings, CliError> {
+    if !(error.is_finite() && error >= 0.0) {
+        return Err(CliError::Usage { flag: "--error", message: format!("must be finite and >= 0, got {error}") });
+    }
+    if max_cut == 0 {
+        return Err(CliError::Usage { flag: "--max-cut", message: "must be at least 1".into() });
+    }
+    Ok(CutSettings { error, max_cut, ..CutSettings::default() })
+}
+
+/// Parses `I/N` with 0 <= I < N.
+pub fn parse_tile(s: &str) -> Result<(u32, u32), String> {
+    let (i, n) = s.split_once('/').ok_or_else(|| format!("expected I/N, got '{s}'"))?;
+    let i: u32 = i.trim().parse().map_err(|_| format!("'{i}' is not a non-negative integer"))?;
+    let n: u32 = n.trim().parse().map_err(|_| format!("'{n}' is not a positive integer"))?;
+    if n == 0 || i >= n {
+        return Err(format!("need 0 <= I < N, got {i}/{n}"));
+    }
+    Ok((i, n))
+}
+
+/// Parses `WxH`.
+pub fn parse_resolution(s: &str) -> Result<(u32, u32), String> {
+    let (w, h) = s.split_once(['x', 'X']).ok_or_else(|| format!("expected WIDTHxHEIGHT, got '{s}'"))?;
+    let w: u32 = w.trim().parse().map_err(|_| format!("width '{w}' is not a positive integer"))?;
+    let h: u32 = h.trim().parse().map_err(|_| format!("height '{h}' is not a positive integer"))?;
+    if w == 0 || h == 0 {
+        return Err(format!("width and height must be at least 1, got {w}x{h}"));
+    }
+    Ok((w, h))
+}
+
+/// Parses `x0,x1,y0,y1`.
+pub fn parse_pixel_bounds(s: &str) -> Result<[u32; 4], String> {
+    let parts: Vec<&str> = s.split(',').collect();
+    if parts.len() != 4 {
+        return Err(format!("expected x0,x1,y0,y1, got '{s}'"));
+    }
+    let mut out = [0u32; 4];
+    for (o, p) in out.iter_mut().zip(&parts) {
+        *o = p.trim().parse().map_err(|_| format!("'{p}' is not a non-negative integer"))?;
+    }
+    Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn resolution_and_bounds_parse_and_reject_garbage() {
+        assert_eq!(parse_resolution("640x480"), Ok((640, 480)));
+        assert!(parse_resolution("640").is_err());
+        assert!(parse_resolution("0x480").is_err());
+        assert!(parse_resolution("-3x4").is_err());
+        assert_eq!(parse_pixel_bounds("1,2,3,4"), Ok([1, 2, 3, 4]));
+        assert!(parse_pixel_bounds("1,2,3").is_err());
+        assert!(parse_pixel_bounds("1,2,3,x").is_err());
+    }
+}
