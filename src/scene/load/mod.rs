@@ -1,0 +1,230 @@
+//! Reading a scene: the file parsed (TOML, JSON, or a glTF file by
+//! itself), then validated section by section into the renderer's model:
+//! `settings` (film, camera, environment, indirect light), `materials`,
+//! `shapes`, `lights`, and the glTF import (`super::gltf`). Every error names
+//! the file and the field path; relative paths resolve against the scene
+//! file's directory.
+
+mod lights;
+mod materials;
+mod settings;
+mod shapes;
+
+use std::path::Path;
+
+use glam::Vec3;
+
+use super::file::{self, SceneFile};
+use super::{gltf, groups, within_limits, LightGroups, Scene, SceneError, MAX_COORDINATE, MAX_EMITTER_SAMPLES};
+
+impl Scene {
+    /// Reads, parses and validates a scene file (`.json` as JSON, anything
+    /// else as TOML).
+    pub fn load(path: &Path) -> Result<Self, SceneError> {
+        Self::load_with_camera(path, None)
+    }
+
+    /// [`Scene::load`], rendering through the glTF camera named `camera`
+    /// (the `--camera` option) instead of the scene's default one. A `.gltf`
+    /// or `.glb` file is a scene by itself: the import of `[gltf]` with
+    /// every default.
+    pub fn load_with_camera(path: &Path, camera: Option<&str>) -> Result<Self, SceneError> {
+        let extension = |x: &str| path.extension().is_some_and(|e| e.eq_ignore_ascii_case(x));
+        let mut spec = if extension("gltf") || extension("glb") {
+            let file = path.file_name().map_or_else(String::new, |f| f.to_string_lossy().into_owned());
+            SceneFile { gltf: Some(file::GltfSpec::file(file)), ..SceneFile::default() }
+        } else {
+            let text =
+                std::fs::read(path).map_err(|e| SceneError::new(path, "file", format!("cannot read scene: {e}")))?;
+            let text = String::from_utf8(text).map_err(|e| {
+                SceneError::new(
+                    path,
+                    format!("byte {}", e.utf8_error().valid_up_to()),
+                    "the scene file is not UTF-8 text",
+                )
+            })?;
+            if extension("json") {
+                parse_json(path, &text)?
+            } else {
+                parse_toml(path, &text)?
+            }
+        };
+        if let Some(name) = camera {
+            let Some(gltf) = spec.gltf.as_mut() else {
+                return Err(SceneError::new(
+                    path,
+                    "--camera",
+                    "picks a glTF camera, but the scene imports no glTF file",
+                ));
+            };
+            gltf.camera = Some(name.to_string());
+            // The TOML's own camera would win over the one asked for.
+            spec.camera = None;
+        }
+        let imports_itself =
+            spec.gltf.as_ref().is_some_and(|g| path.file_name() == Some(std::ffi::OsStr::new(&g.file)))
+                && (extension("gltf") || extension("glb"));
+        let mut scene = Self::from_spec(path, spec)?;
+        if !imports_itself {
+            scene.inputs.insert(0, path.to_path_buf());
+        }
+        Ok(scene)
+    }
+
+    /// Validates a parsed scene file; `path` is used for messages and to
+    /// resolve relative mesh and texture paths.
+    pub fn from_spec(path: &Path, spec: SceneFile) -> Result<Self, SceneError> {
+        let v = Validator { file: path };
+        let base = path.parent().unwrap_or(Path::new("."));
+        settings::check_film_and_camera(&v, &spec)?;
+        let mut inputs = Vec::new();
+        let mut textures = Vec::new();
+        let (mut materials, material_index) = materials::materials(&v, base, &spec, &mut inputs, &mut textures)?;
+        let mut meshes = shapes::shapes(&v, base, &spec, &material_index, &mut inputs)?;
+        let (mut lights, mut requested_groups) =
+            lights::lights(&v, base, &spec, &mut meshes, &mut materials, &mut inputs)?;
+        let mut warnings = Vec::new();
+        let gltf_camera = match &spec.gltf {
+            None => None,
+            Some(g) => {
+                let mut light_names = Vec::new();
+                let parts = gltf::Parts {
+                    meshes: &mut meshes,
+                    materials: &mut materials,
+                    textures: &mut textures,
+                    lights: &mut lights,
+                    light_names: &mut light_names,
+                    inputs: &mut inputs,
+                    warnings: &mut warnings,
+                };
+                let camera = gltf::import(path, base, g, spec.camera.is_none(), parts)?;
+                let matched = groups::apply_rules(path, &g.groups, &light_names)?;
+                for (k, group) in matched.into_iter().enumerate() {
+                    requested_groups.push((group, format!("gltf.groups (glTF light {k})")));
+                }
+                camera
+            }
+        };
+        let (camera_spec, film) = settings::camera_and_film(&v, &spec, gltf_camera)?;
+        let environment = settings::environment(&v, base, &spec, &mut inputs)?;
+        let indirect = settings::indirect(&v, &spec)?;
+        let groups = LightGroups::assign(
+            path,
+            &requested_groups,
+            spec.environment.as_ref().map(|e| (e.group.clone(), "environment.group".to_string())),
+        )?;
+        let clamp = spec.render.distance_clamp;
+        v.check((0.0..=MAX_COORDINATE).contains(&clamp), "render.distance_clamp", || {
+            format!("must be finite and >= 0, got {clamp}")
+        })?;
+
+        Ok(Self {
+            path: path.to_path_buf(),
+            film,
+            camera_spec,
+            materials,
+            textures,
+            meshes,
+            lights,
+            groups,
+            max_mirror_depth: spec.render.max_mirror_depth.min(64),
+            environment,
+            indirect,
+            distance_clamp: clamp,
+            inputs,
+            warnings,
+        })
+    }
+}
+
+fn parse_toml(path: &Path, text: &str) -> Result<SceneFile, SceneError> {
+    let de = toml::Deserializer::new(text);
+    serde_path_to_error::deserialize(de).map_err(|e| {
+        let field = e.path().to_string();
+        let inner = e.into_inner();
+        let position = inner.span().map(|s| line_column(text, s.start));
+        let location = match (field.as_str(), position) {
+            (".", Some((l, c))) | ("", Some((l, c))) => format!("line {l}, column {c}"),
+            (f, Some((l, c))) => format!("{f} (line {l}, column {c})"),
+            (f, None) => f.to_string(),
+        };
+        SceneError::new(path, location, inner.message())
+    })
+}
+
+fn parse_json(path: &Path, text: &str) -> Result<SceneFile, SceneError> {
+    let mut de = serde_json::Deserializer::from_str(text);
+    let spec: SceneFile = serde_path_to_error::deserialize(&mut de).map_err(|e| {
+        let field = e.path().to_string();
+        let inner = e.into_inner();
+        let location = if field == "." || field.is_empty() {
+            format!("line {}, column {}", inner.line(), inner.column())
+        } else {
+            format!("{field} (line {}, column {})", inner.line(), inner.column())
+        };
+        // serde_json appends " at line L column C" itself; the location has it.
+        let message = inner.to_string();
+        let message = message.split(" at line ").next().unwrap_or(&message).to_string();
+        SceneError::new(path, location, message)
+    })?;
+    de.end().map_err(|e| {
+        SceneError::new(
+            path,
+            format!("line {}, column {}", e.line(), e.column()),
+            "trailing characters after the scene",
+        )
+    })?;
+    Ok(spec)
+}
+
+/// 1-based line and column of a byte offset.
+fn line_column(text: &str, offset: usize) -> (usize, usize) {
+    let before = &text[..offset.min(text.len())];
+    let line = before.matches('\n').count() + 1;
+    let column = before.rsplit('\n').next().map_or(0, |l| l.chars().count()) + 1;
+    (line, column)
+}
+/// Field checks that produce errors naming the file and field.
+struct Validator<'a> {
+    file: &'a Path,
+}
+
+impl Validator<'_> {
+    fn error(&self, field: &str, message: &str) -> SceneError {
+        SceneError::new(self.file, field, message)
+    }
+
+    fn check(&self, ok: bool, field: &str, message: impl FnOnce() -> String) -> Result<(), SceneError> {
+        if ok {
+            Ok(())
+        } else {
+            Err(self.error(field, &message()))
+        }
+    }
+
+    fn point(&self, p: [f32; 3], field: &str) -> Result<Vec3, SceneError> {
+        let v = Vec3::from(p);
+        self.check(within_limits(v), field, || format!("must be finite and within +/-{MAX_COORDINATE:e}, got {p:?}"))?;
+        Ok(v)
+    }
+
+    fn non_negative_rgb(&self, c: [f32; 3], field: &str) -> Result<Vec3, SceneError> {
+        let v = Vec3::from(c);
+        self.check(v.is_finite() && v.min_element() >= 0.0, field, || format!("must be finite and >= 0, got {c:?}"))?;
+        Ok(v)
+    }
+
+    fn sample_count(&self, samples: u32, field: &str) -> Result<(), SceneError> {
+        self.check((1..=MAX_EMITTER_SAMPLES).contains(&samples), field, || {
+            format!("must be between 1 and {MAX_EMITTER_SAMPLES}, got {samples}")
+        })
+    }
+
+    fn unit_rgb(&self, c: [f32; 3], field: &str) -> Result<Vec3, SceneError> {
+        let v = Vec3::from(c);
+        self.check(v.is_finite() && v.min_element() >= 0.0 && v.max_element() <= 1.0, field, || {
+            format!("must be between 0 and 1, got {c:?}")
+        })?;
+        Ok(v)
+    }
+}

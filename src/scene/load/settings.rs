@@ -1,0 +1,129 @@
+//! The scene's settings: film, camera (the TOML's or the glTF file's),
+//! environment and indirect light.
+
+use std::path::{Path, PathBuf};
+
+use super::Validator;
+use crate::scene::file::{self, SceneFile};
+use crate::scene::gltf::GltfCamera;
+use crate::scene::{
+    check_resolution, Environment, EnvironmentMap, Film, IndirectSettings, SceneError, DEFAULT_GLTF_WIDTH,
+    MAX_VPL_PATHS,
+};
+
+/// The film and the camera when the TOML gives them; a scene without a
+/// glTF import must give both.
+pub(super) fn check_film_and_camera(v: &Validator<'_>, spec: &SceneFile) -> Result<(), SceneError> {
+    let path = v.file;
+    if spec.gltf.is_none() {
+        v.check(spec.film.is_some(), "film", || "missing: give [film] (or import a glTF file with [gltf])".into())?;
+        v.check(spec.camera.is_some(), "camera", || {
+            "missing: give [camera] (or import a glTF file with a camera, with [gltf])".into()
+        })?;
+    }
+    if let Some(f) = &spec.film {
+        v.check(f.width >= 1, "film.width", || "must be at least 1".into())?;
+        v.check(f.height >= 1, "film.height", || "must be at least 1".into())?;
+        v.check(f.spp >= 1, "film.spp", || "must be at least 1".into())?;
+        check_resolution(path, "film", f.width, f.height)?;
+    }
+    if let Some(cam) = &spec.camera {
+        check_camera(v, cam, "camera")?;
+    }
+    Ok(())
+}
+
+/// Checks a camera (`field` names it in messages).
+fn check_camera(v: &Validator<'_>, cam: &file::CameraSpec, field: &str) -> Result<(), SceneError> {
+    let f = |name: &str| format!("{field}.{name}");
+    let eye = v.point(cam.eye, &f("eye"))?;
+    let look_at = v.point(cam.look_at, &f("look_at"))?;
+    let up = v.point(cam.up, &f("up"))?;
+    v.check(cam.fov_y.is_finite() && cam.fov_y > 0.0 && cam.fov_y < 180.0, &f("fov_y"), || {
+        format!("must be between 0 and 180 degrees (exclusive), got {}", cam.fov_y)
+    })?;
+    let forward = look_at - eye;
+    v.check(forward.length() > 0.0, &f("look_at"), || "must differ from the eye".into())?;
+    v.check(forward.normalize().cross(up).length() > 1e-6, &f("up"), || {
+        "must not be parallel to the viewing direction".into()
+    })
+}
+
+/// The camera (the TOML's, else the glTF file's) and the film (the TOML's,
+/// else 640 pixels wide at the glTF camera's aspect ratio).
+pub(super) fn camera_and_film(
+    v: &Validator<'_>,
+    spec: &SceneFile,
+    gltf_camera: Option<GltfCamera>,
+) -> Result<(file::CameraSpec, Film), SceneError> {
+    let (camera_spec, aspect_ratio) = match (&spec.camera, gltf_camera) {
+        (Some(c), _) => (c.clone(), None),
+        (None, Some(c)) => {
+            let file = spec.gltf.as_ref().map_or("", |g| g.file.as_str());
+            check_camera(v, &c.spec, &format!("gltf.file ({file}) camera"))?;
+            (c.spec, c.aspect_ratio)
+        }
+        (None, None) => {
+            return Err(v.error("camera", "missing: the TOML gives no [camera] and the glTF file has no camera"));
+        }
+    };
+    let film = match &spec.film {
+        Some(f) => Film { width: f.width, height: f.height, spp: f.spp },
+        // The glTF camera's aspect ratio at 640 pixels wide.
+        None => {
+            let height = aspect_ratio.map_or(480.0, |a| (DEFAULT_GLTF_WIDTH as f32 / a).round().clamp(1.0, 16384.0));
+            Film { width: DEFAULT_GLTF_WIDTH, height: height as u32, spp: 1 }
+        }
+    };
+    Ok((camera_spec, film))
+}
+
+/// The `[environment]`: a constant radiance or a lat-long EXR.
+pub(super) fn environment(
+    v: &Validator<'_>,
+    base: &Path,
+    spec: &SceneFile,
+    inputs: &mut Vec<PathBuf>,
+) -> Result<Option<Environment>, SceneError> {
+    let environment = match &spec.environment {
+        None => None,
+        Some(env) => {
+            let field = |f: &str| format!("environment.{f}");
+            v.sample_count(env.samples, &field("samples"))?;
+            v.check(env.scale.is_finite() && env.scale >= 0.0, &field("scale"), || {
+                format!("must be finite and >= 0, got {}", env.scale)
+            })?;
+            let map = match (&env.radiance, &env.file) {
+                (Some(_), Some(_)) => return Err(v.error(&field("file"), "give either radiance or file, not both")),
+                (None, None) => return Err(v.error(&field("radiance"), "missing: give radiance or file")),
+                (Some(r), None) => EnvironmentMap::Constant(v.non_negative_rgb(*r, &field("radiance"))?),
+                (None, Some(f)) => {
+                    let exr = base.join(f);
+                    inputs.push(exr.clone());
+                    EnvironmentMap::load_exr(&exr, env.scale).map_err(|e| {
+                        SceneError::new(&exr, field("file"), format!("cannot use as an environment: {e}"))
+                    })?
+                }
+            };
+            Some(Environment { map, samples: env.samples })
+        }
+    };
+    Ok(environment)
+}
+
+/// The `[indirect]` light's settings.
+pub(super) fn indirect(v: &Validator<'_>, spec: &SceneFile) -> Result<Option<IndirectSettings>, SceneError> {
+    let indirect = match &spec.indirect {
+        None => None,
+        Some(ind) => {
+            v.check(ind.paths <= MAX_VPL_PATHS, "indirect.paths", || {
+                format!("must be at most {MAX_VPL_PATHS}, got {}", ind.paths)
+            })?;
+            v.check((1..=16).contains(&ind.bounces), "indirect.bounces", || {
+                format!("must be between 1 and 16, got {}", ind.bounces)
+            })?;
+            Some(IndirectSettings { paths: ind.paths as usize, bounces: ind.bounces })
+        }
+    };
+    Ok(indirect)
+}
