@@ -1,3 +1,4 @@
+use super::io::percent_decode;
 use super::*;
 
 #[test]

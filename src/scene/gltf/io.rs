@@ -1,0 +1,305 @@
+//! Reading a glTF file's bytes: the JSON (or GLB) parsed and validated,
+//! buffers from the GLB's BIN chunk, base64 `data:` URIs or files, images
+//! decoded, and accessors read into plain arrays with every offset, stride
+//! and count checked against its buffer. Every error names the file and the
+//! JSON location (`accessors[3].count`).
+
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+
+use base64::Engine as _;
+use gltf::accessor::{DataType, Dimensions};
+use gltf::json::validation::Checked;
+
+use super::IMPLEMENTED;
+use crate::scene::image::{self, RgbImage};
+use crate::scene::SceneError;
+
+/// Most vertices, indices or elements one accessor may hold (2^28): beyond
+/// it a count is a corrupt file, not a scene.
+const MAX_ACCESSOR_COUNT: usize = 1 << 28;
+
+/// Parses and validates the JSON (or GLB), refusing required extensions the
+/// renderer does not implement by name.
+pub(super) fn parse(path: &Path, bytes: &[u8]) -> Result<gltf::Gltf, SceneError> {
+    let gltf = gltf::Gltf::from_slice_without_validation(bytes).map_err(|e| {
+        let location = match &e {
+            gltf::Error::Binary(_) => "GLB container".to_string(),
+            gltf::Error::Deserialize(d) => format!("line {}, column {}", d.line(), d.column()),
+            _ => "file".to_string(),
+        };
+        SceneError::new(path, location, format!("not a readable glTF 2.0 file: {e}"))
+    })?;
+    for (i, name) in gltf.document.extensions_required().enumerate() {
+        if !IMPLEMENTED.contains(&name) {
+            return Err(SceneError::new(
+                path,
+                format!("extensionsRequired[{i}]"),
+                format!(
+                    "the file requires {name}, which this renderer does not implement (it implements {})",
+                    IMPLEMENTED.join(", ")
+                ),
+            ));
+        }
+    }
+    let root = gltf.document.clone().into_json();
+    // gltf-json 1.4.1's validator indexes the POSITION accessor before
+    // checking that it exists (a panic on a hostile file): check it first.
+    for (m, mesh) in root.meshes.iter().enumerate() {
+        for (p, primitive) in mesh.primitives.iter().enumerate() {
+            let position = primitive.attributes.get(&Checked::Valid(gltf::Semantic::Positions));
+            if let Some(index) = position.filter(|i| i.value() >= root.accessors.len()) {
+                return Err(SceneError::new(
+                    path,
+                    format!("meshes[{m}].primitives[{p}].attributes.POSITION"),
+                    format!("accessor {} does not exist (the file has {})", index.value(), root.accessors.len()),
+                ));
+            }
+        }
+    }
+    gltf::Document::from_json(root).map_err(|e| match e {
+        gltf::Error::Validation(errors) => {
+            let (location, error) = &errors[0];
+            let more = if errors.len() > 1 { format!(" (and {} more)", errors.len() - 1) } else { String::new() };
+            SceneError::new(path, location.to_string(), format!("invalid: {error}{more}"))
+        }
+        other => SceneError::new(path, "file", other.to_string()),
+    })?;
+    Ok(gltf)
+}
+
+/// A glTF file's data: its buffers, the images decoded so far, and every
+/// file read for them (in order).
+pub(super) struct Data<'a> {
+    file: &'a Path,
+    /// The directory relative URIs resolve against.
+    base: PathBuf,
+    buffers: Vec<Vec<u8>>,
+    /// Decoded images by glTF image index (linear RGB).
+    images: HashMap<usize, RgbImage>,
+    /// The buffer and image files read, in the order they were read.
+    pub(super) inputs: Vec<PathBuf>,
+}
+
+impl<'a> Data<'a> {
+    /// Reads every buffer of `doc`: the GLB's BIN chunk (`blob`), a base64
+    /// `data:` URI or a file relative to `file`.
+    pub(super) fn load(file: &'a Path, doc: &gltf::Document, blob: Option<&[u8]>) -> Result<Self, SceneError> {
+        let mut data = Self {
+            file,
+            base: file.parent().unwrap_or(Path::new(".")).to_path_buf(),
+            buffers: Vec::new(),
+            images: HashMap::new(),
+            inputs: Vec::new(),
+        };
+        data.load_buffers(doc, blob)?;
+        Ok(data)
+    }
+
+    fn error(&self, location: impl Into<String>, message: impl Into<String>) -> SceneError {
+        SceneError::new(self.file, location, message)
+    }
+
+    /// Reads every buffer: the GLB's BIN chunk, a base64 `data:` URI or a file.
+    fn load_buffers(&mut self, doc: &gltf::Document, blob: Option<&[u8]>) -> Result<(), SceneError> {
+        for buffer in doc.buffers() {
+            let location = format!("buffers[{}]", buffer.index());
+            let data = match buffer.source() {
+                gltf::buffer::Source::Bin => blob
+                    .ok_or_else(|| {
+                        self.error(&location, "refers to the GLB's BIN chunk, which the file does not have")
+                    })?
+                    .to_vec(),
+                gltf::buffer::Source::Uri(uri) => self.read_uri(uri, &format!("{location}.uri"))?,
+            };
+            if data.len() < buffer.length() {
+                return Err(self.error(
+                    format!("{location}.byteLength"),
+                    format!("is {} but the data holds only {} bytes", buffer.length(), data.len()),
+                ));
+            }
+            self.buffers.push(data);
+        }
+        Ok(())
+    }
+
+    /// The bytes a URI names: a base64 `data:` URI, or a file relative to the glTF file.
+    fn read_uri(&mut self, uri: &str, location: &str) -> Result<Vec<u8>, SceneError> {
+        if let Some(rest) = uri.strip_prefix("data:") {
+            let Some((_, payload)) = rest.split_once(";base64,") else {
+                return Err(self.error(location, "a data: URI must be base64 (';base64,')"));
+            };
+            return base64::engine::general_purpose::STANDARD
+                .decode(payload)
+                .map_err(|e| self.error(location, format!("bad base64 data: {e}")));
+        }
+        if let Some((scheme, _)) = uri.split_once("://") {
+            return Err(
+                self.error(location, format!("'{scheme}://' URIs are not supported: give a relative file path"))
+            );
+        }
+        let path = self.base.join(percent_decode(uri));
+        self.inputs.push(path.clone());
+        std::fs::read(&path).map_err(|e| self.error(location, format!("cannot read '{}': {e}", path.display())))
+    }
+
+    /// Decodes an image (PNG or JPEG, sRGB) once.
+    pub(super) fn image(&mut self, image: &gltf::Image<'_>, location: &str) -> Result<RgbImage, SceneError> {
+        if let Some(decoded) = self.images.get(&image.index()) {
+            return Ok(decoded.clone());
+        }
+        let at = format!("images[{}]", image.index());
+        let (bytes, named) = match image.source() {
+            gltf::image::Source::Uri { uri, .. } => {
+                let bytes = self.read_uri(uri, &format!("{at}.uri"))?;
+                let named = if uri.starts_with("data:") { None } else { Some(self.base.join(percent_decode(uri))) };
+                (bytes, named)
+            }
+            gltf::image::Source::View { view, .. } => {
+                (self.view_bytes(&view, &format!("{at}.bufferView"))?.to_vec(), None)
+            }
+        };
+        let decoded = image::decode_srgb(&bytes).map_err(|e| {
+            let what = named.as_ref().map_or_else(String::new, |p| format!("'{}': ", p.display()));
+            self.error(format!("{location} ({at})"), format!("{what}{e}"))
+        })?;
+        self.images.insert(image.index(), decoded.clone());
+        Ok(decoded)
+    }
+
+    /// The bytes of a buffer view, checked against its buffer.
+    pub(super) fn view_bytes(&self, view: &gltf::buffer::View<'_>, location: &str) -> Result<&[u8], SceneError> {
+        let buffer = &self.buffers[view.buffer().index()];
+        let end = view.offset().checked_add(view.length());
+        match end {
+            Some(end) if end <= buffer.len() => Ok(&buffer[view.offset()..end]),
+            _ => Err(self.error(
+                format!("bufferViews[{}]", view.index()),
+                format!(
+                    "bytes {}..{} are past the end of buffers[{}] ({} bytes) ({location})",
+                    view.offset(),
+                    view.offset().saturating_add(view.length()),
+                    view.buffer().index(),
+                    buffer.len()
+                ),
+            )),
+        }
+    }
+
+    /// An accessor's elements, as raw bytes per element: (bytes, stride, count).
+    fn elements(
+        &self,
+        a: &gltf::Accessor<'_>,
+        location: &str,
+        size: usize,
+    ) -> Result<Option<(&[u8], usize)>, SceneError> {
+        let at = format!("accessors[{}]", a.index());
+        if a.sparse().is_some() {
+            return Err(self.error(format!("{at}.sparse"), format!("sparse accessors are not supported ({location})")));
+        }
+        if a.count() > MAX_ACCESSOR_COUNT {
+            return Err(self.error(
+                format!("{at}.count"),
+                format!("{} is more than {MAX_ACCESSOR_COUNT} ({location})", a.count()),
+            ));
+        }
+        let Some(view) = a.view() else { return Ok(None) };
+        let bytes = self.view_bytes(&view, location)?;
+        let stride = view.stride().unwrap_or(size);
+        if stride < size {
+            return Err(self.error(
+                format!("bufferViews[{}].byteStride", view.index()),
+                format!("{stride} is less than an element's {size} bytes ({location})"),
+            ));
+        }
+        let needed = match a.count() {
+            0 => Some(0),
+            n => (n - 1).checked_mul(stride).and_then(|x| x.checked_add(size)).and_then(|x| x.checked_add(a.offset())),
+        };
+        match needed {
+            Some(n) if n <= bytes.len() => Ok(Some((&bytes[a.offset().min(bytes.len())..], stride))),
+            _ => Err(self.error(
+                at.to_string(),
+                format!("{} elements of {size} bytes every {stride} from byte {} overrun bufferViews[{}] ({} bytes) ({location})", a.count(), a.offset(), view.index(), bytes.len()),
+            )),
+        }
+    }
+
+    /// A float accessor of N components (FLOAT, or normalized integers).
+    pub(super) fn read_floats<const N: usize>(
+        &self,
+        a: &gltf::Accessor<'_>,
+        location: &str,
+    ) -> Result<Vec<[f32; N]>, SceneError> {
+        let want = match N {
+            2 => Dimensions::Vec2,
+            _ => Dimensions::Vec3,
+        };
+        if a.dimensions() != want {
+            return Err(self.error(location, format!("must be a {want:?} accessor, got {:?}", a.dimensions())));
+        }
+        let kind = a.data_type();
+        if kind != DataType::F32 && !a.normalized() {
+            return Err(self.error(location, format!("must be FLOAT or normalized integers, got {kind:?}")));
+        }
+        let component = kind.size();
+        let Some((bytes, stride)) = self.elements(a, location, component * N)? else {
+            return Ok(vec![[0.0; N]; a.count()]);
+        };
+        let read = |b: &[u8]| -> f32 {
+            match kind {
+                DataType::F32 => f32::from_le_bytes([b[0], b[1], b[2], b[3]]),
+                DataType::U8 => f32::from(b[0]) / 255.0,
+                DataType::I8 => (f32::from(b[0] as i8) / 127.0).max(-1.0),
+                DataType::U16 => f32::from(u16::from_le_bytes([b[0], b[1]])) / 65535.0,
+                DataType::I16 => (f32::from(i16::from_le_bytes([b[0], b[1]])) / 32767.0).max(-1.0),
+                DataType::U32 => u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as f32 / u32::MAX as f32,
+            }
+        };
+        Ok((0..a.count()).map(|i| std::array::from_fn(|c| read(&bytes[i * stride + c * component..]))).collect())
+    }
+
+    /// An index accessor (unsigned byte, short or int scalars).
+    pub(super) fn read_indices(&self, a: &gltf::Accessor<'_>, location: &str) -> Result<Vec<u32>, SceneError> {
+        let kind = a.data_type();
+        if a.dimensions() != Dimensions::Scalar || !matches!(kind, DataType::U8 | DataType::U16 | DataType::U32) {
+            return Err(
+                self.error(location, format!("indices must be unsigned scalars, got {:?} {kind:?}", a.dimensions()))
+            );
+        }
+        let size = kind.size();
+        let Some((bytes, stride)) = self.elements(a, location, size)? else {
+            return Ok(vec![0; a.count()]);
+        };
+        Ok((0..a.count())
+            .map(|i| {
+                let b = &bytes[i * stride..];
+                match kind {
+                    DataType::U8 => u32::from(b[0]),
+                    DataType::U16 => u32::from(u16::from_le_bytes([b[0], b[1]])),
+                    _ => u32::from_le_bytes([b[0], b[1], b[2], b[3]]),
+                }
+            })
+            .collect())
+    }
+}
+
+/// `%20`-style escapes of a relative URI decoded (invalid escapes kept).
+pub(super) fn percent_decode(uri: &str) -> String {
+    let bytes = uri.as_bytes();
+    let mut out = Vec::with_capacity(bytes.len());
+    let mut i = 0;
+    while i < bytes.len() {
+        let hex = |c: u8| (c as char).to_digit(16);
+        if bytes[i] == b'%' && i + 2 < bytes.len() {
+            if let (Some(h), Some(l)) = (hex(bytes[i + 1]), hex(bytes[i + 2])) {
+                out.push((h * 16 + l) as u8);
+                i += 3;
+                continue;
+            }
+        }
+        out.push(bytes[i]);
+        i += 1;
+    }
+    String::from_utf8_lossy(&out).into_owned()
+}
