@@ -12,14 +12,12 @@ use std::f32::consts::FRAC_PI_4;
 use std::path::{Path, PathBuf};
 
 use glam::{Affine2, Mat2, Mat3, Mat4, Vec2, Vec3, Vec4};
-
 use gltf::json::extensions::scene::khr_lights_punctual::{Light as LightJson, Type as LightType};
 use gltf::json::validation::Checked;
 use gltf::mesh::Mode;
 
 use super::file::{CameraSpec, GltfSpec};
 use super::groups::GltfLightNames;
-
 use super::material::{Albedo, Cutout, Material};
 use super::mesh::Mesh;
 use super::texture::Texture;
