@@ -12,7 +12,7 @@ use super::CliError;
 use crate::lightcut::stochastic::{STOCHASTIC_DEFAULTS, STOCHASTIC_FROM_SPP};
 use crate::lightcut::{CutSettings, GroupError};
 use crate::render::session::Mode;
-use crate::render::{PassSettings, PixelBounds};
+use crate::render::{Aovs, PassSettings, PixelBounds};
 use crate::scene::{check_resolution, Scene};
 
 /// How direct light is computed. Without a mode flag, the mode that gave
@@ -152,7 +152,7 @@ pub fn pass_settings(
             PixelBounds { x0, x1, y0, y1 }
         }
     };
-    Ok(PassSettings { width, height, spp, seed, bounds, cryptomatte: false, transparent: false })
+    Ok(PassSettings { width, height, spp, seed, bounds, aovs: Aovs::all(false), transparent: false })
 }
 
 /// The cut settings of a lightcuts render, validated.

@@ -8,10 +8,10 @@ use super::args::{parse_tile, ModeArgs, PassArgs};
 use super::farm::{tile_rows, Claim};
 use super::progress::Progress;
 use super::CliError;
-use crate::output::exr::{write_exr, Aovs, ExrChannels, ExrMetadata};
+use crate::output::exr::{write_exr, ExrMetadata};
 use crate::output::preview::write_png;
 use crate::render::session::{PassResult, Session};
-use crate::render::PixelBounds;
+use crate::render::{Aovs, PixelBounds};
 
 #[derive(Debug, Args)]
 pub struct RenderArgs {
@@ -104,7 +104,7 @@ pub fn run(args: &RenderArgs) -> Result<(), CliError> {
     let mode = args.mode.mode(settings.spp)?;
     let mut aovs = args.aovs.unwrap_or(Aovs::all(mode.cut().is_some()));
     aovs.cryptomatte |= args.cryptomatte;
-    settings.cryptomatte = aovs.cryptomatte;
+    settings.aovs = aovs;
     settings.transparent = args.transparent;
     if aovs.lightcuts && mode.cut().is_none() {
         return Err(CliError::Usage {
@@ -120,7 +120,7 @@ pub fn run(args: &RenderArgs) -> Result<(), CliError> {
     crate::embree::set_timing(args.stats);
     let cpu_before = super::process::cpu_seconds();
     let PassResult { film, stats, seconds, trees, tree_bytes, vpls, vpl_time, lights, refused_rays } =
-        session.render(&settings, mode, aovs.groups, &|event| progress.report(event))?;
+        session.render(&settings, mode, &|event| progress.report(event))?;
     if refused_rays > 0 {
         eprintln!(
             "warning: {refused_rays} rays had a non-finite or out-of-range component and were not traced \
@@ -142,7 +142,7 @@ pub fn run(args: &RenderArgs) -> Result<(), CliError> {
         world_to_camera: Some(scene.camera(settings.width, settings.height).world_to_camera().to_cols_array()),
         world_to_ndc: Some(scene.camera(settings.width, settings.height).world_to_ndc().to_cols_array()),
     };
-    write_exr(&args.output, &film, ExrChannels { half_beauty: args.half, aovs }, &meta)?;
+    write_exr(&args.output, &film, args.half, &meta)?;
     if let Some(png) = &args.png {
         write_png(png, &film, args.exposure)?;
     }

@@ -18,12 +18,12 @@ use super::CliError;
 use crate::lightcut::stochastic::STOCHASTIC_DEFAULTS;
 use crate::lightcut::CutSettings;
 use crate::output::compare::compare_rgb;
-use crate::output::exr::{write_exr, Aovs, ExrChannels, ExrMetadata};
+use crate::output::exr::{write_exr, ExrMetadata};
 use crate::output::plot::{Plot, Series};
 use crate::output::read::read_exr;
 use crate::output::{write_atomically, OutputError};
 use crate::render::session::{Mode, PassResult, Session};
-use crate::render::{Film, PassSettings};
+use crate::render::{Aovs, Film, PassSettings};
 use crate::scene::Scene;
 
 /// A lightcut mode a sweep measures.
@@ -134,7 +134,7 @@ fn renderer_identity() -> Result<String, OutputError> {
 }
 
 fn rgb(film: &Film) -> Vec<DVec3> {
-    film.pixels.iter().map(|p| DVec3::new(f64::from(p.rgb[0]), f64::from(p.rgb[1]), f64::from(p.rgb[2]))).collect()
+    film.rgb().iter().map(|p| DVec3::new(f64::from(p[0]), f64::from(p[1]), f64::from(p[2]))).collect()
 }
 
 fn metadata(
@@ -188,9 +188,9 @@ fn reference(
         }
     }
     let progress = Progress::for_stderr("exact", quiet);
-    let result = session.render(settings, Mode::Exact, true, &|event| progress.report(event))?;
+    let result = session.render(settings, Mode::Exact, &|event| progress.report(event))?;
     let meta = metadata(session.scene, key, settings, "exact".into(), &result);
-    write_exr(&exr_path, &result.film, ExrChannels { half_beauty: false, aovs: Aovs::all(false) }, &meta)?;
+    write_exr(&exr_path, &result.film, false, &meta)?;
     let record =
         ReferenceRecord { key: key.clone(), seconds: result.seconds, shadow_rays: result.stats.shading.shadow_rays };
     let text = serde_json::to_string_pretty(&record).expect("plain data serialises");
@@ -217,7 +217,8 @@ pub fn run(args: &SweepArgs) -> Result<(), CliError> {
     let mut rows = Vec::new();
     let mut references = Vec::new();
     for &spp in &spps {
-        let settings = args.pass.settings(&scene, Some(spp))?;
+        // The reference's AOVs are the exact mode's; the cut modes' add the cut's.
+        let mut settings = args.pass.settings(&scene, Some(spp))?;
         let b = settings.bounds;
         let key = ReferenceKey {
             scene: std::fs::canonicalize(&scene.path).unwrap_or_else(|_| scene.path.clone()).display().to_string(),
@@ -231,6 +232,7 @@ pub fn run(args: &SweepArgs) -> Result<(), CliError> {
             camera: args.pass.camera.clone(),
         };
         let (reference_rgb, record) = reference(&session, &settings, &key, &args.out, args.quiet)?;
+        settings.aovs = Aovs::all(true);
         let pixels = b.area().max(1) as f64;
         for &sweep_mode in &args.modes {
             let defaults = match sweep_mode {
@@ -242,12 +244,12 @@ pub fn run(args: &SweepArgs) -> Result<(), CliError> {
                 let mode = sweep_mode.mode(cut);
                 let progress =
                     Progress::for_stderr(&format!("{} {spp} spp error {error}", sweep_mode.name()), args.quiet);
-                let result = session.render(&settings, mode, true, &|event| progress.report(event))?;
+                let result = session.render(&settings, mode, &|event| progress.report(event))?;
                 let comparison =
                     compare_rgb(&rgb(&result.film), &reference_rgb, b.width() as usize, b.height() as usize).summary;
                 let path = args.out.join(format!("{}-spp{spp}-error-{error}.exr", sweep_mode.name()));
                 let meta = metadata(&scene, &key, &settings, mode.describe(), &result);
-                write_exr(&path, &result.film, ExrChannels { half_beauty: false, aovs: Aovs::all(true) }, &meta)?;
+                write_exr(&path, &result.film, false, &meta)?;
                 let shading = &result.stats.shading;
                 rows.push(SweepRow {
                     mode: sweep_mode,

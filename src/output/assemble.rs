@@ -6,28 +6,10 @@
 
 use std::path::{Path, PathBuf};
 
-use super::exr::{write_exr, Aovs, ExrChannels, ExrMetadata};
+use super::exr::{write_exr, ExrMetadata};
 use super::read::{read_exr, ExrImage};
 use super::OutputError;
-use crate::render::{Film, FilmChannel, Pixel, PixelBounds};
-
-/// The channels a [`Pixel`] holds; every other channel of a tile is carried
-/// over as it is (light groups, Cryptomatte).
-const FIXED_CHANNELS: [&str; 13] = [
-    "R",
-    "G",
-    "B",
-    "A",
-    "albedo.R",
-    "albedo.G",
-    "albedo.B",
-    "N.X",
-    "N.Y",
-    "N.Z",
-    "Z",
-    "lightcuts.cut_size",
-    "lightcuts.shadow_rays",
-];
+use crate::render::{Film, FilmChannel, PixelBounds};
 
 /// Header attributes every tile must share with the first.
 pub const MUST_AGREE: [&str; 5] =
@@ -133,24 +115,10 @@ pub fn assemble(output: &Path, tiles: &[PathBuf]) -> Result<Assembled, OutputErr
             (image, (y - image.y0 as usize) * image.width + (x - image.x0 as usize))
         })
         .collect();
-    let mut pixels = vec![Pixel::default(); width * height];
-    for (pixel, &(image, at)) in pixels.iter_mut().zip(&sources) {
-        let value = |name: &str| image.channels.get(name).map_or(0.0, |c| c[at]);
-        *pixel = Pixel {
-            rgb: [value("R"), value("G"), value("B")],
-            alpha: value("A"),
-            albedo: [value("albedo.R"), value("albedo.G"), value("albedo.B")],
-            normal: [value("N.X"), value("N.Y"), value("N.Z")],
-            z: value("Z"),
-            cut_size: value("lightcuts.cut_size"),
-            shadow_rays: value("lightcuts.shadow_rays"),
-        };
-    }
-    // The light groups' and Cryptomatte's channels, and Cryptomatte's header.
+    // Every channel, from the tile that covers each pixel; and Cryptomatte's header.
     let channels = first
         .channels
         .keys()
-        .filter(|name| !FIXED_CHANNELS.contains(&name.as_str()))
         .map(|name| FilmChannel {
             name: name.clone(),
             values: sources.iter().map(|&(image, at)| image.channels[name][at]).collect(),
@@ -166,7 +134,6 @@ pub fn assemble(output: &Path, tiles: &[PathBuf]) -> Result<Assembled, OutputErr
         full_width: width as u32,
         full_height: height as u32,
         bounds: PixelBounds::full(width as u32, height as u32),
-        pixels,
         channels,
         attributes,
     };
@@ -184,17 +151,7 @@ pub fn assemble(output: &Path, tiles: &[PathBuf]) -> Result<Assembled, OutputErr
         world_to_camera: first.world_to_camera,
         world_to_ndc: first.world_to_ndc,
     };
-    let has = |name: &str| first.channels.contains_key(name);
-    let aovs = Aovs {
-        albedo: has("albedo.R"),
-        normal: has("N.X"),
-        depth: has("Z"),
-        lightcuts: has("lightcuts.cut_size"),
-        groups: film.channels.iter().any(|c| c.name.starts_with("Combined_")),
-        cryptomatte: film.channels.iter().any(|c| c.name.starts_with("Crypto")),
-    };
-    let channels = ExrChannels { half_beauty: first.half.contains("R"), aovs };
-    write_exr(output, &film, channels, &meta)?;
+    write_exr(output, &film, first.half.contains("R"), &meta)?;
     Ok(Assembled { width: width as u32, height: height as u32, tiles: tiles.len(), render_seconds })
 }
 

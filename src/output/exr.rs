@@ -1,17 +1,16 @@
-//! OpenEXR output: single part, scanlines, ZIP compression. Channels `R,G,B,A`,
-//! `albedo.R/G/B`, `N.X/Y/Z`, `Z`, plus lightcuts' `lightcuts.cut_size` and
-//! `lightcuts.shadow_rays` when the render mode produces them, each light
-//! group's `Combined_<group>.R/G/B` (Cycles' names for light-group passes)
-//! when the scene has groups, and Cryptomatte's `CryptoObject00..02` and
-//! `CryptoMaterial00..02` when asked for. The data window is the rendered
-//! window; the display window the full frame.
+//! OpenEXR output: single part, scanlines, ZIP compression, the film's
+//! channels: `R,G,B,A` and the AOVs the pass filled (`albedo.R/G/B`,
+//! `N.X/Y/Z`, `Z`, `lightcuts.cut_size`, `lightcuts.shadow_rays`, each light
+//! group's `Combined_<group>.R/G/B`, Cryptomatte's `CryptoObject00..02` and
+//! `CryptoMaterial00..02`; see `render::Aovs`). The data window is the
+//! rendered window; the display window the full frame.
 
 use std::path::{Path, PathBuf};
 
 use exr::prelude::*;
 
 use super::{write_atomically, OutputError};
-use crate::render::Film;
+use crate::render::{Film, BEAUTY};
 
 /// Header attributes describing how the image was made.
 #[derive(Debug, Clone)]
@@ -41,67 +40,6 @@ fn rec709() -> exr::meta::attribute::Chromaticities {
     }
 }
 
-/// Which channels to write.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct ExrChannels {
-    /// 16-bit half floats for the beauty (R, G, B, A); AOVs stay 32-bit.
-    pub half_beauty: bool,
-    /// The AOV layers to write.
-    pub aovs: Aovs,
-}
-
-/// The AOV layers an EXR holds beside the beauty (`render --aovs`).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct Aovs {
-    /// `albedo.R/G/B`: the diffuse albedo of the first hit.
-    pub albedo: bool,
-    /// `N.X/Y/Z`: the shading normal.
-    pub normal: bool,
-    /// `Z`: the distance to the first hit.
-    pub depth: bool,
-    /// `lightcuts.cut_size` and `lightcuts.shadow_rays` (cut modes only).
-    pub lightcuts: bool,
-    /// `Combined_<group>.R/G/B` per light group (scenes with groups only).
-    pub groups: bool,
-    /// Cryptomatte's object and material mattes.
-    pub cryptomatte: bool,
-}
-
-impl Aovs {
-    /// The default layers of a render in a mode with (`cut`) or without a
-    /// cut: every one but Cryptomatte's (`--cryptomatte` adds it).
-    #[must_use]
-    pub fn all(cut: bool) -> Self {
-        Self { albedo: true, normal: true, depth: true, lightcuts: cut, groups: true, cryptomatte: false }
-    }
-
-    /// The layers named in `list` (`albedo`, `N`, `Z`, `lightcuts`,
-    /// `groups`, `cryptomatte`, comma separated; `none` for the beauty alone).
-    pub fn parse(list: &str) -> std::result::Result<Self, String> {
-        let mut aovs =
-            Self { albedo: false, normal: false, depth: false, lightcuts: false, groups: false, cryptomatte: false };
-        if list.trim() == "none" {
-            return Ok(aovs);
-        }
-        for name in list.split(',').map(str::trim) {
-            match name {
-                "albedo" => aovs.albedo = true,
-                "N" => aovs.normal = true,
-                "Z" => aovs.depth = true,
-                "lightcuts" => aovs.lightcuts = true,
-                "groups" => aovs.groups = true,
-                "cryptomatte" => aovs.cryptomatte = true,
-                other => {
-                    return Err(format!(
-                        "unknown AOV '{other}': expected albedo, N, Z, lightcuts, groups, cryptomatte or none"
-                    ))
-                }
-            }
-        }
-        Ok(aovs)
-    }
-}
-
 /// An attribute's text as UTF-8 bytes, as OpenEXR stores strings (the exr
 /// crate's `Text::from` accepts only Latin-1 and panics on the rest, and a
 /// glTF name in a Cryptomatte manifest may be anything).
@@ -112,60 +50,33 @@ fn utf8_text(value: &str) -> Text {
 /// Largest finite half float: beauty values beyond it are clamped, never Inf.
 const HALF_MAX: f32 = 65504.0;
 
+/// Writes `film` (every channel it has) with `meta`'s attributes; with
+/// `half_beauty`, the beauty (R, G, B, A) as 16-bit half floats (AOVs stay
+/// 32-bit).
 pub fn write_exr(
     path: &Path,
     film: &Film,
-    channels: ExrChannels,
+    half_beauty: bool,
     meta: &ExrMetadata,
 ) -> std::result::Result<(), OutputError> {
     let b = film.bounds;
     let size = (b.width() as usize, b.height() as usize);
-    let column = |f: &dyn Fn(&crate::render::Pixel) -> f32| -> Vec<f32> { film.pixels.iter().map(f).collect() };
-    let beauty = |name: &str, values: Vec<f32>| {
-        if channels.half_beauty {
-            AnyChannel::new(
-                name,
-                FlatSamples::F16(values.into_iter().map(|v| f16::from_f32(v.min(HALF_MAX))).collect()),
-            )
-        } else {
-            AnyChannel::new(name, FlatSamples::F32(values))
-        }
-    };
-    let full = |name: &str, values: Vec<f32>| AnyChannel::new(name, FlatSamples::F32(values));
-    // pLinear is only a hint for lossy B44 compression: true for alpha alone.
-    let colour = |mut c: AnyChannel<FlatSamples>| {
-        c.quantize_linearly = c.name.eq("A");
-        c
-    };
-    let mut list: Vec<AnyChannel<FlatSamples>> = vec![
-        beauty("R", column(&|p| p.rgb[0])),
-        beauty("G", column(&|p| p.rgb[1])),
-        beauty("B", column(&|p| p.rgb[2])),
-        beauty("A", column(&|p| p.alpha)),
-    ];
-    let aovs = channels.aovs;
-    if aovs.albedo {
-        list.push(full("albedo.R", column(&|p| p.albedo[0])));
-        list.push(full("albedo.G", column(&|p| p.albedo[1])));
-        list.push(full("albedo.B", column(&|p| p.albedo[2])));
-    }
-    if aovs.normal {
-        list.push(full("N.X", column(&|p| p.normal[0])));
-        list.push(full("N.Y", column(&|p| p.normal[1])));
-        list.push(full("N.Z", column(&|p| p.normal[2])));
-    }
-    if aovs.depth {
-        list.push(full("Z", column(&|p| p.z)));
-    }
-    if aovs.lightcuts {
-        list.push(full("lightcuts.cut_size", column(&|p| p.cut_size)));
-        list.push(full("lightcuts.shadow_rays", column(&|p| p.shadow_rays)));
-    }
-    // The light groups and the mattes: the film holds them only when they
-    // were asked for (they change what is rendered).
-    for channel in &film.channels {
-        list.push(full(&channel.name, channel.values.clone()));
-    }
+    let list: Vec<AnyChannel<FlatSamples>> = film
+        .channels
+        .iter()
+        .map(|channel| {
+            let values = channel.values.clone();
+            let samples = if half_beauty && BEAUTY.contains(&channel.name.as_str()) {
+                FlatSamples::F16(values.into_iter().map(|v| f16::from_f32(v.min(HALF_MAX))).collect())
+            } else {
+                FlatSamples::F32(values)
+            };
+            let mut c = AnyChannel::new(channel.name.as_str(), samples);
+            // pLinear is only a hint for lossy B44 compression: true for alpha alone.
+            c.quantize_linearly = channel.name == "A";
+            c
+        })
+        .collect();
 
     let mut attributes = LayerAttributes {
         layer_position: Vec2(b.x0 as i32, b.y0 as i32),
@@ -190,7 +101,7 @@ pub fn write_exr(
 
     let encoding =
         Encoding { compression: Compression::ZIP16, blocks: Blocks::ScanLines, line_order: LineOrder::Increasing };
-    let layer = Layer::new(size, attributes, encoding, AnyChannels::sort(list.into_iter().map(colour).collect()));
+    let layer = Layer::new(size, attributes, encoding, AnyChannels::sort(list.into()));
     let display = IntegerBounds::new(Vec2(0, 0), Vec2(film.full_width as usize, film.full_height as usize));
     let mut image_attributes = ImageAttributes::new(display);
     image_attributes.chromaticities = Some(rec709());

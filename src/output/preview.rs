@@ -17,7 +17,7 @@ pub fn to_srgb8(linear: f32, scale: f32) -> u8 {
 /// Writes the film's window as an RGB PNG.
 pub fn write_png(path: &Path, film: &Film, exposure_stops: f32) -> Result<(), OutputError> {
     let scale = exposure_stops.exp2();
-    let data: Vec<u8> = film.pixels.iter().flat_map(|p| p.rgb.map(|c| to_srgb8(c, scale))).collect();
+    let data: Vec<u8> = film.rgb().iter().flat_map(|p| p.map(|c| to_srgb8(c, scale))).collect();
     write_rgb_png(path, film.bounds.width(), film.bounds.height(), &data)
 }
 

@@ -1,10 +1,17 @@
-//! The rendered window: beauty and AOVs per pixel, in scanline order.
+//! The rendered window: named channels (OpenEXR's names), one value per
+//! pixel each, in scanline order. The beauty and every AOV are channels of
+//! the same kind; which AOVs a pass fills is its [`Aovs`].
 
 /// The depth (`Z`) of a pixel where no camera sample hit a surface: far
 /// away, as Cycles writes it (1e10), so that depth-based compositing
 /// (defocus, fog, depth mattes) puts the background behind everything. 0
 /// would read as the nearest possible depth.
 pub const BACKGROUND_DEPTH: f32 = 1e10;
+
+/// The beauty's channels: radiance (W/(m^2 sr) per channel) and coverage
+/// (the fraction of samples that hit geometry or, unless the film is
+/// transparent, saw the environment).
+pub const BEAUTY: [&str; 4] = ["R", "G", "B", "A"];
 
 /// Half-open pixel window [x0, x1) x [y0, y1) in pixels of the full frame.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -37,25 +44,63 @@ impl PixelBounds {
     }
 }
 
-/// What one pixel holds: the averages over its samples. Every value is finite
-/// (the integrator sanitises before storing).
-#[derive(Debug, Clone, Copy, Default, PartialEq)]
-pub struct Pixel {
-    /// Radiance, W/(m^2 sr) per channel.
-    pub rgb: [f32; 3],
-    /// Coverage: the fraction of samples that hit geometry or, unless the
-    /// film is transparent, saw the environment.
-    pub alpha: f32,
-    pub albedo: [f32; 3],
-    /// Shading normal (world space, facing the camera), averaged over hits.
-    pub normal: [f32; 3],
-    /// Distance from the eye to the nearest hit, metres; [`BACKGROUND_DEPTH`]
-    /// where no sample hit a surface.
-    pub z: f32,
-    /// Nodes in the lightcut, averaged over the pixel's shading points.
-    pub cut_size: f32,
-    /// Shadow rays cast for this pixel.
-    pub shadow_rays: f32,
+/// The AOV layers a pass writes beside the beauty (`render --aovs`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Aovs {
+    /// `albedo.R/G/B`: the diffuse albedo of the first hit.
+    pub albedo: bool,
+    /// `N.X/Y/Z`: the shading normal (world space, facing the camera).
+    pub normal: bool,
+    /// `Z`: the distance from the eye to the nearest hit, metres
+    /// ([`BACKGROUND_DEPTH`] where nothing was hit).
+    pub depth: bool,
+    /// `lightcuts.cut_size` (nodes per shading point, averaged over the
+    /// pixel's) and `lightcuts.shadow_rays` (the pixel's): cut modes only.
+    pub lightcuts: bool,
+    /// `Combined_<group>.R/G/B` per light group (scenes with groups only).
+    pub groups: bool,
+    /// Cryptomatte's object and material mattes.
+    pub cryptomatte: bool,
+}
+
+impl Aovs {
+    /// The default layers of a render in a mode with (`cut`) or without a
+    /// cut: every one but Cryptomatte's (`--cryptomatte` adds it).
+    #[must_use]
+    pub fn all(cut: bool) -> Self {
+        Self { albedo: true, normal: true, depth: true, lightcuts: cut, groups: true, cryptomatte: false }
+    }
+
+    /// None of them: the beauty alone.
+    #[must_use]
+    pub fn none() -> Self {
+        Self { albedo: false, normal: false, depth: false, lightcuts: false, groups: false, cryptomatte: false }
+    }
+
+    /// The layers named in `list` (`albedo`, `N`, `Z`, `lightcuts`,
+    /// `groups`, `cryptomatte`, comma separated; `none` for the beauty alone).
+    pub fn parse(list: &str) -> Result<Self, String> {
+        let mut aovs = Self::none();
+        if list.trim() == "none" {
+            return Ok(aovs);
+        }
+        for name in list.split(',').map(str::trim) {
+            match name {
+                "albedo" => aovs.albedo = true,
+                "N" => aovs.normal = true,
+                "Z" => aovs.depth = true,
+                "lightcuts" => aovs.lightcuts = true,
+                "groups" => aovs.groups = true,
+                "cryptomatte" => aovs.cryptomatte = true,
+                other => {
+                    return Err(format!(
+                        "unknown AOV '{other}': expected albedo, N, Z, lightcuts, groups, cryptomatte or none"
+                    ))
+                }
+            }
+        }
+        Ok(aovs)
+    }
 }
 
 /// A rendered window of the full frame.
@@ -65,19 +110,34 @@ pub struct Film {
     pub full_width: u32,
     pub full_height: u32,
     pub bounds: PixelBounds,
-    /// bounds.area() pixels, row by row from (x0, y0).
-    pub pixels: Vec<Pixel>,
-    /// Channels beside the beauty and the fixed AOVs, each with one value
-    /// per pixel in the order of `pixels`: the light groups'
-    /// `Combined_<group>.R/G/B`, Cryptomatte's `CryptoObject00.R`...
+    /// The beauty ([`BEAUTY`]) first, then the AOVs the pass filled: the
+    /// fixed ones, each light group's `Combined_<group>.R/G/B` (Cycles'
+    /// names for light-group passes), Cryptomatte's `CryptoObject00.R`...
+    /// Every value is finite (the integrator sanitises before storing).
     pub channels: Vec<FilmChannel>,
-    /// Header attributes those channels need (Cryptomatte's metadata).
+    /// Header attributes the channels need (Cryptomatte's metadata).
     pub attributes: Vec<(String, String)>,
 }
 
-/// One named channel of a film.
+/// One named channel of a film: `bounds.area()` values, row by row from
+/// (x0, y0).
 #[derive(Debug, Clone, PartialEq)]
 pub struct FilmChannel {
     pub name: String,
     pub values: Vec<f32>,
+}
+
+impl Film {
+    /// The named channel's values, if the film has it.
+    #[must_use]
+    pub fn channel(&self, name: &str) -> Option<&[f32]> {
+        self.channels.iter().find(|c| c.name == name).map(|c| c.values.as_slice())
+    }
+
+    /// The beauty's radiance, pixel by pixel.
+    #[must_use]
+    pub fn rgb(&self) -> Vec<[f32; 3]> {
+        let [r, g, b] = ["R", "G", "B"].map(|c| self.channel(c).expect("every film has the beauty"));
+        (0..r.len()).map(|i| [r[i], g[i], b[i]]).collect()
+    }
 }

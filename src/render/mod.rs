@@ -21,7 +21,7 @@ use crate::embree::EmbreeError;
 use crate::scene::{Camera, Scene};
 use crate::util::sampling::Rng;
 use cryptomatte::{Coverage, CryptoType};
-pub use film::{Film, FilmChannel, Pixel, PixelBounds, BACKGROUND_DEPTH};
+pub use film::{Aovs, Film, FilmChannel, PixelBounds, BACKGROUND_DEPTH, BEAUTY};
 use integrator::{film_value, Integrator, Scratch};
 pub use integrator::{DirectLighting, ShadingStats};
 
@@ -36,8 +36,9 @@ pub struct PassSettings {
     pub spp: u32,
     pub seed: u64,
     pub bounds: PixelBounds,
-    /// Whether to write Cryptomatte's object and material mattes.
-    pub cryptomatte: bool,
+    /// The AOV layers to fill beside the beauty. Without `groups`, a scene
+    /// with light groups is rendered as one group (one cut).
+    pub aovs: Aovs,
     /// A transparent film (`render --transparent`): camera rays that hit
     /// nothing give RGB 0 and alpha 0 instead of the environment and
     /// alpha 1. The environment still lights the scene and shows in mirrors.
@@ -80,33 +81,51 @@ pub fn tiles(bounds: PixelBounds, tile: u32) -> Vec<PixelBounds> {
     out
 }
 
-/// The channels a pass writes beside the beauty and the fixed AOVs, and
-/// what it needs to fill them.
-struct Extra {
+/// The channels a pass fills, in the film's order, and where each part's
+/// values sit among a pixel's values.
+struct Layout {
     names: Vec<String>,
-    /// Light groups the radiance is split into (0: none).
+    /// Offsets of the fixed AOVs a pass writes (None: not written).
+    albedo: Option<usize>,
+    normal: Option<usize>,
+    depth: Option<usize>,
+    lightcuts: Option<usize>,
+    /// Offset of the first light group's channels, and the light groups the
+    /// radiance is split into (0: none).
     groups: usize,
-    /// Cryptomatte IDs of each mesh's object name and each material's
-    /// name, when the pass writes mattes.
+    group_count: usize,
+    /// Offset of Cryptomatte's channels, and the IDs of each mesh's object
+    /// name and each material's name, when the pass writes mattes.
+    cryptomatte: usize,
     ids: Option<(Vec<f32>, Vec<f32>)>,
 }
 
-impl Extra {
-    fn new(integrator: &Integrator<'_>, cryptomatte: bool) -> Self {
+impl Layout {
+    fn new(integrator: &Integrator<'_>, aovs: Aovs) -> Self {
         let scene = integrator.geometry.scene;
-        let groups = integrator.group_slots();
-        let mut names: Vec<String> = Vec::new();
-        for g in 0..groups {
-            let group = &scene.groups.names[g];
+        let mut names: Vec<String> = BEAUTY.iter().map(|c| (*c).to_string()).collect();
+        let mut add = |wanted: bool, channels: &[&str]| {
+            wanted.then(|| {
+                names.extend(channels.iter().map(|c| (*c).to_string()));
+                names.len() - channels.len()
+            })
+        };
+        let albedo = add(aovs.albedo, &["albedo.R", "albedo.G", "albedo.B"]);
+        let normal = add(aovs.normal, &["N.X", "N.Y", "N.Z"]);
+        let depth = add(aovs.depth, &["Z"]);
+        let lightcuts = add(aovs.lightcuts, &["lightcuts.cut_size", "lightcuts.shadow_rays"]);
+        let (groups, group_count) = (names.len(), integrator.group_slots());
+        for group in &scene.groups.names[..group_count] {
             names.extend(["R", "G", "B"].map(|c| format!("Combined_{group}.{c}")));
         }
-        let ids = cryptomatte.then(|| {
+        let cryptomatte = names.len();
+        let ids = aovs.cryptomatte.then(|| {
             names.extend(CryptoType::ALL.iter().flat_map(|t| t.channels()));
             let objects = scene.meshes.iter().map(|m| cryptomatte::id_of(&m.name)).collect();
             let materials = scene.materials.iter().map(|m| cryptomatte::id_of(&m.name)).collect();
             (objects, materials)
         });
-        Self { names, groups, ids }
+        Self { names, albedo, normal, depth, lightcuts, groups, group_count, cryptomatte, ids }
     }
 
     /// Cryptomatte's header attributes: each type's manifest lists every
@@ -136,14 +155,14 @@ pub fn render(
     progress: &(dyn Fn(PassProgress) + Sync),
 ) -> Result<(Film, PassStats), EmbreeError> {
     let start = Instant::now();
-    let extra = Extra::new(integrator, settings.cryptomatte);
+    let layout = Layout::new(integrator, settings.aovs);
     let tile_list = tiles(settings.bounds, TILE);
     progress(PassProgress::Started { tiles: tile_list.len() as u64 });
     let embree = &integrator.geometry.embree;
-    let rendered: Vec<(Vec<Pixel>, Vec<f32>, PassStats)> = tile_list
+    let rendered: Vec<(Vec<f32>, PassStats)> = tile_list
         .par_iter()
         .map_init(Scratch::default, |scratch, tile| {
-            let result = render_tile(integrator, camera, settings, &extra, *tile, scratch);
+            let result = render_tile(integrator, camera, settings, &layout, *tile, scratch);
             embree.take_error("tracing a tile's rays")?;
             progress(PassProgress::TileDone);
             Ok(result)
@@ -152,30 +171,28 @@ pub fn render(
     progress(PassProgress::Finished);
 
     let b = settings.bounds;
-    let channel_count = extra.names.len();
+    let count = layout.names.len();
     let mut film = Film {
         full_width: settings.width,
         full_height: settings.height,
         bounds: b,
-        pixels: vec![Pixel::default(); b.area()],
-        channels: extra
+        channels: layout
             .names
             .iter()
             .map(|name| FilmChannel { name: name.clone(), values: vec![0.0; b.area()] })
             .collect(),
-        attributes: extra.attributes(integrator.geometry.scene),
+        attributes: layout.attributes(integrator.geometry.scene),
     };
     let mut stats = PassStats::default();
-    for (tile, (pixels, values, tile_stats)) in tile_list.iter().zip(rendered) {
+    for (tile, (values, tile_stats)) in tile_list.iter().zip(rendered) {
         stats.camera_rays += tile_stats.camera_rays;
         stats.shading.add(&tile_stats.shading);
-        for (i, pixel) in pixels.into_iter().enumerate() {
+        for (i, pixel) in values.chunks_exact(count).enumerate() {
             let x = tile.x0 + i as u32 % tile.width();
             let y = tile.y0 + i as u32 / tile.width();
             let at = (y - b.y0) as usize * b.width() as usize + (x - b.x0) as usize;
-            film.pixels[at] = pixel;
-            for (c, channel) in film.channels.iter_mut().enumerate() {
-                channel.values[at] = values[i * channel_count + c];
+            for (channel, &value) in film.channels.iter_mut().zip(pixel) {
+                channel.values[at] = value;
             }
         }
     }
@@ -183,83 +200,88 @@ pub fn render(
     Ok((film, stats))
 }
 
-/// A tile's pixels, its extra channels' values (pixel by pixel, each
-/// pixel's channels in `extra.names` order) and its counters.
+/// A tile's values (pixel by pixel, each pixel's channels in `layout`'s
+/// order) and its counters.
 fn render_tile(
     integrator: &Integrator<'_>,
     camera: &Camera,
     settings: &PassSettings,
-    extra: &Extra,
+    layout: &Layout,
     tile: PixelBounds,
     scratch: &mut Scratch,
-) -> (Vec<Pixel>, Vec<f32>, PassStats) {
-    let mut pixels = Vec::with_capacity(tile.area());
-    let mut values = Vec::with_capacity(tile.area() * extra.names.len());
+) -> (Vec<f32>, PassStats) {
+    let count = layout.names.len();
+    let mut values = vec![0.0f32; tile.area() * count];
     let mut stats = PassStats::default();
     let inv_spp = 1.0 / f64::from(settings.spp);
-    let mut groups = vec![DVec3::ZERO; extra.groups];
+    let mut groups = vec![DVec3::ZERO; layout.group_count];
     let (mut objects, mut materials) = (Coverage::default(), Coverage::default());
-    for y in tile.y0..tile.y1 {
-        for x in tile.x0..tile.x1 {
-            let mut radiance = DVec3::ZERO;
-            let mut albedo = DVec3::ZERO;
-            let mut normal = DVec3::ZERO;
-            let mut hits = 0u32;
-            let mut opaque = 0u32;
-            let mut z = f32::INFINITY;
-            let mut pixel_stats = ShadingStats::default();
-            groups.fill(DVec3::ZERO);
-            objects.clear();
-            materials.clear();
-            for s in 0..settings.spp {
-                let mut rng = Rng::from_key(&[settings.seed, u64::from(x), u64::from(y), u64::from(s)]);
-                let ray = camera.ray(x as f32 + rng.next_f32(), y as f32 + rng.next_f32());
-                let key = [settings.seed, u64::from(x), u64::from(y), u64::from(s)];
-                let sample = integrator.trace(ray, key, settings.transparent, scratch, &mut groups);
-                stats.camera_rays += 1;
-                radiance += sample.radiance;
-                opaque += u32::from(sample.opaque);
-                pixel_stats.add(&sample.stats);
-                if let Some(hit) = sample.first_hit {
-                    hits += 1;
-                    albedo += hit.albedo.as_dvec3();
-                    normal += hit.normal.as_dvec3();
-                    z = z.min(hit.distance);
-                }
-                // Every camera sample weighs 1 / spp (the box filter the
-                // beauty uses), so coverages sum to the pixel's alpha.
-                if let (Some((object_ids, material_ids)), Some((mesh, material))) = (&extra.ids, sample.first_ids) {
-                    objects.add(object_ids[mesh], inv_spp);
-                    materials.add(material_ids[material], inv_spp);
-                }
+    for (i, pixel) in values.chunks_exact_mut(count).enumerate() {
+        let (x, y) = (tile.x0 + i as u32 % tile.width(), tile.y0 + i as u32 / tile.width());
+        let mut radiance = DVec3::ZERO;
+        let mut albedo = DVec3::ZERO;
+        let mut normal = DVec3::ZERO;
+        let mut hits = 0u32;
+        let mut opaque = 0u32;
+        let mut z = f32::INFINITY;
+        let mut pixel_stats = ShadingStats::default();
+        groups.fill(DVec3::ZERO);
+        objects.clear();
+        materials.clear();
+        for s in 0..settings.spp {
+            let mut rng = Rng::from_key(&[settings.seed, u64::from(x), u64::from(y), u64::from(s)]);
+            let ray = camera.ray(x as f32 + rng.next_f32(), y as f32 + rng.next_f32());
+            let key = [settings.seed, u64::from(x), u64::from(y), u64::from(s)];
+            let sample = integrator.trace(ray, key, settings.transparent, scratch, &mut groups);
+            stats.camera_rays += 1;
+            radiance += sample.radiance;
+            opaque += u32::from(sample.opaque);
+            pixel_stats.add(&sample.stats);
+            if let Some(hit) = sample.first_hit {
+                hits += 1;
+                albedo += hit.albedo.as_dvec3();
+                normal += hit.normal.as_dvec3();
+                z = z.min(hit.distance);
             }
-            stats.shading.add(&pixel_stats);
-            let value = |v: DVec3, scale: f64| (v * scale).to_array().map(film_value);
-            let hit_scale = if hits > 0 { 1.0 / f64::from(hits) } else { 0.0 };
-            pixels.push(Pixel {
-                rgb: value(radiance, inv_spp),
-                alpha: (f64::from(opaque) * inv_spp) as f32,
-                albedo: value(albedo, hit_scale),
-                normal: value(normal, hit_scale),
-                z: if z.is_finite() { z } else { BACKGROUND_DEPTH },
-                cut_size: if pixel_stats.shading_points > 0 {
-                    (pixel_stats.cut_nodes as f64 / pixel_stats.shading_points as f64) as f32
-                } else {
-                    0.0
-                },
-                shadow_rays: pixel_stats.shadow_rays as f32,
-            });
-            for group in &groups {
-                values.extend(value(*group, inv_spp));
+            // Every camera sample weighs 1 / spp (the box filter the
+            // beauty uses), so coverages sum to the pixel's alpha.
+            if let (Some((object_ids, material_ids)), Some((mesh, material))) = (&layout.ids, sample.first_ids) {
+                objects.add(object_ids[mesh], inv_spp);
+                materials.add(material_ids[material], inv_spp);
             }
-            if extra.ids.is_some() {
-                for coverage in [&mut objects, &mut materials] {
-                    values.extend(coverage.ranks().iter().flat_map(|&(id, weight)| [id, weight]));
-                }
+        }
+        stats.shading.add(&pixel_stats);
+        let value = |v: DVec3, scale: f64| (v * scale).to_array().map(film_value);
+        let hit_scale = if hits > 0 { 1.0 / f64::from(hits) } else { 0.0 };
+        pixel[..3].copy_from_slice(&value(radiance, inv_spp));
+        pixel[3] = (f64::from(opaque) * inv_spp) as f32;
+        if let Some(at) = layout.albedo {
+            pixel[at..at + 3].copy_from_slice(&value(albedo, hit_scale));
+        }
+        if let Some(at) = layout.normal {
+            pixel[at..at + 3].copy_from_slice(&value(normal, hit_scale));
+        }
+        if let Some(at) = layout.depth {
+            pixel[at] = if z.is_finite() { z } else { BACKGROUND_DEPTH };
+        }
+        if let Some(at) = layout.lightcuts {
+            let points = pixel_stats.shading_points;
+            pixel[at] = if points > 0 { (pixel_stats.cut_nodes as f64 / points as f64) as f32 } else { 0.0 };
+            pixel[at + 1] = pixel_stats.shadow_rays as f32;
+        }
+        for (g, group) in groups.iter().enumerate() {
+            let at = layout.groups + 3 * g;
+            pixel[at..at + 3].copy_from_slice(&value(*group, inv_spp));
+        }
+        if layout.ids.is_some() {
+            let ranks = [&mut objects, &mut materials].map(|coverage| coverage.ranks());
+            let flat = ranks.iter().flat_map(|r| r.iter().flat_map(|&(id, weight)| [id, weight]));
+            for (slot, v) in pixel[layout.cryptomatte..].iter_mut().zip(flat) {
+                *slot = v;
             }
         }
     }
-    (pixels, values, stats)
+    (values, stats)
 }
 
 /// A rayon pool of `threads` workers (0: one per CPU), each with Embree's

@@ -114,15 +114,14 @@ impl<'s> Session<'s> {
     }
 
     /// Renders one pass in `mode` (building the light trees first for the
-    /// lightcut modes, timed as part of the pass). With `split_groups`, a
+    /// lightcut modes, timed as part of the pass). With the `groups` AOV, a
     /// scene with light groups is rendered group by group as well (the
-    /// film's `Combined_<group>` channels, and the bounded cut's per-group
-    /// error control); without, as one group.
+    /// film's `Combined_<group>` channels, and the cuts' per-group error
+    /// control); without, as one group.
     pub fn render(
         &self,
         settings: &PassSettings,
         mode: Mode,
-        split_groups: bool,
         progress: &(dyn Fn(PassProgress) + Sync),
     ) -> Result<PassResult, SessionError> {
         let start = Instant::now();
@@ -142,7 +141,7 @@ impl<'s> Session<'s> {
             }
             None => (std::borrow::Cow::Borrowed(&self.lights), 0),
         };
-        let split_groups = split_groups && self.scene.groups.named();
+        let split_groups = settings.aovs.groups && self.scene.groups.named();
         if !split_groups && lights.len() > 1 {
             // One group: every light in one set of trees, as a scene
             // without groups.
@@ -206,7 +205,7 @@ impl<'s> Session<'s> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::render::PixelBounds;
+    use crate::render::{Aovs, PixelBounds};
 
     /// 2 x 2 pixels, all on a floor seen from above; `lights` TOML appended.
     fn scene(lights: &str) -> Scene {
@@ -253,10 +252,10 @@ intensity = [1, 1, 1]
             spp: 1,
             seed: 0,
             bounds: PixelBounds::full(2, 2),
-            cryptomatte: false,
+            aovs: Aovs::all(true),
             transparent: false,
         };
-        let result = session.render(&settings, mode, true, &|_| {}).unwrap();
+        let result = session.render(&settings, mode, &|_| {}).unwrap();
         assert_eq!(result.stats.camera_rays, 4);
         result.stats.shading
     }
@@ -300,7 +299,7 @@ intensity = [1, 1, 1]
             spp: 1,
             seed: 0,
             bounds: PixelBounds::full(64, 48),
-            cryptomatte: false,
+            aovs: Aovs::all(true),
             transparent: false,
         };
         let tiles = std::sync::atomic::AtomicUsize::new(0);
@@ -313,7 +312,7 @@ intensity = [1, 1, 1]
         };
         for mode in [Mode::Exact, Mode::Bounded(CutSettings::default())] {
             tiles.store(0, std::sync::atomic::Ordering::Relaxed);
-            match session.render(&settings, mode, true, &progress) {
+            match session.render(&settings, mode, &progress) {
                 Err(SessionError::Embree(e)) => assert!(e.to_string().contains("while tracing a tile's rays"), "{e}"),
                 Err(e) => panic!("{mode:?}: another error: {e}"),
                 Ok(_) => panic!("{mode:?}: the render succeeded after Embree reported an error"),
@@ -321,6 +320,6 @@ intensity = [1, 1, 1]
             assert!(tiles.load(std::sync::atomic::Ordering::Relaxed) < 12, "the pass stops at the error");
         }
         // The error was taken: the next pass renders.
-        assert!(session.render(&settings, Mode::Exact, true, &|_| {}).is_ok());
+        assert!(session.render(&settings, Mode::Exact, &|_| {}).is_ok());
     }
 }

@@ -127,9 +127,9 @@ pub fn measure(
     embree.take_error("tracing the recorded shadow rays")?;
 
     let progress = Progress::for_stderr("lightcuts", quiet);
-    let lightcuts = session.render(settings, mode, true, &|event| progress.report(event))?;
+    let lightcuts = session.render(settings, mode, &|event| progress.report(event))?;
     let progress = Progress::for_stderr("exact", quiet);
-    let exact = session.render(settings, Mode::Exact, true, &|event| progress.report(event))?;
+    let exact = session.render(settings, Mode::Exact, &|event| progress.report(event))?;
     let embree_batch = rate(rays.len(), batch_seconds);
     let (lc_rays, ex_rays) = (lightcuts.stats.shading.shadow_rays, exact.stats.shading.shadow_rays);
     let (lc_s, ex_s) = (lightcuts.stats.time.as_secs_f64(), exact.stats.time.as_secs_f64());
