@@ -4,16 +4,116 @@
 //! camera), and the parsers of the flags' values. `render`, `sweep` and
 //! `bench` take what this module resolves and never import each other.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use clap::Args;
 
+use super::farm::tile_rows;
 use super::CliError;
 use crate::lightcut::stochastic::{STOCHASTIC_DEFAULTS, STOCHASTIC_FROM_SPP};
 use crate::lightcut::{CutSettings, GroupError};
 use crate::render::session::Mode;
 use crate::render::{Aovs, PassSettings, PixelBounds};
 use crate::scene::{check_resolution, Scene};
+
+#[derive(Debug, Args)]
+pub struct RenderArgs {
+    /// Scene file (TOML, or JSON by its .json extension).
+    pub scene: PathBuf,
+    /// Output OpenEXR file.
+    #[arg(short, long, value_name = "OUT.exr")]
+    pub output: PathBuf,
+    #[command(flatten)]
+    pub mode: ModeArgs,
+    /// Samples per pixel, overriding the scene's.
+    #[arg(long, value_name = "N")]
+    pub spp: Option<u32>,
+    #[command(flatten)]
+    pub pass: PassArgs,
+    /// Write the beauty (R, G, B, A) as 16-bit half floats.
+    #[arg(long)]
+    pub half: bool,
+    /// The AOV layers to write beside the beauty: a comma-separated list of
+    /// albedo, N, Z, lightcuts (the cut's size and shadow rays; cut modes
+    /// only), groups (Combined_<group>.R/G/B per light group; scenes with
+    /// groups), cryptomatte, or none. Default: all but cryptomatte.
+    #[arg(long, value_name = "LIST", value_parser = Aovs::parse)]
+    pub aovs: Option<Aovs>,
+    /// Also write Cryptomatte's object and material ID mattes
+    /// (CryptoObject00..02, CryptoMaterial00..02).
+    #[arg(long)]
+    pub cryptomatte: bool,
+    /// A transparent background: where a camera ray hits nothing the pixel
+    /// gets RGB 0 and alpha 0 (premultiplied, ready for "over" onto a
+    /// plate) instead of the environment with alpha 1. The environment
+    /// still lights the scene and shows in mirrors.
+    #[arg(long)]
+    pub transparent: bool,
+    /// Also write a tone-mapped sRGB PNG preview.
+    #[arg(long, value_name = "PREVIEW.png")]
+    pub png: Option<PathBuf>,
+    /// Preview exposure in stops (the EXR is never scaled).
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+    pub exposure: f32,
+    /// No progress output.
+    #[arg(long, short)]
+    pub quiet: bool,
+    /// The full statistics block: cut-size histogram, share of time in
+    /// Embree (times every ray query), peak memory.
+    #[arg(long)]
+    pub stats: bool,
+    /// Render tile I of N (I from 0): the horizontal band of rows
+    /// floor(I H / N) to floor((I + 1) H / N), every column; the EXR's data
+    /// window is the band, its display window the frame (see `assemble`).
+    #[arg(long, value_name = "I/N", value_parser = parse_tile, conflicts_with = "pixel_bounds")]
+    pub tile: Option<(u32, u32)>,
+    /// Skip the render when the output exists, and claim the output
+    /// atomically (OUT.exr.claim, created exclusively) before rendering, so
+    /// that two processes never render the same file and a re-run renders
+    /// only what is missing.
+    #[arg(long)]
+    pub no_overwrite: bool,
+}
+
+impl RenderArgs {
+    /// The pass and the mode these flags ask for on `scene`: the film, the
+    /// samples, the window (`--pixel-bounds` or `--tile`), the AOVs and the
+    /// background; conflicts among them are usage errors.
+    pub fn resolve(&self, scene: &Scene) -> Result<(PassSettings, Mode), CliError> {
+        let mut settings = self.pass.settings(scene, self.spp)?;
+        if let Some((index, count)) = self.tile {
+            if count > settings.height {
+                return Err(CliError::Usage {
+                    flag: "--tile",
+                    message: format!(
+                        "{count} tiles of a frame {} rows high: at most one tile per row",
+                        settings.height
+                    ),
+                });
+            }
+            let (y0, y1) = tile_rows(index, count, settings.height);
+            settings.bounds = PixelBounds { x0: 0, x1: settings.width, y0, y1 };
+        }
+        let mode = self.mode.mode(settings.spp)?;
+        let mut aovs = self.aovs.unwrap_or(Aovs::all(mode.cut().is_some()));
+        aovs.cryptomatte |= self.cryptomatte;
+        if aovs.lightcuts && mode.cut().is_none() {
+            return Err(CliError::Usage {
+                flag: "--aovs",
+                message: "lightcuts (the cut's size and shadow rays) needs a cut mode, not --exact".into(),
+            });
+        }
+        if !self.exposure.is_finite() {
+            return Err(CliError::Usage {
+                flag: "--exposure",
+                message: format!("must be finite, got {}", self.exposure),
+            });
+        }
+        settings.aovs = aovs;
+        settings.transparent = self.transparent;
+        Ok((settings, mode))
+    }
+}
 
 /// How direct light is computed. Without a mode flag, the mode that gave
 /// the smaller error for the time at the samples per pixel asked for (see

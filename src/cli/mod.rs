@@ -28,7 +28,7 @@ pub struct Cli {
 #[derive(Debug, Subcommand)]
 pub enum Command {
     /// Render a scene to an OpenEXR image (beauty + AOVs).
-    Render(render_cmd::RenderArgs),
+    Render(args::RenderArgs),
     /// Compare a render against a reference on luminance (relative error).
     Compare(compare_cmd::CompareArgs),
     /// Speed against accuracy over a list of error thresholds.

@@ -279,7 +279,14 @@ pub fn run(args: &SweepArgs) -> Result<(), CliError> {
         println!("{}", serde_json::to_string_pretty(&rows).expect("plain data serialises"));
         return Ok(());
     }
-    for (spp, record, pixels) in &references {
+    print_table(&references, &rows);
+    println!("wrote {}/sweep.csv, sweep.svg, sweep.png, sweep-p99.svg, sweep-p99.png", args.out.display());
+    Ok(())
+}
+
+/// The references' figures, then a row per render.
+fn print_table(references: &[(u32, ReferenceRecord, f64)], rows: &[SweepRow]) {
+    for (spp, record, pixels) in references {
         println!(
             "exact reference at {spp} spp: {:.3} s, {:.1} shadow rays per pixel",
             record.seconds,
@@ -301,7 +308,7 @@ pub fn run(args: &SweepArgs) -> Result<(), CliError> {
         "max err",
         "> 2%"
     );
-    for r in &rows {
+    for r in rows {
         println!(
             "{:>10} {:>5} {:>9} {:>9.3} {:>7.1}x {:>8.1} {:>7} {:>9.1} {:>8.3}% {:>8.2}% {:>8.2}% {:>7.2}%",
             r.mode.name(),
@@ -318,8 +325,6 @@ pub fn run(args: &SweepArgs) -> Result<(), CliError> {
             100.0 * r.fraction_above_2_percent
         );
     }
-    println!("wrote {}/sweep.csv, sweep.svg, sweep.png, sweep-p99.svg, sweep-p99.png", args.out.display());
-    Ok(())
 }
 
 /// One CSV row per threshold, with the columns of [`SweepRow`].

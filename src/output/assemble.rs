@@ -30,83 +30,16 @@ pub struct Assembled {
 /// absent: its pixels are reported as a gap, with the missing files named.
 pub fn assemble(output: &Path, tiles: &[PathBuf]) -> Result<Assembled, OutputError> {
     let (present, absent): (Vec<&PathBuf>, Vec<&PathBuf>) = tiles.iter().partition(|t| t.exists());
-    let Some(&first_path) = present.first() else {
+    if present.is_empty() {
         let names: Vec<String> = absent.iter().map(|p| p.display().to_string()).collect();
         return Err(OutputError::NoTiles { path: output.to_path_buf(), missing: names.join(", ") });
-    };
+    }
     let tiles: Vec<PathBuf> = present.iter().map(|p| (*p).clone()).collect();
     let images: Vec<ExrImage> = tiles.iter().map(|t| read_exr(t)).collect::<Result<_, _>>()?;
     let first = &images[0];
     let (width, height) = (first.display_width, first.display_height);
-    for (image, path) in images.iter().zip(&tiles).skip(1) {
-        let mismatch = |what: &str, found: String, expected: String| OutputError::TileMismatch {
-            path: path.clone(),
-            reference: first_path.clone(),
-            what: what.to_string(),
-            found,
-            expected,
-        };
-        if (image.display_width, image.display_height) != (width, height) {
-            let size = |i: &ExrImage| format!("{}x{}", i.display_width, i.display_height);
-            return Err(mismatch("the display window", size(image), size(first)));
-        }
-        let names = |i: &ExrImage| i.channels.keys().cloned().collect::<Vec<_>>().join(",");
-        if names(image) != names(first) || image.half != first.half {
-            return Err(mismatch("the channel list", names(image), names(first)));
-        }
-        for key in MUST_AGREE {
-            let value = |i: &ExrImage| i.attributes.get(key).cloned().unwrap_or_else(|| "(absent)".into());
-            if value(image) != value(first) {
-                return Err(mismatch(key, value(image), value(first)));
-            }
-        }
-        // The camera too (a glTF scene's --camera is not in the scene hash).
-        let show = |m: Option<[f32; 16]>| m.map_or_else(|| "(absent)".to_string(), |m| format!("{m:?}"));
-        if image.world_to_camera != first.world_to_camera {
-            return Err(mismatch("worldToCamera", show(image.world_to_camera), show(first.world_to_camera)));
-        }
-        if image.world_to_ndc != first.world_to_ndc {
-            return Err(mismatch("worldToNDC", show(image.world_to_ndc), show(first.world_to_ndc)));
-        }
-    }
-    // Which tile covers each pixel: overlaps are errors, gaps are listed.
-    let mut owner: Vec<Option<usize>> = vec![None; width * height];
-    for (t, image) in images.iter().enumerate() {
-        let (x0, y0) = (image.x0.max(0) as usize, image.y0.max(0) as usize);
-        for y in y0..(y0 + image.height).min(height) {
-            for x in x0..(x0 + image.width).min(width) {
-                if let Some(other) = owner[y * width + x].replace(t) {
-                    let window = |i: &ExrImage| {
-                        [i.x0 as u32, i.x0 as u32 + i.width as u32, i.y0 as u32, i.y0 as u32 + i.height as u32]
-                    };
-                    let (a, b) = (window(image), window(&images[other]));
-                    return Err(OutputError::TileOverlap {
-                        path: tiles[t].clone(),
-                        other: tiles[other].clone(),
-                        window: [a[0].max(b[0]), a[1].min(b[1]), a[2].max(b[2]), a[3].min(b[3])],
-                    });
-                }
-            }
-        }
-    }
-    let gaps = uncovered(&owner, width, height);
-    if !gaps.is_empty() {
-        let pixels = gaps.iter().map(|r| u64::from(r[1] - r[0]) * u64::from(r[3] - r[2])).sum();
-        let shown: Vec<String> =
-            gaps.iter().take(8).map(|r| format!("x {}..{}, y {}..{}", r[0], r[1], r[2], r[3])).collect();
-        let more = if gaps.len() > 8 { format!(" and {} more ranges", gaps.len() - 8) } else { String::new() };
-        let files = if absent.is_empty() {
-            String::new()
-        } else {
-            let names: Vec<String> = absent.iter().map(|p| p.display().to_string()).collect();
-            format!(" (tile files that do not exist: {})", names.join(", "))
-        };
-        return Err(OutputError::TileGaps {
-            path: output.to_path_buf(),
-            pixels,
-            missing: shown.join("; ") + &more + &files,
-        });
-    }
+    check_same_render(&images, &tiles)?;
+    let owner = coverage(output, &images, &tiles, &absent)?;
     // Each frame pixel's tile and its index in that tile's window.
     let sources: Vec<(&ExrImage, usize)> = (0..width * height)
         .map(|i| {
@@ -153,6 +86,94 @@ pub fn assemble(output: &Path, tiles: &[PathBuf]) -> Result<Assembled, OutputErr
     };
     write_exr(output, &film, first.half.contains("R"), &meta)?;
     Ok(Assembled { width: width as u32, height: height as u32, tiles: tiles.len(), render_seconds })
+}
+
+/// Every tile against the first: the same frame size, channels, render
+/// (MUST_AGREE) and camera.
+fn check_same_render(images: &[ExrImage], tiles: &[PathBuf]) -> Result<(), OutputError> {
+    let (first, first_path) = (&images[0], &tiles[0]);
+    let (width, height) = (first.display_width, first.display_height);
+    for (image, path) in images.iter().zip(tiles).skip(1) {
+        let mismatch = |what: &str, found: String, expected: String| OutputError::TileMismatch {
+            path: path.clone(),
+            reference: first_path.clone(),
+            what: what.to_string(),
+            found,
+            expected,
+        };
+        if (image.display_width, image.display_height) != (width, height) {
+            let size = |i: &ExrImage| format!("{}x{}", i.display_width, i.display_height);
+            return Err(mismatch("the display window", size(image), size(first)));
+        }
+        let names = |i: &ExrImage| i.channels.keys().cloned().collect::<Vec<_>>().join(",");
+        if names(image) != names(first) || image.half != first.half {
+            return Err(mismatch("the channel list", names(image), names(first)));
+        }
+        for key in MUST_AGREE {
+            let value = |i: &ExrImage| i.attributes.get(key).cloned().unwrap_or_else(|| "(absent)".into());
+            if value(image) != value(first) {
+                return Err(mismatch(key, value(image), value(first)));
+            }
+        }
+        // The camera too (a glTF scene's --camera is not in the scene hash).
+        let show = |m: Option<[f32; 16]>| m.map_or_else(|| "(absent)".to_string(), |m| format!("{m:?}"));
+        if image.world_to_camera != first.world_to_camera {
+            return Err(mismatch("worldToCamera", show(image.world_to_camera), show(first.world_to_camera)));
+        }
+        if image.world_to_ndc != first.world_to_ndc {
+            return Err(mismatch("worldToNDC", show(image.world_to_ndc), show(first.world_to_ndc)));
+        }
+    }
+    Ok(())
+}
+
+/// Which tile covers each pixel of the frame: overlaps are errors, and so
+/// are gaps, listed by range (with the tile files that do not exist).
+fn coverage(
+    output: &Path,
+    images: &[ExrImage],
+    tiles: &[PathBuf],
+    absent: &[&PathBuf],
+) -> Result<Vec<Option<usize>>, OutputError> {
+    let (width, height) = (images[0].display_width, images[0].display_height);
+    let mut owner: Vec<Option<usize>> = vec![None; width * height];
+    for (t, image) in images.iter().enumerate() {
+        let (x0, y0) = (image.x0.max(0) as usize, image.y0.max(0) as usize);
+        for y in y0..(y0 + image.height).min(height) {
+            for x in x0..(x0 + image.width).min(width) {
+                if let Some(other) = owner[y * width + x].replace(t) {
+                    let window = |i: &ExrImage| {
+                        [i.x0 as u32, i.x0 as u32 + i.width as u32, i.y0 as u32, i.y0 as u32 + i.height as u32]
+                    };
+                    let (a, b) = (window(image), window(&images[other]));
+                    return Err(OutputError::TileOverlap {
+                        path: tiles[t].clone(),
+                        other: tiles[other].clone(),
+                        window: [a[0].max(b[0]), a[1].min(b[1]), a[2].max(b[2]), a[3].min(b[3])],
+                    });
+                }
+            }
+        }
+    }
+    let gaps = uncovered(&owner, width, height);
+    if !gaps.is_empty() {
+        let pixels = gaps.iter().map(|r| u64::from(r[1] - r[0]) * u64::from(r[3] - r[2])).sum();
+        let shown: Vec<String> =
+            gaps.iter().take(8).map(|r| format!("x {}..{}, y {}..{}", r[0], r[1], r[2], r[3])).collect();
+        let more = if gaps.len() > 8 { format!(" and {} more ranges", gaps.len() - 8) } else { String::new() };
+        let files = if absent.is_empty() {
+            String::new()
+        } else {
+            let names: Vec<String> = absent.iter().map(|p| p.display().to_string()).collect();
+            format!(" (tile files that do not exist: {})", names.join(", "))
+        };
+        return Err(OutputError::TileGaps {
+            path: output.to_path_buf(),
+            pixels,
+            missing: shown.join("; ") + &more + &files,
+        });
+    }
+    Ok(owner)
 }
 
 /// The uncovered pixels as rectangles [x0, x1, y0, y1): runs of each row,

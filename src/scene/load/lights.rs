@@ -35,105 +35,122 @@ pub(super) fn lights(
         let light = LightSpec::parse(&raw).map_err(entry_error)?;
         // An emitter's geometry is an object too (Cryptomatte).
         let emitter_name = name.unwrap_or_else(|| format!("lights[{i}]"));
-        match &light {
-            LightSpec::Point(PointSpec { position, intensity }) => {
-                let position = v.point(*position, &field("position"))?;
-                let intensity = v.non_negative_rgb(*intensity, &field("intensity"))?;
-                lights.push(LightSource::Point { position, intensity });
-            }
-            LightSpec::Spot(file::SpotSpec { position, direction, intensity, inner_angle, outer_angle }) => {
-                let position = v.point(*position, &field("position"))?;
-                let direction = v.point(*direction, &field("direction"))?;
-                v.check(direction.length() > 0.0, &field("direction"), || "must not be zero".into())?;
-                let intensity = v.non_negative_rgb(*intensity, &field("intensity"))?;
-                v.check(
-                    outer_angle.is_finite() && *outer_angle > 0.0 && *outer_angle <= 90.0,
-                    &field("outer_angle"),
-                    || format!("must be above 0 and at most 90 degrees, got {outer_angle}"),
-                )?;
-                v.check(
-                    inner_angle.is_finite() && *inner_angle >= 0.0 && inner_angle < outer_angle,
-                    &field("inner_angle"),
-                    || format!("must be at least 0 and below outer_angle ({outer_angle}), got {inner_angle}"),
-                )?;
-                lights.push(LightSource::Spot {
-                    position,
-                    direction,
-                    intensity,
-                    inner_angle_degrees: *inner_angle,
-                    outer_angle_degrees: *outer_angle,
-                });
-            }
-            LightSpec::Grid(GridSpec { corner, u, v: edge_v, count, intensity }) => {
-                let c = v.point(*corner, &field("corner"))?;
-                let (u, w) = (v.point(*u, &field("u"))?, v.point(*edge_v, &field("v"))?);
-                let intensity = v.non_negative_rgb(*intensity, &field("intensity"))?;
-                let total = u64::from(count[0]) * u64::from(count[1]);
-                v.check(count[0] >= 1 && count[1] >= 1 && total <= MAX_GRID_LIGHTS, &field("count"), || {
-                    format!("must be at least [1, 1] and at most {MAX_GRID_LIGHTS} lights in all, got {count:?}")
-                })?;
-                // The lights are convex combinations of the corners: corners
-                // within the limits keep every light within them.
-                for (corner, name) in [(c + u, "u"), (c + w, "v"), (c + u + w, "v")] {
-                    v.check(within_limits(corner), &field(name), || {
-                        format!("the grid reaches {corner}: coordinates must be within +/-{MAX_COORDINATE:e} m")
-                    })?;
-                }
-                lights.push(LightSource::Grid { corner: c, u, v: w, count: *count, intensity });
-            }
-            LightSpec::Area(AreaSpec { corner, u, v: edge_v, radiance, samples }) => {
-                let c = v.point(*corner, &field("corner"))?;
-                let (u, w) = (v.point(*u, &field("u"))?, v.point(*edge_v, &field("v"))?);
-                v.check(u.cross(w).length() > 0.0, &field("v"), || {
-                    "the emitter has zero area (u and v are parallel)".into()
-                })?;
-                let radiance = v.non_negative_rgb(*radiance, &field("radiance"))?;
-                v.sample_count(*samples, &field("samples"))?;
-                let quad = Mesh { name: emitter_name, ..Mesh::quad(c, u, w, 0) };
-                lights.push(add_emitter(meshes, materials, quad, radiance, *samples, i as u64));
-            }
-            LightSpec::AreaMesh(AreaMeshSpec { file, scale, translate, radiance, samples }) => {
-                v.check(scale.is_finite() && *scale > 0.0, &field("scale"), || {
-                    format!("must be finite and > 0, got {scale}")
-                })?;
-                let t = v.point(*translate, &field("translate"))?;
-                let radiance = v.non_negative_rgb(*radiance, &field("radiance"))?;
-                v.sample_count(*samples, &field("samples"))?;
-                let mesh_path = base.join(file);
-                inputs.push(mesh_path.clone());
-                if !mesh_path.is_file() {
-                    return Err(v.error(&field("file"), &format!("mesh file '{}' not found", mesh_path.display())));
-                }
-                let mesh = Mesh { name: emitter_name, ..Mesh::load_obj(&mesh_path, *scale, t, 0)? };
-                if let Some(bad) = mesh.positions.iter().position(|p| !within_limits(*p)) {
-                    return Err(v.error(
-                        &field("file"),
-                        &format!("vertex {bad} is outside +/-{MAX_COORDINATE:e} m after scaling"),
-                    ));
-                }
-                lights.push(add_emitter(meshes, materials, mesh, radiance, *samples, i as u64));
-            }
-            LightSpec::Sun(SunSpec { direction, irradiance, angular_radius, samples }) => {
-                let d = v.point(*direction, &field("direction"))?;
-                v.check(d.length() > 0.0, &field("direction"), || "must not be zero".into())?;
-                let irradiance = v.non_negative_rgb(*irradiance, &field("irradiance"))?;
-                v.check(
-                    angular_radius.is_finite() && (0.0..=45.0).contains(angular_radius),
-                    &field("angular_radius"),
-                    || format!("must be between 0 and 45 degrees, got {angular_radius}"),
-                )?;
-                v.sample_count(*samples, &field("samples"))?;
-                lights.push(LightSource::Sun {
-                    direction: d,
-                    irradiance,
-                    angular_radius_degrees: *angular_radius,
-                    samples: *samples,
-                    seed: i as u64,
-                });
-            }
-        }
+        let source = light_source(v, base, i, &light, emitter_name, meshes, materials, inputs)?;
+        lights.push(source);
     }
     Ok((lights, requested_groups))
+}
+
+/// The light source `lights[i]` describes, validated; an emitter adds its
+/// mesh (named `emitter_name`) and material.
+#[allow(clippy::too_many_arguments)]
+fn light_source(
+    v: &Validator<'_>,
+    base: &Path,
+    i: usize,
+    light: &LightSpec,
+    emitter_name: String,
+    meshes: &mut Vec<Mesh>,
+    materials: &mut Vec<Material>,
+    inputs: &mut Vec<PathBuf>,
+) -> Result<LightSource, SceneError> {
+    let field = |f: &str| format!("lights[{i}].{f}");
+    Ok(match light {
+        LightSpec::Point(PointSpec { position, intensity }) => {
+            let position = v.point(*position, &field("position"))?;
+            let intensity = v.non_negative_rgb(*intensity, &field("intensity"))?;
+            LightSource::Point { position, intensity }
+        }
+        LightSpec::Spot(file::SpotSpec { position, direction, intensity, inner_angle, outer_angle }) => {
+            let position = v.point(*position, &field("position"))?;
+            let direction = v.point(*direction, &field("direction"))?;
+            v.check(direction.length() > 0.0, &field("direction"), || "must not be zero".into())?;
+            let intensity = v.non_negative_rgb(*intensity, &field("intensity"))?;
+            v.check(
+                outer_angle.is_finite() && *outer_angle > 0.0 && *outer_angle <= 90.0,
+                &field("outer_angle"),
+                || format!("must be above 0 and at most 90 degrees, got {outer_angle}"),
+            )?;
+            v.check(
+                inner_angle.is_finite() && *inner_angle >= 0.0 && inner_angle < outer_angle,
+                &field("inner_angle"),
+                || format!("must be at least 0 and below outer_angle ({outer_angle}), got {inner_angle}"),
+            )?;
+            LightSource::Spot {
+                position,
+                direction,
+                intensity,
+                inner_angle_degrees: *inner_angle,
+                outer_angle_degrees: *outer_angle,
+            }
+        }
+        LightSpec::Grid(GridSpec { corner, u, v: edge_v, count, intensity }) => {
+            let c = v.point(*corner, &field("corner"))?;
+            let (u, w) = (v.point(*u, &field("u"))?, v.point(*edge_v, &field("v"))?);
+            let intensity = v.non_negative_rgb(*intensity, &field("intensity"))?;
+            let total = u64::from(count[0]) * u64::from(count[1]);
+            v.check(count[0] >= 1 && count[1] >= 1 && total <= MAX_GRID_LIGHTS, &field("count"), || {
+                format!("must be at least [1, 1] and at most {MAX_GRID_LIGHTS} lights in all, got {count:?}")
+            })?;
+            // The lights are convex combinations of the corners: corners
+            // within the limits keep every light within them.
+            for (corner, name) in [(c + u, "u"), (c + w, "v"), (c + u + w, "v")] {
+                v.check(within_limits(corner), &field(name), || {
+                    format!("the grid reaches {corner}: coordinates must be within +/-{MAX_COORDINATE:e} m")
+                })?;
+            }
+            LightSource::Grid { corner: c, u, v: w, count: *count, intensity }
+        }
+        LightSpec::Area(AreaSpec { corner, u, v: edge_v, radiance, samples }) => {
+            let c = v.point(*corner, &field("corner"))?;
+            let (u, w) = (v.point(*u, &field("u"))?, v.point(*edge_v, &field("v"))?);
+            v.check(u.cross(w).length() > 0.0, &field("v"), || {
+                "the emitter has zero area (u and v are parallel)".into()
+            })?;
+            let radiance = v.non_negative_rgb(*radiance, &field("radiance"))?;
+            v.sample_count(*samples, &field("samples"))?;
+            let quad = Mesh { name: emitter_name, ..Mesh::quad(c, u, w, 0) };
+            add_emitter(meshes, materials, quad, radiance, *samples, i as u64)
+        }
+        LightSpec::AreaMesh(AreaMeshSpec { file, scale, translate, radiance, samples }) => {
+            v.check(scale.is_finite() && *scale > 0.0, &field("scale"), || {
+                format!("must be finite and > 0, got {scale}")
+            })?;
+            let t = v.point(*translate, &field("translate"))?;
+            let radiance = v.non_negative_rgb(*radiance, &field("radiance"))?;
+            v.sample_count(*samples, &field("samples"))?;
+            let mesh_path = base.join(file);
+            inputs.push(mesh_path.clone());
+            if !mesh_path.is_file() {
+                return Err(v.error(&field("file"), &format!("mesh file '{}' not found", mesh_path.display())));
+            }
+            let mesh = Mesh { name: emitter_name, ..Mesh::load_obj(&mesh_path, *scale, t, 0)? };
+            if let Some(bad) = mesh.positions.iter().position(|p| !within_limits(*p)) {
+                return Err(
+                    v.error(&field("file"), &format!("vertex {bad} is outside +/-{MAX_COORDINATE:e} m after scaling"))
+                );
+            }
+            add_emitter(meshes, materials, mesh, radiance, *samples, i as u64)
+        }
+        LightSpec::Sun(SunSpec { direction, irradiance, angular_radius, samples }) => {
+            let d = v.point(*direction, &field("direction"))?;
+            v.check(d.length() > 0.0, &field("direction"), || "must not be zero".into())?;
+            let irradiance = v.non_negative_rgb(*irradiance, &field("irradiance"))?;
+            v.check(
+                angular_radius.is_finite() && (0.0..=45.0).contains(angular_radius),
+                &field("angular_radius"),
+                || format!("must be between 0 and 45 degrees, got {angular_radius}"),
+            )?;
+            v.sample_count(*samples, &field("samples"))?;
+            LightSource::Sun {
+                direction: d,
+                irradiance,
+                angular_radius_degrees: *angular_radius,
+                samples: *samples,
+                seed: i as u64,
+            }
+        }
+    })
 }
 
 /// Adds an area emitter's geometry: visible, black, emitting `radiance` from
