@@ -2,7 +2,10 @@
 //! below it, so every arrow of the architecture points down and no two
 //! modules import each other in a circle. Read off every `crate::` path in
 //! `src/` (use lines and inline paths alike), including the tests inside the
-//! modules.
+//! modules. Inside a layer, no two files import each other in a circle
+//! either (a file may use its parent's items and its children's; siblings
+//! and cousins only one way), no function outside the tests is longer than
+//! 120 lines, and nothing in the repository points at a file outside it.
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
@@ -106,4 +109,278 @@ fn paths_are_read_from_use_lines_and_inline_paths() {
         "use crate::light::{Light, Lights};\nlet x = crate::util::color::luminance(c); // crate::cli\nmy_crate::x;";
     let found = crate_paths(text);
     assert_eq!(found, ["light", "util"].iter().map(|s| s.to_string()).collect());
+}
+
+/// A file's module path inside the crate (`src/cli/args.rs` -> `cli::args`,
+/// `src/scene/gltf/mod.rs` -> `scene::gltf`); None for lib.rs, main.rs and
+/// the test files (`tests.rs`).
+fn module_path(src: &Path, file: &Path) -> Option<Vec<String>> {
+    let relative = file.strip_prefix(src).unwrap();
+    let mut parts: Vec<String> = relative.components().map(|c| c.as_os_str().to_string_lossy().into_owned()).collect();
+    let last = parts.pop()?.strip_suffix(".rs")?.to_string();
+    match last.as_str() {
+        "lib" | "main" if parts.is_empty() => return None,
+        "tests" => return None,
+        "mod" => {}
+        _ => parts.push(last),
+    }
+    Some(parts)
+}
+
+/// The code of a file without its `#[cfg(test)] mod tests { ... }` block
+/// and without `//` comments.
+fn code_outside_tests(text: &str) -> String {
+    let mut out = String::new();
+    let mut lines = text.lines().peekable();
+    while let Some(line) = lines.next() {
+        if line.trim() == "#[cfg(test)]" && lines.peek().is_some_and(|next| next.trim_start().starts_with("mod tests"))
+        {
+            if lines.peek().is_some_and(|next| next.trim_end().ends_with(';')) {
+                lines.next();
+                continue;
+            }
+            break; // the inline test module runs to the end of the file
+        }
+        out.push_str(line.split("//").next().unwrap_or(""));
+        out.push('\n');
+    }
+    out
+}
+
+/// The module paths a file at `from` names: `crate::a::b`, `super::b`,
+/// `super::super::b`, `self::b`, each resolved to the longest prefix that is
+/// a module of `modules`.
+fn referenced_modules(from: &[String], code: &str, modules: &BTreeSet<Vec<String>>) -> BTreeSet<Vec<String>> {
+    let mut found = BTreeSet::new();
+    let ident = |c: char| c.is_alphanumeric() || c == '_';
+    for (at, _) in code.match_indices("::") {
+        // The path around this `::`, from its first segment.
+        let start = code[..at].rfind(|c: char| !(ident(c) || c == ':')).map_or(0, |i| i + 1);
+        if start < at && code[..start].ends_with(|c: char| ident(c) || c == '$') {
+            continue;
+        }
+        let path: String = code[start..].chars().take_while(|&c| ident(c) || c == ':').collect();
+        if !code[start..].starts_with(&path) || start + path.find("::").unwrap_or(0) != at {
+            continue; // not the first `::` of its path
+        }
+        let segments: Vec<&str> = path.split("::").filter(|s| !s.is_empty()).collect();
+        let (mut base, rest): (Vec<String>, &[&str]) = match segments.first() {
+            Some(&"crate") => (Vec::new(), &segments[1..]),
+            Some(&"super") => {
+                let ups = segments.iter().take_while(|s| **s == "super").count();
+                if ups > from.len() {
+                    continue;
+                }
+                (from[..from.len() - ups].to_vec(), &segments[ups..])
+            }
+            Some(&"self") => (from.to_vec(), &segments[1..]),
+            _ => continue,
+        };
+        let mut resolved = base.clone();
+        for segment in rest {
+            base.push((*segment).to_string());
+            if modules.contains(&base) {
+                resolved = base.clone();
+            }
+        }
+        found.insert(resolved);
+    }
+    found
+}
+
+/// The arrows between files of the same layer that are neither ancestor
+/// nor descendant of each other: (from, to) -> the file that draws it.
+fn file_arrows(files: &[(Vec<String>, String)]) -> BTreeMap<(Vec<String>, Vec<String>), ()> {
+    let modules: BTreeSet<Vec<String>> = files.iter().map(|(m, _)| m.clone()).collect();
+    let mut arrows = BTreeMap::new();
+    for (from, code) in files {
+        for to in referenced_modules(from, code, &modules) {
+            let related = to.starts_with(from) || from.starts_with(&to);
+            if !related && to.first() == from.first() {
+                arrows.insert((from.clone(), to), ());
+            }
+        }
+    }
+    arrows
+}
+
+/// Circles among the arrows: each strongly connected set of two or more
+/// modules (Tarjan's algorithm), as module paths.
+fn circles(arrows: &BTreeMap<(Vec<String>, Vec<String>), ()>) -> Vec<Vec<String>> {
+    let nodes: BTreeSet<&Vec<String>> = arrows.keys().flat_map(|(a, b)| [a, b]).collect();
+    let nodes: Vec<&Vec<String>> = nodes.into_iter().collect();
+    let index_of = |n: &Vec<String>| nodes.iter().position(|m| *m == n).unwrap();
+    let mut next: Vec<Vec<usize>> = vec![Vec::new(); nodes.len()];
+    for (a, b) in arrows.keys() {
+        next[index_of(a)].push(index_of(b));
+    }
+    struct Tarjan<'a> {
+        next: &'a [Vec<usize>],
+        index: Vec<Option<usize>>,
+        low: Vec<usize>,
+        stack: Vec<usize>,
+        on_stack: Vec<bool>,
+        counter: usize,
+        found: Vec<Vec<usize>>,
+    }
+    impl Tarjan<'_> {
+        fn visit(&mut self, v: usize) {
+            self.index[v] = Some(self.counter);
+            self.low[v] = self.counter;
+            self.counter += 1;
+            self.stack.push(v);
+            self.on_stack[v] = true;
+            for &w in &self.next[v] {
+                match self.index[w] {
+                    None => {
+                        self.visit(w);
+                        self.low[v] = self.low[v].min(self.low[w]);
+                    }
+                    Some(i) if self.on_stack[w] => self.low[v] = self.low[v].min(i),
+                    Some(_) => {}
+                }
+            }
+            if Some(self.low[v]) == self.index[v] {
+                let mut component = Vec::new();
+                while let Some(w) = self.stack.pop() {
+                    self.on_stack[w] = false;
+                    component.push(w);
+                    if w == v {
+                        break;
+                    }
+                }
+                if component.len() > 1 {
+                    self.found.push(component);
+                }
+            }
+        }
+    }
+    let n = nodes.len();
+    let mut t = Tarjan {
+        next: &next,
+        index: vec![None; n],
+        low: vec![0; n],
+        stack: Vec::new(),
+        on_stack: vec![false; n],
+        counter: 0,
+        found: Vec::new(),
+    };
+    for v in 0..n {
+        if t.index[v].is_none() {
+            t.visit(v);
+        }
+    }
+    t.found.into_iter().map(|c| c.into_iter().map(|i| nodes[i].join("::")).collect()).collect()
+}
+
+/// Every file of `src/` (but the test files) with its module path and its
+/// code outside tests.
+fn files_of(src: &Path) -> Vec<(Vec<String>, String)> {
+    let mut paths = Vec::new();
+    rust_files(src, &mut paths);
+    paths.sort();
+    paths
+        .iter()
+        .filter_map(|p| Some((module_path(src, p)?, code_outside_tests(&std::fs::read_to_string(p).unwrap()))))
+        .collect()
+}
+
+#[test]
+fn no_two_files_of_a_layer_import_each_other_in_a_circle() {
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
+    let files = files_of(&src);
+    let arrows = file_arrows(&files);
+    let found = circles(&arrows);
+    assert!(found.is_empty(), "files of one layer that import each other in a circle: {found:?}");
+    // The check sees the real arrows between siblings.
+    let arrow = |a: &str, b: &str| {
+        let split = |s: &str| s.split("::").map(String::from).collect::<Vec<_>>();
+        arrows.contains_key(&(split(a), split(b)))
+    };
+    assert!(arrow("cli::render_cmd", "cli::args") && arrow("lightcut::stochastic", "lightcut::bounds"));
+}
+
+#[test]
+fn a_circle_of_siblings_is_found_and_parents_and_children_are_not_one() {
+    let m = |s: &str| s.split("::").map(String::from).collect::<Vec<_>>();
+    let files = vec![
+        (m("cli"), "mod a; mod b; use self::a::X;".to_string()),
+        (m("cli::a"), "use super::b::Y; use super::CliError;".to_string()),
+        (m("cli::b"), "fn f() { crate::cli::a::g(); }".to_string()),
+        (m("cli::c"), "use super::a::Z;".to_string()),
+    ];
+    let found = circles(&file_arrows(&files));
+    assert_eq!(found.len(), 1, "{found:?}");
+    let mut circle = found[0].clone();
+    circle.sort();
+    assert_eq!(circle, ["cli::a", "cli::b"]);
+}
+
+/// Every function outside the tests with its length in lines, from its
+/// `fn` line to the `}` at the same indentation.
+fn function_lengths(src: &Path) -> Vec<(usize, String)> {
+    let mut paths = Vec::new();
+    rust_files(src, &mut paths);
+    let mut found = Vec::new();
+    for path in paths.iter().filter(|p| module_path(src, p).is_some()) {
+        let text = std::fs::read_to_string(path).unwrap();
+        let code = code_outside_tests(&text);
+        let lines: Vec<&str> = code.lines().collect();
+        for (i, line) in lines.iter().enumerate() {
+            let trimmed = line.trim_start();
+            let indent = &line[..line.len() - trimmed.len()];
+            let declaration = trimmed
+                .strip_prefix("pub ")
+                .or_else(|| trimmed.strip_prefix("pub(crate) "))
+                .or_else(|| trimmed.strip_prefix("pub(super) "))
+                .unwrap_or(trimmed);
+            let declaration = declaration.strip_prefix("const ").unwrap_or(declaration);
+            if !declaration.starts_with("fn ") || line.trim_end().ends_with(';') {
+                continue;
+            }
+            let closing = format!("{indent}}}");
+            if let Some(end) = lines[i + 1..].iter().position(|l| *l == closing) {
+                let name: String = declaration[3..].chars().take_while(|c| c.is_alphanumeric() || *c == '_').collect();
+                found.push((end + 2, format!("{}: {name}", path.strip_prefix(src).unwrap().display())));
+            }
+        }
+    }
+    found
+}
+
+#[test]
+fn no_function_outside_the_tests_is_longer_than_120_lines() {
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
+    let lengths = function_lengths(&src);
+    assert!(lengths.len() > 300, "the functions are found: {}", lengths.len());
+    let long: Vec<_> = lengths.iter().filter(|(n, _)| *n > 120).collect();
+    assert!(long.is_empty(), "functions over 120 lines: {long:?}");
+}
+
+#[test]
+fn nothing_in_the_repository_points_outside_it() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let output =
+        std::process::Command::new("git").arg("-C").arg(root).args(["ls-files", "-z"]).output().expect("run git");
+    assert!(output.status.success(), "git ls-files (ci/setup.sh --test installs git)");
+    // Spelled in pieces, so that this file does not match itself.
+    let patterns = [
+        ["..", "/shared"].concat(),
+        ["/wo", "rk/"].concat(),
+        ["/ho", "me/"].concat(),
+        ["/ro", "ot/"].concat(),
+        ["/Us", "ers/"].concat(),
+    ];
+    let mut found = Vec::new();
+    let files: Vec<&str> = std::str::from_utf8(&output.stdout).unwrap().split('\0').filter(|f| !f.is_empty()).collect();
+    assert!(files.len() > 100, "the repository's files are listed: {}", files.len());
+    for file in files {
+        let Ok(text) = std::fs::read_to_string(root.join(file)) else { continue }; // binary
+        for (n, line) in text.lines().enumerate() {
+            if let Some(p) = patterns.iter().find(|p| line.contains(p.as_str())) {
+                found.push(format!("{file}:{}: {p}", n + 1));
+            }
+        }
+    }
+    assert!(found.is_empty(), "references to files outside the repository:\n{}", found.join("\n"));
 }

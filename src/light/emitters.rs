@@ -1,6 +1,6 @@
-//! Emitters turned into point lights ([LC05] sec. 5; ../shared/LIGHTCUTS.md
-//! section 7): area lights into oriented lights, environments and the sun
-//! into directional lights. Stratified and deterministic for a seed.
+//! Emitters turned into point lights ([LC05]; docs/design.md §6): area
+//! lights into oriented lights, environments and the sun into directional
+//! lights. Stratified and deterministic for a seed.
 
 use std::f32::consts::PI;
 
@@ -129,7 +129,7 @@ pub fn sample_sun(
 /// The environment as `samples` directional lights: stratified importance
 /// sampling on luminance times each pixel's solid angle, each with
 /// irradiance L(w) / (samples * pdf(w)), so their sum estimates the
-/// environment's illumination ([LC05] sec. 5).
+/// environment's illumination (docs/design.md §6.2).
 #[must_use]
 pub fn sample_environment(map: &EnvironmentMap, samples: usize, seed: u64) -> Vec<DirectionalLight> {
     if samples == 0 {

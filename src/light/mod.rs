@@ -1,9 +1,9 @@
 //! Light kinds and the lights of a scene. Every light reduces to a point
-//! light of one of three kinds, and each kind gets its own light tree
-//! ([LC05] sec. 4.1, ../shared/LIGHTCUTS.md section 2); a scene builds trees
+//! light of one of four kinds, and each kind gets its own light tree
+//! ([LC05]; docs/design.md §5.2); a scene builds trees
 //! only for the kinds it has. `Lights::from_scene` turns the scene's light
 //! sources (point lights, grids, area emitters, the sun, the environment)
-//! into lights of these kinds ([LC05] sec. 5, `emitters`).
+//! into lights of these kinds (docs/design.md §6, `emitters`).
 
 use glam::Vec3;
 
@@ -11,7 +11,7 @@ pub mod emitters;
 
 use crate::scene::{LightSource, Scene};
 
-/// The three light kinds of [LC05], each with its own tree.
+/// The light kinds, each with its own tree: [LC05]'s three, and spots.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum LightKind {
     /// Point lights radiating equally in all directions.

@@ -1,5 +1,5 @@
 //! What the builders merge: a cluster's bounds, cone, intensity and size.
-//! The size metric is [LC05] sec. 4.1 (../shared/LIGHTCUTS.md section 6):
+//! The size metric is [LC05]'s (docs/design.md §7.2):
 //! size(C) = I_C * (alpha_C^2 + c^2 (1 - cos beta_C)^2).
 
 use glam::Vec3;

@@ -1,5 +1,5 @@
 //! The exact greedy agglomerative build: always merge the pair whose union has
-//! the smallest cluster size ([LC05] sec. 4.1). O(n^2) time with cached
+//! the smallest cluster size ([LC05]; docs/design.md §7.2). O(n^2) time with cached
 //! nearest neighbours; for tests and the quality benchmark only.
 
 use super::cluster::Cluster;

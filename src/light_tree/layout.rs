@@ -9,7 +9,7 @@
 //! Boxes are stored as centre and half-extent, widened so that
 //! [c - h, c + h] contains the cluster's box in f32 arithmetic; cones as an
 //! axis with the cosine and sine of the half-angle, so the bounds need no
-//! inverse trigonometric functions ([LC05] sec. 4.2, pbrt-v4's
+//! inverse trigonometric functions (docs/design.md §7.4, pbrt-v4's
 //! `CompactLightBounds`).
 
 use glam::Vec3;

@@ -1,4 +1,4 @@
-//! The light tree ([LC05] sec. 4.1): a binary tree per light type whose leaves
+//! The light tree ([LC05]; docs/design.md §7): a binary tree per light type whose leaves
 //! are lights and whose internal nodes are clusters with summed intensity,
 //! bounds, and a representative light chosen with probability proportional
 //! to intensity. Stored as flat arrays; a node stores only what its type needs.
@@ -340,7 +340,7 @@ impl TreeBuilder {
     /// probability w_A / (w_A + w_B), drawn from a stream keyed by (seed,
     /// node index): node indices are assigned in a fixed order, so the choice
     /// does not depend on thread timing. By induction every light is its
-    /// node's representative with probability w_light / w_node ([LC05] sec. 4.1).
+    /// node's representative with probability w_light / w_node ([LC05]; docs/design.md §7.1).
     fn merge(&mut self, a: &Cluster, b: &Cluster) -> Cluster {
         let index = self.tree.nodes.len() as u32;
         let node = NodeRef::internal(index);

@@ -1,6 +1,6 @@
-//! Upper bounds of a cluster's error at a shading point ([LC05] sec. 4.2;
-//! ../shared/LIGHTCUTS.md sections 2 to 4): M_ub * G_ub * I_C, compared on
-//! luminance, for both children of a node at once (f32x4 lanes 0 and 1).
+//! Upper bounds of a cluster's error at a shading point ([LC05];
+//! docs/design.md §8): M_ub * G_ub * I_C, compared on luminance, for both
+//! children of a node at once (f32x4 lanes 0 and 1).
 //!
 //! Everything here is f32 and free of inverse trigonometric functions: the
 //! widened cone uses cos(theta - beta) = cos theta cos beta + sin theta
@@ -109,7 +109,7 @@ impl Frame {
     }
 
     /// Upper bound of cos(angle between the axis and v) over v in the box of
-    /// centre `c` and half-extent `h` (LIGHTCUTS.md section 3): along a unit
+    /// centre `c` and half-extent `h` (docs/design.md §8.2): along a unit
     /// axis e the box spans e.c -/+ |e|.h, which gives the box of the
     /// rotated box; then w / sqrt(u^2 + v^2 + w^2) at the largest w and the
     /// smallest |u|, |v|. 0 where the whole box is behind the plane.

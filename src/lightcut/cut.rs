@@ -1,4 +1,4 @@
-//! The cut per shading point ([LC05] sec. 4; ../shared/LIGHTCUTS.md section 5).
+//! The bounded cut per shading point ([LC05]; docs/design.md §9).
 //!
 //! Start from the roots of the trees present; keep the cut in a max-heap on
 //! error bound; replace the node with the largest bound by its children while

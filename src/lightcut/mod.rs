@@ -1,4 +1,4 @@
-//! Lightcuts ([LC05] sec. 4): per shading point, a cut through the light
+//! Lightcuts ([LC05]): per shading point, a cut through the light
 //! trees whose every cluster's error bound is at most `error` times the total
 //! estimate, or `max_cut` nodes (docs/design.md, "The bounded cut").
 //! `bounds` holds the provable upper bounds of the material and geometric
@@ -33,7 +33,13 @@ pub const EXHAUSTIVE_LIGHTS: usize = 200;
 /// trees of at most [`EXHAUSTIVE_LIGHTS`] lights are kept as lists.
 #[must_use]
 pub fn build_trees(groups: &[Lights], seed: u64) -> LightTrees {
-    LightTrees::build_groups(groups, seed, EXHAUSTIVE_LIGHTS)
+    build_trees_with(groups, seed, &CutSettings::default())
+}
+
+/// [`build_trees`] with `settings`' switch (`exhaustive_lights`).
+#[must_use]
+pub fn build_trees_with(groups: &[Lights], seed: u64, settings: &CutSettings) -> LightTrees {
+    LightTrees::build_groups(groups, seed, settings.exhaustive_lights)
 }
 
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -44,11 +50,15 @@ pub struct CutSettings {
     pub max_cut: usize,
     /// What the threshold is relative to when the scene has light groups.
     pub group_error: GroupError,
+    /// Trees of at most this many lights are evaluated light by light
+    /// ([`EXHAUSTIVE_LIGHTS`]; `lightcuts bench switch` sets it to measure
+    /// the break-even).
+    pub exhaustive_lights: usize,
 }
 
 impl Default for CutSettings {
     fn default() -> Self {
-        Self { error: 0.02, max_cut: 1000, group_error: GroupError::Group }
+        Self { error: 0.02, max_cut: 1000, group_error: GroupError::Group, exhaustive_lights: EXHAUSTIVE_LIGHTS }
     }
 }
 

@@ -1,5 +1,5 @@
 //! Stochastic lightcuts ([SLC19] Yuksel, "Stochastic Lightcuts", HPG 2019;
-//! docs/stochastic-lightcuts.md has the mathematics): per sample, a cut is
+//! docs/design.md §10 has the mathematics): per sample, a cut is
 //! chosen from the bounds alone (no shadow ray), then each cut node's light
 //! is drawn by walking down its subtree, taking each child with probability
 //! proportional to its importance (its bound: an upper bound of its
@@ -30,7 +30,12 @@ use crate::util::sampling::Rng;
 
 /// The stochastic mode's default cut settings (chosen by measurement: see
 /// the README's "Stochastic lightcuts" section).
-pub const STOCHASTIC_DEFAULTS: CutSettings = CutSettings { error: 0.05, max_cut: 1000, group_error: GroupError::Group };
+pub const STOCHASTIC_DEFAULTS: CutSettings = CutSettings {
+    error: 0.05,
+    max_cut: 1000,
+    group_error: GroupError::Group,
+    exhaustive_lights: super::EXHAUSTIVE_LIGHTS,
+};
 
 /// From this many samples per pixel on, a render without a mode flag is
 /// stochastic (measured: see the README).

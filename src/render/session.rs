@@ -152,7 +152,8 @@ impl<'s> Session<'s> {
             lights = std::borrow::Cow::Owned(vec![all]);
         }
         let vpl_time = start.elapsed();
-        let trees = mode.cut().map(|_| self.pool.install(|| crate::lightcut::build_trees(&lights, settings.seed)));
+        let trees =
+            mode.cut().map(|cut| self.pool.install(|| crate::lightcut::build_trees_with(&lights, settings.seed, &cut)));
         let direct = match (&trees, mode) {
             (Some(trees), Mode::Bounded(settings)) => DirectLighting::Lightcuts { trees, settings },
             (Some(trees), Mode::Stochastic(settings)) => DirectLighting::StochasticLightcuts { trees, settings },

@@ -1,4 +1,4 @@
-//! Indirect light by instant radiosity (Keller 1997; [LC05] sec. 5): light
+//! Indirect light by instant radiosity (Keller 1997; [LC05]; docs/design.md §6.4): light
 //! paths from every emitter leave virtual point lights (oriented lights) at
 //! diffuse hits, carrying the reflected power.
 //!

@@ -1,6 +1,6 @@
 //! Materials: diffuse (constant or textured albedo) plus Phong specular, plus
-//! a perfect mirror layer. The BRDF is the one [LC05] and the 2010 report use,
-//! and whose bound is in ../shared/LIGHTCUTS.md section 4.
+//! a perfect mirror layer: [LC05]'s model (docs/design.md §5.3; its bound
+//! over a cluster, §8.3).
 
 use std::f32::consts::PI;
 

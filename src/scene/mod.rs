@@ -47,7 +47,7 @@ pub struct Film {
 }
 
 /// A light as the scene file describes it, validated. `light::Lights::from_scene`
-/// turns each into point lights of one kind ([LC05] sec. 5).
+/// turns each into point lights of one kind ([LC05]; docs/design.md §6).
 #[derive(Debug, Clone, PartialEq)]
 pub enum LightSource {
     /// One omni light of `intensity` W/sr.

@@ -7,6 +7,7 @@ use clap::{Args, Subcommand, ValueEnum};
 use serde::Serialize;
 
 pub mod rays;
+pub mod switch;
 pub mod tree;
 
 use super::CliError;
@@ -25,6 +26,24 @@ pub enum Bench {
     Tree(TreeArgs),
     /// Shadow-ray throughput: Embree alone, the lightcuts pass, the exact pass.
     Rays(RaysArgs),
+    /// Where a cut starts to pay: the exact render against the bounded cut
+    /// with every tree cut, on grids of more and more lights.
+    Switch(SwitchArgs),
+}
+
+#[derive(Debug, Args)]
+pub struct SwitchArgs {
+    /// Light counts (each rounded to a square grid), comma-separated.
+    #[arg(long, value_delimiter = ',', default_values_t = [25usize, 49, 100, 144, 196, 256, 324, 400])]
+    pub lights: Vec<usize>,
+    /// Worker threads (0: one per CPU).
+    #[arg(long, default_value_t = 0)]
+    pub threads: usize,
+    /// Renders per mode and count; the fastest is reported.
+    #[arg(long, default_value_t = 3)]
+    pub repeat: usize,
+    #[arg(long)]
+    pub json: bool,
 }
 
 #[derive(Debug, Args)]
@@ -99,7 +118,36 @@ pub fn run(args: &BenchArgs) -> Result<(), CliError> {
     match &args.bench {
         Bench::Tree(t) => tree(t),
         Bench::Rays(r) => rays(r),
+        Bench::Switch(s) => switch(s),
     }
+}
+
+fn switch(args: &SwitchArgs) -> Result<(), CliError> {
+    if args.lights.iter().any(|&n| n == 0 || n > 1 << 20) {
+        return Err(CliError::Usage { flag: "--lights", message: "every count must be between 1 and 2^20".into() });
+    }
+    let figures = switch::measure(&args.lights, args.threads, args.repeat)?;
+    if args.json {
+        println!("{}", serde_json::to_string_pretty(&figures).expect("plain data serialises"));
+        return Ok(());
+    }
+    println!(
+        "{:>7} {:>10} {:>10} {:>7} {:>8} {:>12} {:>12}",
+        "lights", "exact (s)", "cut (s)", "ratio", "avg cut", "exact rays", "cut rays"
+    );
+    for f in &figures {
+        println!(
+            "{:>7} {:>10.3} {:>10.3} {:>7.2} {:>8.1} {:>12.1} {:>12.1}",
+            f.lights,
+            f.exact_seconds,
+            f.cut_seconds,
+            f.ratio,
+            f.average_cut,
+            f.exact_shadow_rays_per_pixel,
+            f.cut_shadow_rays_per_pixel
+        );
+    }
+    Ok(())
 }
 
 fn rays(args: &RaysArgs) -> Result<(), CliError> {
