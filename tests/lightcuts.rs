@@ -84,24 +84,7 @@ fn known_answer_holds_in_lightcuts_mode() {
 fn lightcuts_images_are_identical_for_any_thread_count_and_window() {
     let dir = TempDir::new("lc-threads");
     let scene = dir.write("s.toml", &small_scene(16));
-    let (a, b, w) = (dir.path("a.exr"), dir.path("b.exr"), dir.path("w.exr"));
-    lightcuts_ok(&["render", s(&scene), "-o", s(&a), "--quiet", "--threads", "1"]);
-    lightcuts_ok(&["render", s(&scene), "-o", s(&b), "--quiet", "--threads", "2"]);
-    lightcuts_ok(&["render", s(&scene), "-o", s(&w), "--quiet", "--threads", "2", "--pixel-bounds", "5,50,9,40"]);
-    let (a, b, w) = (read_exr(&a).unwrap(), read_exr(&b).unwrap(), read_exr(&w).unwrap());
-    for name in a.channels.keys() {
-        let (x, y) = (&a.channels[name], &b.channels[name]);
-        assert!(x.iter().zip(y).all(|(p, q)| p.to_bits() == q.to_bits()), "{name}: 1 vs 2 threads");
-        for yy in 0..31 {
-            for xx in 0..45 {
-                assert_eq!(
-                    x[(yy + 9) * 96 + xx + 5].to_bits(),
-                    w.channels[name][yy * 45 + xx].to_bits(),
-                    "{name} window"
-                );
-            }
-        }
-    }
+    assert_same_bits_for_any_threads_and_window(&dir, &scene, 96, &["--bounded"]);
 }
 
 #[test]

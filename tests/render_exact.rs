@@ -105,43 +105,10 @@ fn pixels(image: &ExrImage, name: &str) -> Vec<u32> {
 }
 
 #[test]
-fn any_thread_count_gives_the_same_bits() {
+fn any_thread_count_and_window_give_the_same_bits() {
     let dir = TempDir::new("threads");
     let scene = dir.write("small.toml", &small_scene(4));
-    let mut images = Vec::new();
-    for threads in ["1", "2", "3"] {
-        let out = dir.path(&format!("t{threads}.exr"));
-        lightcuts_ok(&["render", s(&scene), "-o", s(&out), "--exact", "--quiet", "--threads", threads, "--spp", "2"]);
-        images.push(read_exr(&out).unwrap());
-    }
-    for name in images[0].channels.keys() {
-        assert_eq!(pixels(&images[0], name), pixels(&images[1], name), "{name}: 1 vs 2 threads");
-        assert_eq!(pixels(&images[0], name), pixels(&images[2], name), "{name}: 1 vs 3 threads");
-    }
-}
-
-#[test]
-fn a_pixel_window_matches_the_same_pixels_of_the_full_frame() {
-    let dir = TempDir::new("window");
-    let scene = dir.write("small.toml", &small_scene(3));
-    let (full, part) = (dir.path("full.exr"), dir.path("part.exr"));
-    lightcuts_ok(&["render", s(&scene), "-o", s(&full), "--exact", "--quiet"]);
-    // A window that does not align with the 16-pixel tiles.
-    lightcuts_ok(&["render", s(&scene), "-o", s(&part), "--exact", "--quiet", "--pixel-bounds", "13,61,7,50"]);
-    let (full, part) = (read_exr(&full).unwrap(), read_exr(&part).unwrap());
-    assert_eq!((part.x0, part.y0, part.width, part.height), (13, 7, 48, 43));
-    assert_eq!((part.display_width, part.display_height), (96, 72));
-    for name in full.channels.keys() {
-        let f = &full.channels[name];
-        let p = &part.channels[name];
-        for y in 0..43 {
-            for x in 0..48 {
-                let a = f[(y + 7) * 96 + x + 13];
-                let b = p[y * 48 + x];
-                assert_eq!(a.to_bits(), b.to_bits(), "{name} at ({}, {})", x + 13, y + 7);
-            }
-        }
-    }
+    assert_same_bits_for_any_threads_and_window(&dir, &scene, 96, &["--exact", "--spp", "2"]);
 }
 
 #[test]

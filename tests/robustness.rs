@@ -22,43 +22,19 @@ fn tolerance(mode: &[&str]) -> f64 {
 
 /// A floor and a sphere at `scale`, lights given as TOML.
 fn scene(scale: f64, lights: &str) -> String {
-    let s = |v: f64| v * scale;
-    format!(
-        r#"
-[film]
-width = 40
-height = 30
-[camera]
-eye = [0, {}, {}]
-look_at = [0, {}, 0]
-fov_y = 50
-[materials.floor]
-albedo = [0.7, 0.7, 0.7]
-specular = [0.2, 0.2, 0.2]
-exponent = 20
-[[shapes]]
-type = "quad"
-corner = [{}, 0, {}]
-u = [{}, 0, 0]
-v = [0, 0, {}]
-material = "floor"
-[[shapes]]
-type = "sphere"
-center = [0, {}, 0]
-radius = {}
-material = "floor"
-{lights}
-"#,
-        s(3.0),
-        s(6.0),
-        s(0.5),
-        s(-5.0),
-        s(5.0),
-        s(10.0),
-        s(-10.0),
-        s(0.8),
-        s(0.8)
-    )
+    scene_seen_from([0.0, 3.0, 6.0], scale, lights)
+}
+
+/// [`scene`] with the eye at `eye` (before scaling).
+fn scene_seen_from(eye: [f64; 3], scale: f64, lights: &str) -> String {
+    let s = |v: [f64; 3]| v.map(|x| x * scale);
+    SceneText::new(40, 30)
+        .camera(s(eye), s([0.0, 0.5, 0.0]), 50.0)
+        .material("floor", [0.7, 0.7, 0.7], "specular = [0.2, 0.2, 0.2]\nexponent = 20\n")
+        .floor(0.0, 5.0 * scale, "floor")
+        .sphere(s([0.0, 0.8, 0.0]), 0.8 * scale, "floor")
+        .raw(lights)
+        .toml()
 }
 
 fn grid(scale: f64, n: u32, intensity: f64) -> String {
@@ -235,7 +211,7 @@ fn error_and_cut_extremes_terminate_with_finite_images() {
 #[test]
 fn a_camera_inside_geometry() {
     let dir = TempDir::new("inside");
-    let text = scene(1.0, &grid(1.0, 16, 0.01)).replace("eye = [0, 3, 6]", "eye = [0.1, 0.6, 0.2]");
+    let text = scene_seen_from([0.1, 0.6, 0.2], 1.0, &grid(1.0, 16, 0.01));
     for mode in MODES {
         let image = render(&dir, "inside", &text, mode);
         assert!(image.channels["A"].iter().all(|&a| a == 1.0), "every ray hits the inside of the sphere");

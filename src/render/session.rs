@@ -207,31 +207,17 @@ impl<'s> Session<'s> {
 mod tests {
     use super::*;
     use crate::render::{Aovs, PixelBounds};
+    use crate::scene::builder::SceneText;
 
     /// 2 x 2 pixels, all on a floor seen from above; `lights` TOML appended.
     fn scene(lights: &str) -> Scene {
-        let text = format!(
-            r#"
-[film]
-width = 2
-height = 2
-[camera]
-eye = [0, 1, 0]
-look_at = [0, 0, 0]
-up = [0, 0, -1]
-fov_y = 10
-[materials.floor]
-albedo = [0.5, 0.5, 0.5]
-[[shapes]]
-type = "quad"
-corner = [-5, 0, 5]
-u = [10, 0, 0]
-v = [0, 0, -10]
-material = "floor"
-{lights}
-"#
-        );
-        Scene::from_spec(std::path::Path::new("stats.toml"), toml::from_str(&text).unwrap()).unwrap()
+        SceneText::new(2, 2)
+            .raw("[camera]\neye = [0, 1, 0]\nlook_at = [0, 0, 0]\nup = [0, 0, -1]\nfov_y = 10\n")
+            .material("floor", [0.5, 0.5, 0.5], "")
+            .floor(0.0, 5.0, "floor")
+            .raw(lights)
+            .load(std::path::Path::new("stats.toml"))
+            .unwrap()
     }
 
     /// 256 lights at one point over the floor.

@@ -4,6 +4,7 @@
 //! the scene file's directory. The light sources are descriptions: the
 //! `light` layer above turns them into the point lights the trees cluster.
 
+pub mod builder;
 pub mod camera;
 pub mod environment;
 pub mod error;

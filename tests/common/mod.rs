@@ -5,6 +5,7 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
 pub use lightcuts::output::read::{read_exr, ExrImage};
+pub use lightcuts::scene::builder::{floor_spheres_grid, SceneText};
 
 pub mod gltf;
 
@@ -69,59 +70,10 @@ pub fn scenes() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes")
 }
 
-/// A small scene: floor, two spheres, a grid of point lights.
+/// A small scene: floor, two spheres, a grid of point lights (the
+/// library's [`floor_spheres_grid`], as text).
 pub fn small_scene(lights_per_side: u32) -> String {
-    format!(
-        r#"
-[film]
-width = 96
-height = 72
-
-[camera]
-eye = [0, 3, 6]
-look_at = [0, 0.5, 0]
-fov_y = 45
-
-[materials.floor]
-albedo = [0.7, 0.7, 0.7]
-
-[materials.shiny]
-albedo = [0.6, 0.2, 0.1]
-specular = [0.3, 0.3, 0.3]
-exponent = 30
-
-[materials.mirror]
-albedo = [0.05, 0.05, 0.05]
-mirror = [0.8, 0.8, 0.8]
-
-[[shapes]]
-type = "quad"
-corner = [-5, 0, 5]
-u = [10, 0, 0]
-v = [0, 0, -10]
-material = "floor"
-
-[[shapes]]
-type = "sphere"
-center = [-0.8, 0.7, 0]
-radius = 0.7
-material = "shiny"
-
-[[shapes]]
-type = "sphere"
-center = [0.9, 0.5, 0.4]
-radius = 0.5
-material = "mirror"
-
-[[lights]]
-type = "grid"
-corner = [-2, 3, -2]
-u = [4, 0, 0]
-v = [0, 0, 4]
-count = [{lights_per_side}, {lights_per_side}]
-intensity = [1.0, 0.9, 0.8]
-"#
-    )
+    floor_spheres_grid(lights_per_side).toml()
 }
 
 /// Lights of the known-answer scene: on a sphere of this radius (metres)
@@ -147,26 +99,12 @@ pub fn inside_sphere_scene(width: u32, height: u32) -> String {
 /// The diffuse sphere of radius 2 (albedo 0.5) seen from inside, with
 /// `lights` (TOML) inside it.
 pub fn inside_sphere_with(width: u32, height: u32, lights: &str) -> String {
-    format!(
-        r#"
-[film]
-width = {width}
-height = {height}
-[camera]
-eye = [0.2, 0.1, 0]
-look_at = [1, 0, 0.4]
-fov_y = 60
-[materials.inner]
-albedo = [0.5, 0.5, 0.5]
-[[shapes]]
-type = "sphere"
-center = [0, 0, 0]
-radius = 2
-segments = 512
-material = "inner"
-{lights}
-"#
-    )
+    SceneText::new(width, height)
+        .camera([0.2, 0.1, 0.0], [1.0, 0.0, 0.4], 60.0)
+        .material("inner", [0.5, 0.5, 0.5], "")
+        .raw("[[shapes]]\ntype = \"sphere\"\ncenter = [0, 0, 0]\nradius = 2\nsegments = 512\nmaterial = \"inner\"\n")
+        .raw(lights)
+        .toml()
 }
 
 /// `count` point lights on a Fibonacci lattice over the sphere of `radius`
@@ -229,4 +167,35 @@ pub fn mean_relative_error(test: &ExrImage, reference: &ExrImage) -> f64 {
     let errors: Vec<f64> =
         t.iter().zip(&r).filter(|(_, &r)| r > 1e-3 * mean).map(|(&t, &r)| (t - r).abs() / r).collect();
     errors.iter().sum::<f64>() / errors.len() as f64
+}
+
+/// Renders `scene` (a `width`-pixel-wide film) with `args` on one thread,
+/// on two and on three, and on the window x 13..61, y 7..50 (which does not
+/// align with the 16-pixel tiles), and asserts that every channel of every
+/// render has the same bits as the one-thread render's pixels.
+pub fn assert_same_bits_for_any_threads_and_window(dir: &TempDir, scene: &Path, width: usize, args: &[&str]) {
+    let render = |name: &str, more: &[&str]| {
+        let out = dir.path(name);
+        lightcuts_ok(&[&["render", s(scene), "-o", s(&out), "--quiet"][..], args, more].concat());
+        read_exr(&out).unwrap()
+    };
+    let one = render("threads1.exr", &["--threads", "1"]);
+    let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+    for threads in ["2", "3"] {
+        let other = render(&format!("threads{threads}.exr"), &["--threads", threads]);
+        assert_eq!(one.channels.keys().collect::<Vec<_>>(), other.channels.keys().collect::<Vec<_>>());
+        for (name, values) in &one.channels {
+            assert_eq!(bits(values), bits(&other.channels[name]), "{name}: 1 vs {threads} threads");
+        }
+    }
+    let window = render("window.exr", &["--pixel-bounds", "13,61,7,50"]);
+    assert_eq!((window.x0, window.y0, window.width, window.height), (13, 7, 48, 43));
+    for (name, values) in &one.channels {
+        for y in 0..43 {
+            for x in 0..48 {
+                let (a, b) = (values[(y + 7) * width + x + 13], window.channels[name][y * 48 + x]);
+                assert_eq!(a.to_bits(), b.to_bits(), "{name} at ({}, {})", x + 13, y + 7);
+            }
+        }
+    }
 }

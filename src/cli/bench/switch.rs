@@ -9,6 +9,7 @@ use serde::Serialize;
 use crate::lightcut::CutSettings;
 use crate::render::session::{Mode, Session, SessionError};
 use crate::render::{PassSettings, PixelBounds};
+use crate::scene::builder::SceneText;
 use crate::scene::{Scene, SceneError};
 
 /// One light count's figures.
@@ -28,44 +29,14 @@ pub struct SwitchFigure {
 /// A floor and a sphere under a `side` x `side` grid of point lights, seen
 /// from above at an angle: every pixel sees a lit surface.
 fn scene(side: u32) -> Result<Scene, SceneError> {
-    let text = format!(
-        r#"
-[film]
-width = 160
-height = 120
-[camera]
-eye = [0, 3, 6]
-look_at = [0, 0.5, 0]
-fov_y = 50
-[materials.floor]
-albedo = [0.7, 0.7, 0.7]
-[materials.glossy]
-albedo = [0.5, 0.3, 0.2]
-specular = [0.2, 0.2, 0.2]
-exponent = 30
-[[shapes]]
-type = "quad"
-corner = [-6, 0, 6]
-u = [12, 0, 0]
-v = [0, 0, -12]
-material = "floor"
-[[shapes]]
-type = "sphere"
-center = [0, 0.8, 0]
-radius = 0.8
-material = "glossy"
-[[lights]]
-type = "grid"
-corner = [-3, 3, -3]
-u = [6, 0, 0]
-v = [0, 0, 6]
-count = [{side}, {side}]
-intensity = [0.02, 0.02, 0.02]
-"#
-    );
-    let path = std::path::Path::new("bench-switch.toml");
-    let spec = toml::from_str(&text).map_err(|e| SceneError::new(path, "file", e.to_string()))?;
-    Scene::from_spec(path, spec)
+    SceneText::new(160, 120)
+        .camera([0.0, 3.0, 6.0], [0.0, 0.5, 0.0], 50.0)
+        .material("floor", [0.7, 0.7, 0.7], "")
+        .material("glossy", [0.5, 0.3, 0.2], "specular = [0.2, 0.2, 0.2]\nexponent = 30\n")
+        .floor(0.0, 6.0, "floor")
+        .sphere([0.0, 0.8, 0.0], 0.8, "glossy")
+        .grid([-3.0, 3.0, -3.0], [6.0, 0.0, 0.0], [0.0, 0.0, 6.0], [side, side], [0.02, 0.02, 0.02])
+        .load(std::path::Path::new("bench-switch.toml"))
 }
 
 /// Measures each light count (rounded to a square grid), `repeat` times.

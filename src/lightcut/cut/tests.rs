@@ -3,6 +3,7 @@ use super::*;
 use crate::embree::Device;
 use crate::light::Lights;
 use crate::lightcut::EXHAUSTIVE_LIGHTS;
+use crate::scene::builder::SceneText;
 use crate::scene::Scene;
 use crate::shading::Geometry;
 use crate::shading::LightBatch;
@@ -16,56 +17,18 @@ fn scene(n: u32) -> Scene {
 
 /// [`scene`] with more `lights` (TOML `[[lights]]` entries).
 fn scene_with(n: u32, lights: &str) -> Scene {
-    let text = format!(
-        r#"
-[film]
-width = 64
-height = 48
-[camera]
-eye = [0, 4, 7]
-look_at = [0, 0.5, 0]
-fov_y = 50
-[materials.floor]
-albedo = [0.7, 0.7, 0.7]
-[materials.glossy]
-albedo = [0.5, 0.3, 0.2]
-specular = [0.4, 0.4, 0.4]
-exponent = 60
-[[shapes]]
-type = "quad"
-corner = [-6, 0, 6]
-u = [12, 0, 0]
-v = [0, 0, -12]
-material = "floor"
-[[shapes]]
-type = "sphere"
-center = [-1, 1, 0]
-radius = 1
-material = "glossy"
-[[shapes]]
-type = "sphere"
-center = [1.5, 0.6, 1]
-radius = 0.6
-material = "floor"
-[[lights]]
-type = "grid"
-corner = [-3, 3, -3]
-u = [6, 0, 0]
-v = [0, 0, 6]
-count = [{n}, {n}]
-intensity = [0.05, 0.05, 0.05]
-[[lights]]
-type = "grid"
-corner = [-4, 1.5, -4]
-u = [8, 0, 0]
-v = [0, 0, 8]
-count = [{n}, 2]
-intensity = [0.2, 0.1, 0.05]
-{lights}
-"#
-    );
-    let spec = toml::from_str(&text).unwrap();
-    Scene::from_spec(std::path::Path::new("test.toml"), spec).unwrap()
+    SceneText::new(64, 48)
+        .camera([0.0, 4.0, 7.0], [0.0, 0.5, 0.0], 50.0)
+        .material("floor", [0.7, 0.7, 0.7], "")
+        .material("glossy", [0.5, 0.3, 0.2], "specular = [0.4, 0.4, 0.4]\nexponent = 60\n")
+        .floor(0.0, 6.0, "floor")
+        .sphere([-1.0, 1.0, 0.0], 1.0, "glossy")
+        .sphere([1.5, 0.6, 1.0], 0.6, "floor")
+        .grid([-3.0, 3.0, -3.0], [6.0, 0.0, 0.0], [0.0, 0.0, 6.0], [n, n], [0.05, 0.05, 0.05])
+        .grid([-4.0, 1.5, -4.0], [8.0, 0.0, 0.0], [0.0, 0.0, 8.0], [n, 2], [0.2, 0.1, 0.05])
+        .raw(lights)
+        .load(std::path::Path::new("test.toml"))
+        .unwrap()
 }
 
 /// Runs `check(cut, exact, error_bound)` at shading points seen through

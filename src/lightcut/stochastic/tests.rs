@@ -5,6 +5,7 @@
 use super::*;
 use crate::embree::Device;
 use crate::light::Lights;
+use crate::scene::builder::SceneText;
 use crate::scene::Scene;
 use crate::shading::{Geometry, LightBatch, SurfacePoint};
 use crate::util::color::luminance64;
@@ -16,41 +17,16 @@ const SEEDS: u64 = 1024;
 
 /// A floor, an occluding sphere and a box, and `lights`.
 fn scene(lights: &str) -> Scene {
-    let text = format!(
-        r#"
-[film]
-width = 32
-height = 24
-[camera]
-eye = [0, 4, 7]
-look_at = [0, 0.5, 0]
-fov_y = 55
-[materials.floor]
-albedo = [0.7, 0.7, 0.7]
-[materials.glossy]
-albedo = [0.4, 0.3, 0.2]
-specular = [0.3, 0.3, 0.3]
-exponent = 30
-[[shapes]]
-type = "quad"
-corner = [-6, 0, 6]
-u = [12, 0, 0]
-v = [0, 0, -12]
-material = "floor"
-[[shapes]]
-type = "sphere"
-center = [-0.8, 1, 0]
-radius = 1
-material = "glossy"
-[[shapes]]
-type = "box"
-min = [1, 0, -1]
-max = [2, 1.5, 0]
-material = "floor"
-{lights}
-"#
-    );
-    Scene::from_spec(std::path::Path::new("stochastic.toml"), toml::from_str(&text).unwrap()).unwrap()
+    SceneText::new(32, 24)
+        .camera([0.0, 4.0, 7.0], [0.0, 0.5, 0.0], 55.0)
+        .material("floor", [0.7, 0.7, 0.7], "")
+        .material("glossy", [0.4, 0.3, 0.2], "specular = [0.3, 0.3, 0.3]\nexponent = 30\n")
+        .floor(0.0, 6.0, "floor")
+        .sphere([-0.8, 1.0, 0.0], 1.0, "glossy")
+        .cuboid([1.0, 0.0, -1.0], [2.0, 1.5, 0.0], "floor")
+        .raw(lights)
+        .load(std::path::Path::new("stochastic.toml"))
+        .unwrap()
 }
 
 const OMNI: &str = r#"
