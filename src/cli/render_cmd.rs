@@ -136,9 +136,12 @@ fn print_full_stats(stats: &crate::render::PassStats, cpu_seconds: Option<f64>, 
     }
     if stats.shading.cut_nanos > 0 {
         println!(
-            "    cut work       {:.1} ns per cut node ({:.3} thread-seconds choosing cuts, outside Embree)",
+            "    cut work       {:.1} ns per cut node ({:.3} thread-seconds choosing cuts, outside Embree; {} nodes \
+             at {} shading points)",
             stats.shading.cut_nanos as f64 / stats.shading.cut_nodes.max(1) as f64,
-            stats.shading.cut_nanos as f64 * 1e-9
+            stats.shading.cut_nanos as f64 * 1e-9,
+            stats.shading.cut_nodes,
+            stats.shading.shading_points
         );
     }
     println!("    tree memory    {:.1} MiB", tree_bytes as f64 / (1024.0 * 1024.0));

@@ -28,10 +28,10 @@ use glam::{DVec3, Vec3};
 
 use super::bounds::PointBounds;
 use super::{by_group, exhaustive_part, CutResult, CutSettings};
-use crate::embree::{PacketWidth, Scene as EmbreeScene, ShadowRay};
+use crate::embree::{PacketWidth, Scene as EmbreeScene};
 use crate::light_tree::layout::{Child, CutTree};
 use crate::light_tree::LightTrees;
-use crate::shading::{BatchBuffers, Lanes, LightEvaluator, SurfacePoint};
+use crate::shading::{evaluate_and_trace, BatchBuffers, Chosen, Evaluations, LightEvaluator, SurfacePoint};
 use crate::util::color::luminance64;
 
 /// Nodes refined per batch of shadow rays (each refinement needs one ray:
@@ -49,9 +49,6 @@ struct Entry {
     bound: f32,
     child: Child,
     representative: u32,
-    /// While its shadow ray is in flight: the ray's index in the batch
-    /// (`NO_RAY` when it needs none).
-    ray: u32,
     tree: u8,
     in_cut: bool,
 }
@@ -64,8 +61,6 @@ impl Entry {
         self.unit * self.intensity.as_dvec3()
     }
 }
-
-const NO_RAY: u32 = u32::MAX;
 
 /// A node whose representative's M * G and shadow ray are still to be
 /// found (the child of a refined node that does not share its
@@ -105,8 +100,8 @@ pub struct CutScratch {
     entries: Vec<Entry>,
     heap: BinaryHeap<u64>,
     fresh: Vec<Fresh>,
-    rays: Vec<ShadowRay>,
-    occluded: Vec<bool>,
+    chosen: Vec<Chosen>,
+    evaluations: Evaluations,
 }
 
 struct Cut<'a, 'p> {
@@ -155,8 +150,7 @@ impl Cut<'_, '_> {
             let intensity = Vec3::new(block.intensity[0][k], block.intensity[1][k], block.intensity[2][k]);
             match parent {
                 Some((shared, unit)) if shared == representative => {
-                    let entry =
-                        Entry { unit, intensity, bound, child, representative, ray: NO_RAY, tree, in_cut: true };
+                    let entry = Entry { unit, intensity, bound, child, representative, tree, in_cut: true };
                     let index = self.scratch.entries.len();
                     self.scratch.entries.push(entry);
                     self.admit(index);
@@ -202,56 +196,34 @@ impl Cut<'_, '_> {
         }
     }
 
-    /// Evaluates the fresh nodes' representatives four at a time, traces
-    /// their shadow rays in one packet call, and admits the nodes.
+    /// Evaluates the fresh nodes' representatives (M * G * V per unit
+    /// intensity) by the evaluate-and-trace step, and admits the nodes.
     fn flush(&mut self) {
         if self.scratch.fresh.is_empty() {
             return;
         }
-        let first = self.scratch.entries.len();
-        let CutScratch { fresh, entries, rays, .. } = &mut *self.scratch;
-        for group in fresh.chunk_by(|a, b| a.tree == b.tree) {
-            let tree = &self.trees[group[0].tree as usize];
-            for quad in group.chunks(4) {
-                let mut lanes = Lanes::default();
-                for f in quad {
-                    let light = tree.representative(f.block as usize, f.slot as usize);
-                    lanes.push(&light);
-                }
-                let terms = self.evaluator.terms(tree.kind, &lanes);
-                for (f, found) in quad.iter().zip(terms) {
-                    // No ray for a representative that contributes nothing here.
-                    let ray = match found.ray {
-                        Some(r) if found.term != DVec3::ZERO => {
-                            rays.push(r);
-                            (rays.len() - 1) as u32
-                        }
-                        _ => NO_RAY,
-                    };
-                    entries.push(Entry {
-                        unit: found.term,
-                        intensity: f.intensity,
-                        bound: f.bound,
-                        child: f.child,
-                        representative: f.representative,
-                        ray,
-                        tree: f.tree,
-                        in_cut: true,
-                    });
-                }
-            }
-        }
+        let CutScratch { fresh, entries, chosen, evaluations, .. } = &mut *self.scratch;
+        chosen.clear();
+        chosen.extend(fresh.iter().map(|f| {
+            let tree = &self.trees[f.tree as usize];
+            Chosen::new(tree.kind, &tree.representative(f.block as usize, f.slot as usize), DVec3::ONE, 0)
+        }));
+        let (units, rays) = evaluate_and_trace(&self.evaluator, self.embree, PacketWidth::Eight, chosen, evaluations);
+        self.shadow_rays += rays;
+        let first = entries.len();
+        entries.extend(fresh.iter().zip(units).map(|(f, &unit)| Entry {
+            unit,
+            intensity: f.intensity,
+            bound: f.bound,
+            child: f.child,
+            representative: f.representative,
+            tree: f.tree,
+            in_cut: true,
+        }));
         fresh.clear();
-        self.embree.occluded_packets(&self.scratch.rays, &mut self.scratch.occluded, PacketWidth::Eight);
-        self.shadow_rays += self.scratch.rays.len() as u64;
         for index in first..self.scratch.entries.len() {
-            let entry = &mut self.scratch.entries[index];
-            if entry.ray != NO_RAY && self.scratch.occluded[entry.ray as usize] {
-                entry.unit = DVec3::ZERO;
-            }
             self.admit(index);
         }
-        self.scratch.rays.clear();
     }
 }
 
@@ -296,7 +268,6 @@ fn cut_through(
     scratch.entries.clear();
     scratch.heap.clear();
     scratch.fresh.clear();
-    scratch.rays.clear();
     let scale = all.scale;
     let mut cut = Cut {
         trees,

@@ -21,10 +21,10 @@ use glam::{DVec3, Vec3};
 
 use super::bounds::PointBounds;
 use super::{by_group, exhaustive_part, CutResult, CutSettings, GroupError};
-use crate::embree::{PacketWidth, Scene as EmbreeScene, ShadowRay};
+use crate::embree::{PacketWidth, Scene as EmbreeScene};
 use crate::light_tree::layout::{Child, CutTree};
 use crate::light_tree::LightTrees;
-use crate::shading::{BatchBuffers, Lanes, LightEvaluator, SurfacePoint};
+use crate::shading::{evaluate_and_trace, BatchBuffers, Chosen, Evaluations, LightEvaluator, SurfacePoint};
 use crate::util::color::luminance;
 use crate::util::sampling::Rng;
 
@@ -71,11 +71,8 @@ pub struct StochasticScratch {
     heap: BinaryHeap<u64>,
     walks: Vec<Walk>,
     drawn: Vec<Drawn>,
-    values: Vec<DVec3>,
-    /// The tree of each of `values`.
-    value_trees: Vec<u8>,
-    rays: Vec<ShadowRay>,
-    occluded: Vec<bool>,
+    chosen: Vec<Chosen>,
+    evaluations: Evaluations,
 }
 
 /// How a walk down a subtree chooses between two children: the weights of
@@ -165,50 +162,22 @@ fn cut_through(
     draw(trees, rng, scratch, importance);
     // Group the draws by tree (the walks finish in any order).
     scratch.drawn.sort_by_key(|d| d.tree);
-    // Evaluate them four at a time, trace their shadow rays in packets.
+    // Evaluated by the evaluate-and-trace step, each credited to its tree's group.
+    scratch.chosen.clear();
+    scratch.chosen.extend(scratch.drawn.iter().map(|d| {
+        let tree = &trees.trees[d.tree as usize];
+        let light = tree.representative(d.block as usize, d.slot as usize);
+        Chosen::new(tree.kind, &light, d.weight, trees.group_of_tree[d.tree as usize] as u32)
+    }));
     let evaluator = LightEvaluator::new(sp);
-    scratch.values.clear();
-    scratch.value_trees.clear();
-    scratch.rays.clear();
-    let mut unshadowed = DVec3::ZERO;
-    for group in scratch.drawn.chunk_by(|a, b| a.tree == b.tree) {
-        let tree = &trees.trees[group[0].tree as usize];
-        for quad in group.chunks(4) {
-            let mut lanes = Lanes::default();
-            for d in quad {
-                let light = tree.representative(d.block as usize, d.slot as usize);
-                lanes.push(&light);
-            }
-            for (d, found) in quad.iter().zip(evaluator.terms(tree.kind, &lanes)) {
-                let value = found.term * d.weight;
-                if value == DVec3::ZERO {
-                    continue;
-                }
-                match found.ray {
-                    Some(ray) => {
-                        scratch.rays.push(ray);
-                        scratch.values.push(value);
-                        scratch.value_trees.push(d.tree);
-                    }
-                    None => {
-                        unshadowed += value;
-                        if let Some(slot) = groups.get_mut(trees.group_of_tree[d.tree as usize]) {
-                            *slot += value;
-                        }
-                    }
-                }
-            }
-        }
-    }
-    embree.occluded_packets(&scratch.rays, &mut scratch.occluded, PacketWidth::Sixteen);
-    result.shadow_rays += scratch.rays.len() as u64;
-    let mut radiance = fixed + unshadowed;
-    for ((value, &occluded), &tree) in scratch.values.iter().zip(&scratch.occluded).zip(&scratch.value_trees) {
-        if !occluded {
-            radiance += *value;
-            if let Some(slot) = groups.get_mut(trees.group_of_tree[tree as usize]) {
-                *slot += *value;
-            }
+    let (values, rays) =
+        evaluate_and_trace(&evaluator, embree, PacketWidth::Sixteen, &scratch.chosen, &mut scratch.evaluations);
+    result.shadow_rays += rays;
+    let mut radiance = fixed;
+    for (c, value) in scratch.chosen.iter().zip(values) {
+        radiance += *value;
+        if let Some(slot) = groups.get_mut(c.slot as usize) {
+            *slot += *value;
         }
     }
     result.radiance = radiance;

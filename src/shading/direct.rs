@@ -15,6 +15,7 @@ use std::f32::consts::PI;
 use glam::{DVec3, Vec3};
 use wide::{f32x4, CmpEq, CmpLe};
 
+use super::evaluate::{evaluate_and_trace, Chosen, Evaluations};
 use super::surface::SurfacePoint;
 use crate::embree::{PacketWidth, Ray, Scene as EmbreeScene, ShadowRay};
 use crate::light::{Light, LightKind, SpotLight, TreeLight};
@@ -46,15 +47,20 @@ impl Lanes {
     /// Puts a light (a tree leaf's data) in the next lane; false when all
     /// four are taken.
     pub fn push(&mut self, light: &crate::light::TreeLight) -> bool {
+        self.push_point(light.point, light.normal, light.spread)
+    }
+
+    /// [`Lanes::push`] of a light's position (or direction), normal and spread.
+    pub fn push_point(&mut self, point: Vec3, normal: Vec3, spread: [f32; 2]) -> bool {
         if self.count == 4 {
             return false;
         }
         for axis in 0..3 {
-            self.point[axis][self.count] = light.point[axis];
-            self.normal[axis][self.count] = light.normal[axis];
+            self.point[axis][self.count] = point[axis];
+            self.normal[axis][self.count] = normal[axis];
         }
-        self.spread[0][self.count] = light.spread[0];
-        self.spread[1][self.count] = light.spread[1];
+        self.spread[0][self.count] = spread[0];
+        self.spread[1][self.count] = spread[1];
         self.count += 1;
         true
     }
@@ -235,9 +241,8 @@ pub fn light_sample(light: &Light, sp: &SurfacePoint<'_>, intensity: Vec3) -> Op
 /// Reusable buffers for [`LightBatch`].
 #[derive(Default)]
 pub struct BatchBuffers {
-    rays: Vec<ShadowRay>,
-    values: Vec<DVec3>,
-    occluded: Vec<bool>,
+    chosen: Vec<Chosen>,
+    evaluations: Evaluations,
 }
 
 /// What a batch found: the sum, and what it cost.
@@ -250,84 +255,49 @@ pub struct BatchResult {
     pub shadow_rays: u64,
 }
 
-/// Sums M * G * V * I over the lights added, four at a time, casting their
-/// shadow rays in batches of [`SHADOW_BATCH`]. The sum is in the order
-/// lights are added.
+/// Sums M * G * V * I over the lights added, in the order added, by the
+/// evaluate-and-trace step ([`evaluate_and_trace`]) in batches of
+/// [`SHADOW_BATCH`] lights: the exact renderer, and the cut modes' trees too
+/// small for a cut.
 pub struct LightBatch<'a, 'p> {
     embree: &'a EmbreeScene,
     evaluator: LightEvaluator<'a, 'p>,
     buffers: &'a mut BatchBuffers,
-    /// Lights waiting for a full set of lanes, all of `kind`.
-    lanes: Lanes,
-    intensities: [Vec3; 4],
-    kind: LightKind,
     result: BatchResult,
 }
 
 impl<'a, 'p> LightBatch<'a, 'p> {
     pub fn new(embree: &'a EmbreeScene, sp: &'a SurfacePoint<'p>, buffers: &'a mut BatchBuffers) -> Self {
-        buffers.rays.clear();
-        buffers.values.clear();
-        Self {
-            embree,
-            evaluator: LightEvaluator::new(sp),
-            buffers,
-            lanes: Lanes::default(),
-            intensities: [Vec3::ZERO; 4],
-            kind: LightKind::Omni,
-            result: BatchResult::default(),
-        }
+        buffers.chosen.clear();
+        Self { embree, evaluator: LightEvaluator::new(sp), buffers, result: BatchResult::default() }
     }
 
     /// One light, with its own intensity.
     pub fn add(&mut self, light: &Light) {
-        self.result.lights += 1;
-        if light.kind() != self.kind || self.lanes.count == 4 {
-            self.evaluate();
-            self.kind = light.kind();
-        }
-        self.intensities[self.lanes.count] = light_intensity(light);
-        self.lanes.push(&TreeLight::of(light));
+        self.add_tree_light(light.kind(), &TreeLight::of(light));
     }
 
-    /// Evaluates the lights waiting in the lanes.
-    fn evaluate(&mut self) {
-        let terms = self.evaluator.terms(self.kind, &self.lanes);
-        for (found, intensity) in terms.iter().zip(self.intensities).take(self.lanes.count) {
-            let value = found.term * intensity.as_dvec3();
-            if value == DVec3::ZERO {
-                continue;
-            }
-            match found.ray {
-                Some(ray) => {
-                    self.buffers.rays.push(ray);
-                    self.buffers.values.push(value);
-                    if self.buffers.rays.len() == SHADOW_BATCH {
-                        self.flush();
-                    }
-                }
-                None => self.result.radiance += value,
-            }
+    /// One light of `kind` as a tree stores it, with its own intensity.
+    pub fn add_tree_light(&mut self, kind: LightKind, light: &TreeLight) {
+        self.result.lights += 1;
+        self.buffers.chosen.push(Chosen::new(kind, light, light.intensity.as_dvec3(), 0));
+        if self.buffers.chosen.len() == SHADOW_BATCH {
+            self.flush();
         }
-        self.lanes.count = 0;
     }
 
     fn flush(&mut self) {
         let b = &mut *self.buffers;
-        self.embree.occluded_packets(&b.rays, &mut b.occluded, SHADOW_PACKET);
-        self.result.shadow_rays += b.rays.len() as u64;
-        for (value, &occluded) in b.values.iter().zip(&b.occluded) {
-            if !occluded {
-                self.result.radiance += *value;
-            }
+        let (values, rays) = evaluate_and_trace(&self.evaluator, self.embree, SHADOW_PACKET, &b.chosen, &mut b.evaluations);
+        self.result.shadow_rays += rays;
+        for value in values {
+            self.result.radiance += *value;
         }
-        b.rays.clear();
-        b.values.clear();
+        b.chosen.clear();
     }
 
     /// Traces what is left and returns the sum and the counts.
     pub fn finish(mut self) -> BatchResult {
-        self.evaluate();
         self.flush();
         self.result
     }

@@ -4,11 +4,13 @@
 //! and the light cuts above evaluate lights only through here.
 
 pub mod direct;
+pub mod evaluate;
 pub mod geometry;
 pub mod surface;
 
 pub use direct::{
     light_sample, light_term, BatchBuffers, BatchResult, Lanes, LightBatch, LightEvaluator, LightTerm, SHADOW_BATCH,
 };
+pub use evaluate::{evaluate_and_trace, Chosen, Evaluations};
 pub use geometry::{Geometry, GeometryError};
 pub use surface::SurfacePoint;

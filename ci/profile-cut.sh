@@ -1,0 +1,34 @@
+#!/usr/bin/env bash
+# Instructions per cut node outside Embree, counted by valgrind's callgrind
+# (repeatable on a shared machine, unlike times): the render's calls into
+# the bounded or stochastic cut, less the instructions inside Embree's
+# library, over the cut nodes the render reports.
+#
+#   ci/profile-cut.sh [BIN] [SCENE] [WINDOW] [MODE]
+#
+# Defaults: target/release/lightcuts, scenes/grid10k.toml, its central 80x60
+# window (280,360,200,260), --bounded; one thread. Needs valgrind.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+bin=${1:-target/release/lightcuts}
+scene=${2:-scenes/grid10k.toml}
+window=${3:-280,360,200,260}
+mode=${4:---bounded}
+command -v valgrind >/dev/null || { echo "ci/profile-cut.sh: needs valgrind (apt-get install valgrind)" >&2; exit 1; }
+out=$(mktemp -d)
+trap 'rm -rf "$out"' EXIT
+# The cut's entry points: every instruction from there down is counted.
+case "$mode" in
+--bounded) entry='*lightcut*cut*cut_through*' ;;
+--stochastic) entry='*lightcut*stochastic*cut_through*' ;;
+*) echo "ci/profile-cut.sh: MODE is --bounded or --stochastic" >&2; exit 2 ;;
+esac
+valgrind --tool=callgrind --callgrind-out-file="$out/cg" "--toggle-collect=$entry" \
+    "$bin" render "$scene" -o "$out/o.exr" --pixel-bounds "$window" --threads 1 --quiet --stats "$mode" >"$out/stats" 2>"$out/valgrind"
+nodes=$(awk '/cut work/ { for (i = 1; i <= NF; i++) if ($i == "nodes") print $(i - 1) }' "$out/stats")
+callgrind_annotate "$out/cg" >"$out/annotated" 2>/dev/null
+total=$(awk '/PROGRAM TOTALS/ { gsub(",", "", $1); print $1 }' "$out/annotated")
+embree=$(awk '/libembree/ { gsub(",", "", $1); s += $1 } END { print s + 0 }' "$out/annotated")
+awk -v t="$total" -v e="$embree" -v n="$nodes" 'BEGIN {
+    printf "cut nodes %d, instructions in the cut %d, of which in Embree %d: %.0f instructions per cut node outside Embree\n", n, t, e, (t - e) / n
+}'
