@@ -1,8 +1,6 @@
-//! One light's contribution at a shading point ([LC05] eq. 1: M * G * V * I),
-//! evaluated four lights at a time (f32x4 lanes), and a batch that sums many
-//! lights with one shadow ray each: the exact renderer, and lightcuts'
-//! evaluation of trees too small for a cut to pay. Shadow rays go to Embree
-//! in packets.
+//! One light's contribution at a shading point ([LC05] eq. 1: M * G * V * I;
+//! docs/design.md §5), evaluated four lights at a time (f32x4 lanes), with
+//! the shadow ray that decides its visibility (traced by `evaluate`).
 //!
 //! Every light is evaluated by [`LightEvaluator::terms`], whatever the caller
 //! (exact renderer, cut, benchmark), so every mode agrees bit for bit on a
@@ -15,20 +13,10 @@ use std::f32::consts::PI;
 use glam::{DVec3, Vec3};
 use wide::{f32x4, CmpEq, CmpLe};
 
-use super::evaluate::{evaluate_and_trace, Chosen, Evaluations};
 use super::surface::SurfacePoint;
-use crate::embree::{PacketWidth, Ray, Scene as EmbreeScene, ShadowRay};
+use crate::embree::{Ray, ShadowRay};
 use crate::light::{Light, LightKind, SpotLight, TreeLight};
 use crate::scene::material::phong_normalisation;
-
-/// Shadow rays handed to Embree per call: large enough to amortise the FFI
-/// crossing, small enough to stay in L1/L2 (256 rays x 32 bytes = 8 KiB).
-pub const SHADOW_BATCH: usize = 256;
-
-/// Embree's packets for a batch of shadow rays from one shading point:
-/// `lightcuts bench rays` measured packets of 16 at 1.5 times the rate of
-/// single-ray calls on the exact renderer's rays (grid10k).
-pub const SHADOW_PACKET: PacketWidth = PacketWidth::Sixteen;
 
 /// Up to four lights of one kind, one per lane: `point` is the position of
 /// an omni, oriented or spot light, the unit direction towards a
@@ -236,69 +224,4 @@ pub fn light_sample(light: &Light, sp: &SurfacePoint<'_>, intensity: Vec3) -> Op
     let [found, ..] = LightEvaluator::new(sp).terms(light.kind(), &lanes);
     let value = found.term * intensity.as_dvec3();
     (value != DVec3::ZERO).then_some((value, found.ray))
-}
-
-/// Reusable buffers for [`LightBatch`].
-#[derive(Default)]
-pub struct BatchBuffers {
-    chosen: Vec<Chosen>,
-    evaluations: Evaluations,
-}
-
-/// What a batch found: the sum, and what it cost.
-#[derive(Debug, Clone, Copy, Default, PartialEq)]
-pub struct BatchResult {
-    /// Sum of M * G * V * I over the lights added.
-    pub radiance: DVec3,
-    /// Lights added (each evaluated exactly).
-    pub lights: u64,
-    pub shadow_rays: u64,
-}
-
-/// Sums M * G * V * I over the lights added, in the order added, by the
-/// evaluate-and-trace step ([`evaluate_and_trace`]) in batches of
-/// [`SHADOW_BATCH`] lights: the exact renderer, and the cut modes' trees too
-/// small for a cut.
-pub struct LightBatch<'a, 'p> {
-    embree: &'a EmbreeScene,
-    evaluator: LightEvaluator<'a, 'p>,
-    buffers: &'a mut BatchBuffers,
-    result: BatchResult,
-}
-
-impl<'a, 'p> LightBatch<'a, 'p> {
-    pub fn new(embree: &'a EmbreeScene, sp: &'a SurfacePoint<'p>, buffers: &'a mut BatchBuffers) -> Self {
-        buffers.chosen.clear();
-        Self { embree, evaluator: LightEvaluator::new(sp), buffers, result: BatchResult::default() }
-    }
-
-    /// One light, with its own intensity.
-    pub fn add(&mut self, light: &Light) {
-        self.add_tree_light(light.kind(), &TreeLight::of(light));
-    }
-
-    /// One light of `kind` as a tree stores it, with its own intensity.
-    pub fn add_tree_light(&mut self, kind: LightKind, light: &TreeLight) {
-        self.result.lights += 1;
-        self.buffers.chosen.push(Chosen::new(kind, light, light.intensity.as_dvec3(), 0));
-        if self.buffers.chosen.len() == SHADOW_BATCH {
-            self.flush();
-        }
-    }
-
-    fn flush(&mut self) {
-        let b = &mut *self.buffers;
-        let (values, rays) = evaluate_and_trace(&self.evaluator, self.embree, SHADOW_PACKET, &b.chosen, &mut b.evaluations);
-        self.result.shadow_rays += rays;
-        for value in values {
-            self.result.radiance += *value;
-        }
-        b.chosen.clear();
-    }
-
-    /// Traces what is left and returns the sum and the counts.
-    pub fn finish(mut self) -> BatchResult {
-        self.flush();
-        self.result
-    }
 }

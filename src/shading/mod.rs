@@ -8,9 +8,9 @@ pub mod evaluate;
 pub mod geometry;
 pub mod surface;
 
-pub use direct::{
-    light_sample, light_term, BatchBuffers, BatchResult, Lanes, LightBatch, LightEvaluator, LightTerm, SHADOW_BATCH,
+pub use direct::{light_sample, light_term, Lanes, LightEvaluator, LightTerm};
+pub use evaluate::{
+    evaluate_and_trace, BatchBuffers, BatchResult, Chosen, Evaluations, LightBatch, SHADOW_BATCH, SHADOW_PACKET,
 };
-pub use evaluate::{evaluate_and_trace, Chosen, Evaluations};
 pub use geometry::{Geometry, GeometryError};
 pub use surface::SurfacePoint;
