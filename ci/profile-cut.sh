@@ -19,8 +19,8 @@ out=$(mktemp -d)
 trap 'rm -rf "$out"' EXIT
 # The cut's entry points: every instruction from there down is counted.
 case "$mode" in
---bounded) entry='*lightcut*cut*cut_through*' ;;
---stochastic) entry='*lightcut*stochastic*cut_through*' ;;
+--bounded) entry="*::lightcut::cut::evaluate" ;;
+--stochastic) entry="*::lightcut::stochastic::evaluate" ;;
 *) echo "ci/profile-cut.sh: MODE is --bounded or --stochastic" >&2; exit 2 ;;
 esac
 valgrind --tool=callgrind --callgrind-out-file="$out/cg" "--toggle-collect=$entry" \

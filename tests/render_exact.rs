@@ -122,3 +122,93 @@ fn command_line_overrides_apply() {
     assert_eq!((a.width, a.height), (40, 30));
     assert_ne!(pixels(&a, "R"), pixels(&b, "R"), "the seed moves the samples");
 }
+
+/// The hot paths run compiled for AVX2 + FMA where the CPU has them and
+/// for baseline x86-64 otherwise (`util::simd::best`): both must give the
+/// same image to the bit, in every mode, on a scene with every light kind
+/// (point, oriented, spot, directional), a glossy lobe and light groups.
+/// `LIGHTCUTS_BASELINE_SIMD` forces the baseline path.
+#[test]
+fn the_avx2_and_the_baseline_paths_give_the_same_bits() {
+    let dir = TempDir::new("simd-paths");
+    let scene = dir.write(
+        "kinds.toml",
+        r#"
+[film]
+width = 64
+height = 48
+spp = 2
+[camera]
+eye = [0, 1.5, 5]
+look_at = [0, 0.6, 0]
+fov_y = 40
+[materials.glossy]
+albedo = [0.5, 0.5, 0.5]
+specular = [0.3, 0.3, 0.3]
+exponent = 40
+[materials.red]
+albedo = [0.7, 0.2, 0.1]
+[[shapes]]
+type = "quad"
+corner = [-5, 0, 5]
+u = [10, 0, 0]
+v = [0, 0, -10]
+material = "glossy"
+[[shapes]]
+type = "sphere"
+center = [0, 0.6, 0]
+radius = 0.6
+material = "red"
+[[lights]]
+type = "grid"
+group = "fill"
+corner = [2.5, 0.3, 2]
+u = [0, 0, -3]
+v = [0, 2, 0]
+count = [20, 20]
+intensity = [0.001, 0.0012, 0.0014]
+[[lights]]
+type = "area"
+group = "key"
+corner = [-2.5, 2.5, 1.5]
+u = [1, 0, 0]
+v = [0, 0, -1]
+radiance = [4, 4, 4]
+samples = 256
+[[lights]]
+type = "spot"
+group = "key"
+position = [1, 3, 1]
+direction = [-0.3, -1, -0.2]
+intensity = [6, 5, 4]
+outer_angle = 30
+[environment]
+radiance = [0.05, 0.07, 0.1]
+samples = 256
+group = "sky"
+"#,
+    );
+    for mode in ["--exact", "--bounded", "--stochastic"] {
+        let render = |name: &str, baseline: bool| {
+            let out = dir.path(name);
+            let mut command = std::process::Command::new(env!("CARGO_BIN_EXE_lightcuts"));
+            command.args(["render", s(&scene), "-o", s(&out), "--quiet", mode]);
+            command.env_remove("LIGHTCUTS_BASELINE_SIMD");
+            if baseline {
+                command.env("LIGHTCUTS_BASELINE_SIMD", "1");
+            }
+            let output = command.output().expect("run lightcuts");
+            assert!(output.status.success(), "{mode}: {}", String::from_utf8_lossy(&output.stderr));
+            read_exr(&out).unwrap()
+        };
+        let (best, baseline) = (render("best.exr", false), render("baseline.exr", true));
+        assert_eq!(best.channels.keys().collect::<Vec<_>>(), baseline.channels.keys().collect::<Vec<_>>());
+        for (name, values) in &best.channels {
+            let other = &baseline.channels[name];
+            let differ = values.iter().zip(other).position(|(a, b)| a.to_bits() != b.to_bits());
+            if let Some(i) = differ {
+                panic!("{mode}, channel {name}, sample {i}: {} (best) vs {} (baseline)", values[i], other[i]);
+            }
+        }
+    }
+}

@@ -308,6 +308,7 @@ impl Lights {
     /// each in order. Three plain loops: after inlining, each loop's `Light`
     /// variant is known, so the exact renderer's hot path does not branch
     /// on the kind per light.
+    #[inline(always)]
     pub fn for_each(&self, mut f: impl FnMut(Light)) {
         for l in &self.omni {
             f(Light::Omni(*l));

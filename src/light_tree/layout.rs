@@ -83,14 +83,31 @@ pub struct Block {
 }
 
 /// What oriented lights add to a block: the representative's normal and the
-/// cone of normals (axis, cos and sin of the half-angle). 64 bytes.
+/// cone of normals (axis, cos and sin of the half-angle), with the axis's
+/// orthonormal frame (tangent and bitangent, by [`axis_frame`]) that the
+/// cone's bound projects the box onto: computed once here rather than at
+/// every bound. 112 bytes.
 #[derive(Debug, Clone, Copy, Default)]
 #[repr(C, align(64))]
 pub struct ConeBlock {
     pub normal: [[f32; 2]; 3],
     pub axis: [[f32; 2]; 3],
+    pub tangent: [[f32; 2]; 3],
+    pub bitangent: [[f32; 2]; 3],
     pub cos_half_angle: [f32; 2],
     pub sin_half_angle: [f32; 2],
+}
+
+/// The tangent and bitangent completing unit `a` to an orthonormal frame,
+/// without branches (Duff et al. 2017, as glam's `any_orthonormal_pair`),
+/// with the same f32 operations in the same order as the bounds' four-lane
+/// form of it.
+#[must_use]
+pub fn axis_frame(a: Vec3) -> (Vec3, Vec3) {
+    let sign = 1.0f32.copysign(a.z);
+    let k = -1.0 / (sign + a.z);
+    let b = a.x * a.y * k;
+    (Vec3::new(1.0 + sign * a.x * a.x * k, sign * b, -sign * a.x), Vec3::new(b, sign + a.y * a.y * k, -a.y))
 }
 
 /// What spot lights add to a block: the representative's cosines of its
@@ -262,6 +279,11 @@ impl CutTree {
                 block.position[axis][k] = s.position[axis];
                 cone.normal[axis][k] = s.normal[axis];
                 cone.axis[axis][k] = s.cone.axis[axis];
+            }
+            let (tangent, bitangent) = axis_frame(s.cone.axis);
+            for axis in 0..3 {
+                cone.tangent[axis][k] = tangent[axis];
+                cone.bitangent[axis][k] = bitangent[axis];
             }
             block.representative[k] = s.representative;
             block.child[k] = s.child;

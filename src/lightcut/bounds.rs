@@ -20,6 +20,7 @@ use crate::light::LightKind;
 use crate::light_tree::layout::{Block, Cones};
 use crate::scene::material::phong_normalisation;
 use crate::shading::SurfacePoint;
+use crate::util::simd::pow_upper;
 
 /// Slack of every cosine bound, relative and absolute: a bound takes a few
 /// f32 roundings (dot products, sqrt, divide), each within 2^-24 relative;
@@ -37,9 +38,15 @@ const LUMINANCE: Vec3 = Vec3::new(0.2126, 0.7152, 0.0722);
 
 type V3 = [f32x4; 3];
 
-/// Per lane: a cone's axis, cos and sin of its half-angle, and for spots
-/// the cutoff (see `PointBounds::emission`).
-type ConeLanes = (V3, f32x4, f32x4, Option<f32x4>);
+/// Per lane: a cone's axis with its frame (tangent, bitangent), cos and
+/// sin of its half-angle, and for spots the cutoff (see
+/// `PointBounds::emission`).
+struct ConeLanes {
+    frame: Frame,
+    cos_beta: f32x4,
+    sin_beta: f32x4,
+    cutoff: Option<f32x4>,
+}
 
 fn splat3(v: Vec3) -> V3 {
     [f32x4::splat(v.x), f32x4::splat(v.y), f32x4::splat(v.z)]
@@ -83,18 +90,6 @@ impl Frame {
     fn splat(axis: Vec3) -> Self {
         let (t, b) = axis.any_orthonormal_pair();
         Self::of(splat3(t), splat3(b), splat3(axis))
-    }
-
-    /// A frame per lane around unit axes `a`, without branches (Duff et al.
-    /// 2017, the construction glam's `any_orthonormal_pair` uses).
-    #[inline(always)]
-    fn around(a: V3) -> Self {
-        let sign = f32x4::ONE.copysign(a[2]);
-        let k = -f32x4::ONE / (sign + a[2]);
-        let b = a[0] * a[1] * k;
-        let tangent = [f32x4::ONE + sign * a[0] * a[0] * k, sign * b, -sign * a[0]];
-        let bitangent = [b, sign + a[1] * a[1] * k, -a[1]];
-        Self::of(tangent, bitangent, a)
     }
 
     fn of(tangent: V3, bitangent: V3, axis: V3) -> Self {
@@ -146,6 +141,7 @@ pub struct PointBounds {
 impl PointBounds {
     /// `scale` normalises intensities (see [`crate::light_tree::LightTrees::scale`]).
     #[must_use]
+    #[inline(always)]
     pub fn new(sp: &SurfacePoint<'_>, scale: f32) -> Self {
         let m = sp.material;
         let lobe = if m.has_specular() { m.specular * phong_normalisation(m.exponent) } else { Vec3::ZERO };
@@ -173,8 +169,9 @@ impl PointBounds {
         let cos_theta = self.normal.cos_bound(c, h);
         let mut weighted = dot(&self.diffuse, intensity);
         if let Some((frame, exponent)) = &self.phong {
-            let lobe = frame.cos_bound(c, h).to_array().map(|r| r.powf(*exponent));
-            weighted += dot(&self.lobe, intensity) * f32x4::new(lobe);
+            // cos^n is increasing in cos: the bound of cos_r, raised to n, bounds it.
+            let lobe = pow_upper(frame.cos_bound(c, h), *exponent);
+            weighted += dot(&self.lobe, intensity) * lobe;
         }
         (cos_theta, weighted)
     }
@@ -225,9 +222,11 @@ impl PointBounds {
     #[inline(always)]
     pub fn importance(&self, kind: LightKind, block: &Block, cones: Option<Cones<'_>>) -> [f32; 2] {
         let gather = |pairs: &[[f32; 2]; 3]| -> V3 { [lanes(pairs[0]), lanes(pairs[1]), lanes(pairs[2])] };
-        let cone = cones.map(|Cones { cone: c, spot }| {
-            let cutoff = spot.map(|s| lanes(s.min_cos_outer));
-            (gather(&c.axis), lanes(c.cos_half_angle), lanes(c.sin_half_angle), cutoff)
+        let cone = cones.map(|Cones { cone: c, spot }| ConeLanes {
+            frame: Frame::of(gather(&c.tangent), gather(&c.bitangent), gather(&c.axis)),
+            cos_beta: lanes(c.cos_half_angle),
+            sin_beta: lanes(c.sin_half_angle),
+            cutoff: spot.map(|s| lanes(s.min_cos_outer)),
         });
         let [b0, b1, ..] = self
             .lanes(kind, &gather(&block.centre), &gather(&block.half), &gather(&block.intensity), cone.as_ref(), false)
@@ -240,9 +239,10 @@ impl PointBounds {
     #[must_use]
     #[inline(always)]
     pub fn quad(&self, kind: LightKind, blocks: [&Block; 2], cones: Option<[Cones<'_>; 2]>) -> [f32; 4] {
-        let bounds = self.quad_lanes(kind, blocks, cones, false);
-        let exact = |k: usize| blocks[k / 2].child[k % 2].is_exact();
-        [0, 1, 2, 3].map(|k| if exact(k) { 0.0 } else { bounds[k] })
+        let [b0, b1, b2, b3] = self.quad_lanes(kind, blocks, cones, false);
+        let [[c0, c1], [c2, c3]] = [blocks[0].child, blocks[1].child];
+        let exact = |c: crate::light_tree::layout::Child, b: f32| if c.is_exact() { 0.0 } else { b };
+        [exact(c0, b0), exact(c1, b1), exact(c2, b2), exact(c3, b3)]
     }
 
     /// The stochastic walk's weights of the slots of two blocks of one
@@ -273,8 +273,17 @@ impl PointBounds {
         let cone = cones.map(|[a, b]| {
             let cutoff = a.spot.zip(b.spot).map(|(x, y)| two(x.min_cos_outer, y.min_cos_outer));
             let (a, b) = (a.cone, b.cone);
-            let axis = [two(a.axis[0], b.axis[0]), two(a.axis[1], b.axis[1]), two(a.axis[2], b.axis[2])];
-            (axis, two(a.cos_half_angle, b.cos_half_angle), two(a.sin_half_angle, b.sin_half_angle), cutoff)
+            let pairs = |x: &[[f32; 2]; 3], y: &[[f32; 2]; 3]| [two(x[0], y[0]), two(x[1], y[1]), two(x[2], y[2])];
+            ConeLanes {
+                frame: Frame::of(
+                    pairs(&a.tangent, &b.tangent),
+                    pairs(&a.bitangent, &b.bitangent),
+                    pairs(&a.axis, &b.axis),
+                ),
+                cos_beta: two(a.cos_half_angle, b.cos_half_angle),
+                sin_beta: two(a.sin_half_angle, b.sin_half_angle),
+                cutoff,
+            }
         });
         self.lanes(
             kind,
@@ -312,8 +321,8 @@ impl PointBounds {
                 let to_box = sub3(c, &self.p);
                 let (cos_theta, weighted) = self.material(&to_box, h, intensity);
                 let mut geometric = self.geometric(c, h, estimate);
-                if let Some((axis, cos_beta, sin_beta, cutoff)) = cone {
-                    geometric *= self.emission(c, h, axis, *cos_beta, *sin_beta, *cutoff);
+                if let Some(cone) = cone {
+                    geometric *= self.emission(c, h, cone);
                 }
                 (cos_theta, weighted, geometric)
             }
@@ -338,9 +347,10 @@ impl PointBounds {
     /// Spots (`cutoff`: the smallest cosine of an outer angle in the
     /// cluster): no light shines at the point when theta_min - beta is
     /// beyond the widest outer angle; otherwise the falloff is at most 1.
-    fn emission(&self, c: &V3, h: &V3, axis: &V3, cos_beta: f32x4, sin_beta: f32x4, cutoff: Option<f32x4>) -> f32x4 {
+    fn emission(&self, c: &V3, h: &V3, cone: &ConeLanes) -> f32x4 {
+        let ConeLanes { frame, cos_beta, sin_beta, cutoff } = *cone;
         let from_box = sub3(&self.p, c);
-        let cos_theta = Frame::around(*axis).cos_bound(&from_box, h);
+        let cos_theta = frame.cos_bound(&from_box, h);
         let sin_theta = (f32x4::ONE - cos_theta * cos_theta).fast_max(f32x4::ZERO).sqrt();
         let widened = cos_theta * cos_beta + sin_theta * sin_beta;
         let widened = (widened * f32x4::splat(1.0 + COS_SLACK) + f32x4::splat(COS_SLACK)).fast_min(f32x4::ONE);

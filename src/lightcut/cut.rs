@@ -22,16 +22,15 @@
 //! creation order, so it is deterministic and free of the cancellation a
 //! running total accumulates.
 
-use std::collections::BinaryHeap;
-
 use glam::{DVec3, Vec3};
+use std::collections::BinaryHeap;
 
 use super::bounds::PointBounds;
 use super::{by_group, exhaustive_part, CutResult, CutSettings};
 use crate::embree::{PacketWidth, Scene as EmbreeScene};
 use crate::light_tree::layout::{Child, CutTree};
 use crate::light_tree::LightTrees;
-use crate::shading::{evaluate_and_trace, BatchBuffers, Chosen, Evaluations, LightEvaluator, SurfacePoint};
+use crate::shading::{evaluate_and_trace, BatchBuffers, Choices, Evaluations, LightEvaluator, SurfacePoint};
 use crate::util::color::luminance64;
 
 /// Nodes refined per batch of shadow rays (each refinement needs one ray:
@@ -62,30 +61,40 @@ impl Entry {
     }
 }
 
-/// A node whose representative's M * G and shadow ray are still to be
-/// found (the child of a refined node that does not share its
-/// representative).
+/// An entry whose representative's M * G * V is still to be found (the
+/// child of a refined node that does not share its parent's
+/// representative): where its representative is, slot `slot` of block
+/// `block` of its tree.
 #[derive(Debug, Clone, Copy)]
-struct Fresh {
-    intensity: Vec3,
-    bound: f32,
-    child: Child,
-    representative: u32,
+struct Pending {
+    entry: u32,
     block: u32,
     slot: u8,
-    tree: u8,
 }
 
-/// The heap key of an entry: its bound's bits above the complement of its
-/// index, so the largest bound comes first and ties go to the earlier entry.
+/// Most entries one cut may make: the heap key holds an entry's index in
+/// 24 bits. A cut stops refining before it would exceed it (a cut of 8
+/// million nodes, where `max_cut` is 1000 by default).
+const MAX_ENTRIES: usize = 1 << 24;
+
+/// The heap key of an entry: its bound's bits (a non-negative f32 orders
+/// like its bits), its tree, and the complement of its index, so the largest
+/// bound comes first, ties go to the earlier entry, and the key alone says
+/// which tree a node is in.
 #[inline]
-fn key(bound: f32, entry: usize) -> u64 {
-    (u64::from(bound.to_bits()) << 32) | u64::from(!(entry as u32))
+fn key(bound: f32, tree: u8, entry: usize) -> u64 {
+    debug_assert!(entry < MAX_ENTRIES);
+    (u64::from(bound.to_bits()) << 32) | (u64::from(tree) << 24) | u64::from(!(entry as u32) & 0x00ff_ffff)
 }
 
 #[inline]
 fn key_entry(key: u64) -> usize {
-    !(key as u32) as usize
+    (!(key as u32) & 0x00ff_ffff) as usize
+}
+
+#[inline]
+fn key_tree(key: u64) -> u8 {
+    (key >> 24) as u8
 }
 
 #[inline]
@@ -99,8 +108,8 @@ pub struct CutScratch {
     batch: BatchBuffers,
     entries: Vec<Entry>,
     heap: BinaryHeap<u64>,
-    fresh: Vec<Fresh>,
-    chosen: Vec<Chosen>,
+    pending: Vec<Pending>,
+    chosen: Choices,
     evaluations: Evaluations,
 }
 
@@ -112,7 +121,10 @@ struct Cut<'a, 'p> {
     bounds: PointBounds,
     embree: &'a EmbreeScene,
     scratch: &'a mut CutScratch,
-    total: DVec3,
+    /// The luminance of the cut's total estimate (what the threshold is
+    /// relative to): each entry's estimate's luminance added when it joins
+    /// the cut and taken away when it is refined.
+    total: f64,
     cut_nodes: usize,
     shadow_rays: u64,
 }
@@ -122,6 +134,7 @@ impl Cut<'_, '_> {
     /// of block 0). `parent` is the refined node's representative and its
     /// M * G * V, which the child that shares the representative reuses; the
     /// other child waits in `fresh` for its representative's evaluation.
+    #[inline(always)]
     fn add_children(&mut self, tree: u8, b: usize, parent: Option<(u32, DVec3)>) {
         let t = &self.trees[tree as usize];
         let bounds = self.bounds.pair(t.kind, &t.blocks[b], t.cones_of(b));
@@ -130,6 +143,7 @@ impl Cut<'_, '_> {
 
     /// [`Cut::add_children`] of two refined nodes of one tree, their four
     /// children bounded at once.
+    #[inline(always)]
     fn add_children_of_two(&mut self, tree: u8, parents: [&Entry; 2]) {
         let t = &self.trees[tree as usize];
         let [b0, b1] = parents.map(|p| p.child.index());
@@ -139,8 +153,13 @@ impl Cut<'_, '_> {
         self.add_slots(tree, b1, [c0, c1], Some((parents[1].representative, parents[1].unit)));
     }
 
+    /// Makes the entries of block `b`'s children: the one that shares the
+    /// refined node's representative (`parent`) joins the cut with its M * G
+    /// * V; the other waits for its representative's evaluation.
+    #[inline(always)]
     fn add_slots(&mut self, tree: u8, b: usize, bounds: [f32; 2], parent: Option<(u32, DVec3)>) {
         let block = &self.trees[tree as usize].blocks[b];
+        let (shared, unit) = parent.unwrap_or((u32::MAX, DVec3::ZERO));
         for (k, &bound) in bounds.iter().enumerate() {
             let child = block.child[k];
             if child == Child::EMPTY {
@@ -148,28 +167,21 @@ impl Cut<'_, '_> {
             }
             let representative = block.representative[k];
             let intensity = Vec3::new(block.intensity[0][k], block.intensity[1][k], block.intensity[2][k]);
-            match parent {
-                Some((shared, unit)) if shared == representative => {
-                    let entry = Entry { unit, intensity, bound, child, representative, tree, in_cut: true };
-                    let index = self.scratch.entries.len();
-                    self.scratch.entries.push(entry);
-                    self.admit(index);
-                }
-                _ => self.scratch.fresh.push(Fresh {
-                    intensity,
-                    bound,
-                    child,
-                    representative,
-                    block: b as u32,
-                    slot: k as u8,
-                    tree,
-                }),
+            let index = self.scratch.entries.len();
+            if representative == shared && parent.is_some() {
+                self.scratch.entries.push(Entry { unit, intensity, bound, child, representative, tree, in_cut: true });
+                self.admit(index);
+            } else {
+                let entry = Entry { unit: DVec3::ZERO, intensity, bound, child, representative, tree, in_cut: true };
+                self.scratch.entries.push(entry);
+                self.scratch.pending.push(Pending { entry: index as u32, block: b as u32, slot: k as u8 });
             }
         }
     }
 
     /// Takes the node with the largest bound out of the cut, if that bound
     /// exceeds `threshold`: the node to refine.
+    #[inline(always)]
     fn pop_above(&mut self, threshold: f32) -> Option<Entry> {
         let &top = self.scratch.heap.peek()?;
         if key_bound(top) <= threshold {
@@ -179,51 +191,46 @@ impl Cut<'_, '_> {
         let entry = &mut self.scratch.entries[key_entry(top)];
         entry.in_cut = false;
         let entry = *entry;
-        self.total -= entry.estimate();
+        self.total -= luminance64(entry.estimate());
         self.cut_nodes -= 1;
         Some(entry)
     }
 
     /// Counts entry `index` into the cut: its estimate into the total, its
     /// bound into the heap.
-    #[inline]
+    #[inline(always)]
     fn admit(&mut self, index: usize) {
         let entry = &self.scratch.entries[index];
-        self.total += entry.estimate();
+        self.total += luminance64(entry.estimate());
         self.cut_nodes += 1;
         if entry.bound > 0.0 {
-            self.scratch.heap.push(key(entry.bound, index));
+            self.scratch.heap.push(key(entry.bound, entry.tree, index));
         }
     }
 
-    /// Evaluates the fresh nodes' representatives (M * G * V per unit
-    /// intensity) by the evaluate-and-trace step, and admits the nodes.
+    /// Evaluates the pending entries' representatives (M * G * V per unit
+    /// intensity) by the evaluate-and-trace step, and admits the entries.
+    #[inline(always)]
     fn flush(&mut self) {
-        if self.scratch.fresh.is_empty() {
+        if self.scratch.pending.is_empty() {
             return;
         }
-        let CutScratch { fresh, entries, chosen, evaluations, .. } = &mut *self.scratch;
+        let CutScratch { pending, entries, chosen, evaluations, .. } = &mut *self.scratch;
         chosen.clear();
-        chosen.extend(fresh.iter().map(|f| {
-            let tree = &self.trees[f.tree as usize];
-            Chosen::new(tree.kind, &tree.representative(f.block as usize, f.slot as usize), DVec3::ONE, 0)
-        }));
+        for p in pending.iter() {
+            let tree = &self.trees[entries[p.entry as usize].tree as usize];
+            chosen.push(tree.kind, &tree.representative(p.block as usize, p.slot as usize), DVec3::ONE, 0);
+        }
         let (units, rays) = evaluate_and_trace(&self.evaluator, self.embree, PacketWidth::Eight, chosen, evaluations);
         self.shadow_rays += rays;
-        let first = entries.len();
-        entries.extend(fresh.iter().zip(units).map(|(f, &unit)| Entry {
-            unit,
-            intensity: f.intensity,
-            bound: f.bound,
-            child: f.child,
-            representative: f.representative,
-            tree: f.tree,
-            in_cut: true,
-        }));
-        fresh.clear();
-        for index in first..self.scratch.entries.len() {
-            self.admit(index);
+        for (p, &unit) in pending.iter().zip(units) {
+            entries[p.entry as usize].unit = unit;
         }
+        for i in 0..self.scratch.pending.len() {
+            let entry = self.scratch.pending[i].entry as usize;
+            self.admit(entry);
+        }
+        self.scratch.pending.clear();
     }
 }
 
@@ -239,14 +246,26 @@ pub fn evaluate(
     scratch: &mut CutScratch,
     groups: &mut [DVec3],
 ) -> CutResult {
-    by_group(trees, groups, settings.group_error, |range, groups| {
-        cut_through(trees, range, sp, embree, settings, scratch, groups)
-    })
+    // The cut is inlined into the entry point compiled for the CPU's best
+    // instruction set (docs/design.md §4).
+    crate::util::simd::best(
+        #[inline(always)]
+        || {
+            by_group(
+                trees,
+                groups,
+                settings.group_error,
+                #[inline(always)]
+                |range, groups| cut_through(trees, range, sp, embree, settings, scratch, groups),
+            )
+        },
+    )
 }
 
 /// One cut through `trees.trees[range]`, its threshold relative to their
 /// total. With `groups`, every node's estimate is also added to the slot of
 /// its tree's group.
+#[inline(always)]
 fn cut_through(
     all: &LightTrees,
     range: std::ops::Range<usize>,
@@ -267,7 +286,7 @@ fn cut_through(
 
     scratch.entries.clear();
     scratch.heap.clear();
-    scratch.fresh.clear();
+    scratch.pending.clear();
     let scale = all.scale;
     let mut cut = Cut {
         trees,
@@ -275,7 +294,7 @@ fn cut_through(
         bounds: PointBounds::new(sp, scale),
         embree,
         scratch,
-        total: fixed,
+        total: luminance64(fixed),
         cut_nodes: 0,
         shadow_rays: 0,
     };
@@ -287,17 +306,17 @@ fn cut_through(
     cut.flush();
     loop {
         // In the bounds' normalised units.
-        let threshold = (settings.error * luminance64(cut.total).max(0.0) * f64::from(scale)) as f32;
+        let threshold = (settings.error * cut.total.max(0.0) * f64::from(scale)) as f32;
         let mut refined = 0;
         // Only internal nodes have bounds above 0, so a popped entry has a block.
-        while refined < REFINE_BATCH && cut.cut_nodes + refined < settings.max_cut {
+        let max_cut = settings.max_cut.min(MAX_ENTRIES / 2 - REFINE_BATCH);
+        while refined < REFINE_BATCH && cut.cut_nodes + refined < max_cut {
             let Some(first) = cut.pop_above(threshold) else { break };
             refined += 1;
             // The next largest too, when it is of the same tree and the batch
             // and the cut have room: both nodes' children are bounded at once.
-            let room = refined < REFINE_BATCH && cut.cut_nodes + refined + 1 < settings.max_cut;
-            let same_tree =
-                cut.scratch.heap.peek().is_some_and(|&k| cut.scratch.entries[key_entry(k)].tree == first.tree);
+            let room = refined < REFINE_BATCH && cut.cut_nodes + refined + 1 < max_cut;
+            let same_tree = cut.scratch.heap.peek().is_some_and(|&k| key_tree(k) == first.tree);
             match (room && same_tree).then(|| cut.pop_above(threshold)).flatten() {
                 Some(second) => {
                     refined += 1;

@@ -104,6 +104,7 @@ pub struct CutResult {
 
 /// Every light of the trees too small for a cut, one by one with the exact
 /// renderer's code (the same for both cut modes).
+#[inline(always)]
 pub(crate) fn exhaustive(
     trees: &[CutTree],
     sp: &SurfacePoint<'_>,
@@ -123,6 +124,7 @@ pub(crate) fn exhaustive(
 /// trees too small for a cut, by [`exhaustive`]) as the start of the cut's
 /// result. With `groups`, group by group (the range holds whole groups'
 /// trees), each group's sum also added to its slot.
+#[inline(always)]
 pub(crate) fn exhaustive_part(
     trees: &LightTrees,
     range: &std::ops::Range<usize>,
@@ -152,6 +154,7 @@ pub(crate) fn exhaustive_part(
 /// group's slot when given the slots) as `group_error` says: through every
 /// tree at once when there are no slots or with [`GroupError::Pixel`],
 /// else once per group, summing the results. Shared by both cut modes.
+#[inline(always)]
 pub(crate) fn by_group(
     trees: &LightTrees,
     groups: &mut [DVec3],

@@ -24,7 +24,7 @@ use super::{by_group, exhaustive_part, CutResult, CutSettings, GroupError};
 use crate::embree::{PacketWidth, Scene as EmbreeScene};
 use crate::light_tree::layout::{Child, CutTree};
 use crate::light_tree::LightTrees;
-use crate::shading::{evaluate_and_trace, BatchBuffers, Chosen, Evaluations, LightEvaluator, SurfacePoint};
+use crate::shading::{evaluate_and_trace, BatchBuffers, Choices, Evaluations, LightEvaluator, SurfacePoint};
 use crate::util::color::luminance;
 use crate::util::sampling::Rng;
 
@@ -71,7 +71,7 @@ pub struct StochasticScratch {
     heap: BinaryHeap<u64>,
     walks: Vec<Walk>,
     drawn: Vec<Drawn>,
-    chosen: Vec<Chosen>,
+    chosen: Choices,
     evaluations: Evaluations,
 }
 
@@ -129,15 +129,29 @@ pub(crate) fn evaluate_with(
     importance: &impl Importance,
     groups: &mut [DVec3],
 ) -> CutResult {
-    by_group(trees, groups, settings.group_error, |range, groups| {
-        cut_through(trees, range, sp, embree, settings, rng, scratch, bounds, importance, groups)
-    })
+    // Inlined into the entry point compiled for the CPU's best instruction
+    // set (docs/design.md §4).
+    crate::util::simd::best(
+        #[inline(always)]
+        || {
+            by_group(
+                trees,
+                groups,
+                settings.group_error,
+                #[inline(always)]
+                |range, groups| {
+                    cut_through(trees, range, sp, embree, settings, rng, scratch, bounds, importance, groups)
+                },
+            )
+        },
+    )
 }
 
 /// One stochastic cut through `trees.trees[range]`, its threshold relative
 /// to their summed bounds; with `groups`, each drawn light's contribution
 /// is also added to its tree's group's slot.
 #[allow(clippy::too_many_arguments)]
+#[inline(always)]
 fn cut_through(
     trees: &LightTrees,
     range: std::ops::Range<usize>,
@@ -164,20 +178,20 @@ fn cut_through(
     scratch.drawn.sort_by_key(|d| d.tree);
     // Evaluated by the evaluate-and-trace step, each credited to its tree's group.
     scratch.chosen.clear();
-    scratch.chosen.extend(scratch.drawn.iter().map(|d| {
+    for d in &scratch.drawn {
         let tree = &trees.trees[d.tree as usize];
         let light = tree.representative(d.block as usize, d.slot as usize);
-        Chosen::new(tree.kind, &light, d.weight, trees.group_of_tree[d.tree as usize] as u32)
-    }));
+        scratch.chosen.push(tree.kind, &light, d.weight, trees.group_of_tree[d.tree as usize] as u32);
+    }
     let evaluator = LightEvaluator::new(sp);
     let (values, rays) =
         evaluate_and_trace(&evaluator, embree, PacketWidth::Sixteen, &scratch.chosen, &mut scratch.evaluations);
     result.shadow_rays += rays;
     let mut radiance = fixed;
-    for (c, value) in scratch.chosen.iter().zip(values) {
+    for (slot, value) in scratch.chosen.slots().zip(values) {
         radiance += *value;
-        if let Some(slot) = groups.get_mut(c.slot as usize) {
-            *slot += *value;
+        if let Some(group) = groups.get_mut(slot as usize) {
+            *group += *value;
         }
     }
     result.radiance = radiance;

@@ -214,18 +214,28 @@ impl Integrator<'_> {
                 // Every light, one shadow ray each, in batches; summed group
                 // by group, in light order (omni, oriented, directional,
                 // spot) within each: deterministic.
-                let (mut radiance, mut lights, mut shadow_rays) = (DVec3::ZERO, 0, 0);
-                for (g, group) in self.lights.iter().enumerate() {
-                    let mut batch = LightBatch::new(&self.geometry.embree, sp, &mut scratch.batch);
-                    group.for_each(|light| batch.add(&light));
-                    let found = batch.finish();
-                    radiance += found.radiance;
-                    lights += found.lights;
-                    shadow_rays += found.shadow_rays;
-                    if let Some(slot) = scratch.point_groups.get_mut(g) {
-                        *slot += found.radiance;
-                    }
-                }
+                // Run in the CPU's best instruction set (docs/design.md §4).
+                let (radiance, lights, shadow_rays) = crate::util::simd::best(
+                    #[inline(always)]
+                    || {
+                        let (mut radiance, mut lights, mut shadow_rays) = (DVec3::ZERO, 0, 0);
+                        for (g, group) in self.lights.iter().enumerate() {
+                            let mut batch = LightBatch::new(&self.geometry.embree, sp, &mut scratch.batch);
+                            group.for_each(
+                                #[inline(always)]
+                                |light| batch.add(&light),
+                            );
+                            let found = batch.finish();
+                            radiance += found.radiance;
+                            lights += found.lights;
+                            shadow_rays += found.shadow_rays;
+                            if let Some(slot) = scratch.point_groups.get_mut(g) {
+                                *slot += found.radiance;
+                            }
+                        }
+                        (radiance, lights, shadow_rays)
+                    },
+                );
                 stats.record_point(lights, shadow_rays);
                 radiance
             }

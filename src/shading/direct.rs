@@ -11,12 +11,13 @@
 use std::f32::consts::PI;
 
 use glam::{DVec3, Vec3};
-use wide::{f32x4, CmpEq, CmpLe};
+use wide::{f32x4, f64x4, CmpEq, CmpLe};
 
 use super::surface::SurfacePoint;
 use crate::embree::{Ray, ShadowRay};
 use crate::light::{Light, LightKind, SpotLight, TreeLight};
 use crate::scene::material::phong_normalisation;
+use crate::util::simd::pow;
 
 /// Up to four lights of one kind, one per lane: `point` is the position of
 /// an omni, oriented or spot light, the unit direction towards a
@@ -39,17 +40,21 @@ impl Lanes {
     }
 
     /// [`Lanes::push`] of a light's position (or direction), normal and spread.
+    #[inline(always)]
     pub fn push_point(&mut self, point: Vec3, normal: Vec3, spread: [f32; 2]) -> bool {
-        if self.count == 4 {
+        let k = self.count;
+        if k >= 4 {
             return false;
         }
-        for axis in 0..3 {
-            self.point[axis][self.count] = point[axis];
-            self.normal[axis][self.count] = normal[axis];
-        }
-        self.spread[0][self.count] = spread[0];
-        self.spread[1][self.count] = spread[1];
-        self.count += 1;
+        self.point[0][k] = point.x;
+        self.point[1][k] = point.y;
+        self.point[2][k] = point.z;
+        self.normal[0][k] = normal.x;
+        self.normal[1][k] = normal.y;
+        self.normal[2][k] = normal.z;
+        self.spread[0][k] = spread[0];
+        self.spread[1][k] = spread[1];
+        self.count = k + 1;
         true
     }
 }
@@ -94,6 +99,7 @@ pub struct LightEvaluator<'a, 'p> {
 
 impl<'a, 'p> LightEvaluator<'a, 'p> {
     #[must_use]
+    #[inline(always)]
     pub fn new(sp: &'a SurfacePoint<'p>) -> Self {
         let m = sp.material;
         let origin = sp.offset_origin();
@@ -120,9 +126,8 @@ impl<'a, 'p> LightEvaluator<'a, 'p> {
         let below = cos_theta.cmp_le(zero) | dot(&self.ng, wi).cmp_le(zero);
         let mut f = self.diffuse;
         if let Some((specular, normalisation)) = self.phong {
-            let cos_alpha = dot(&self.r, wi).fast_max(zero).to_array();
-            let exponent = self.sp.material.exponent;
-            let lobe = f32x4::new(cos_alpha.map(|c| normalisation * c.powf(exponent)));
+            let cos_alpha = dot(&self.r, wi).fast_max(zero);
+            let lobe = f32x4::splat(normalisation) * pow(cos_alpha, self.sp.material.exponent);
             f = [
                 f[0] + f32x4::splat(specular.x) * lobe,
                 f[1] + f32x4::splat(specular.y) * lobe,
@@ -135,18 +140,38 @@ impl<'a, 'p> LightEvaluator<'a, 'p> {
     /// M * G per unit intensity of the lanes' lights, and their shadow rays.
     #[must_use]
     pub fn terms(&self, kind: LightKind, lanes: &Lanes) -> [LightTerm; 4] {
-        let point = [f32x4::new(lanes.point[0]), f32x4::new(lanes.point[1]), f32x4::new(lanes.point[2])];
         let mut out = [LightTerm::default(); 4];
+        let mut sink = |k: usize, term: DVec3, ray: Option<ShadowRay>| out[k] = LightTerm { term, ray };
+        self.each_term(kind, lanes, &[DVec3::ONE; 4], &mut sink);
+        out
+    }
+
+    /// Calls `sink(lane, value, ray)` for each of the lanes' lights, in lane
+    /// order: value = M * G * `weights[lane]` (V not included), and the
+    /// shadow ray that decides its visibility (None within the ray offset:
+    /// nothing can lie between). A light whose value is 0 gets no ray.
+    #[inline(always)]
+    pub fn each_term(
+        &self,
+        kind: LightKind,
+        lanes: &Lanes,
+        weights: &[DVec3; 4],
+        sink: &mut impl FnMut(usize, DVec3, Option<ShadowRay>),
+    ) {
+        let point = [f32x4::new(lanes.point[0]), f32x4::new(lanes.point[1]), f32x4::new(lanes.point[2])];
         if kind == LightKind::Directional {
             let m = self.material(&point);
             let m = [m[0].to_array(), m[1].to_array(), m[2].to_array()];
-            for (k, slot) in out.iter_mut().enumerate().take(lanes.count) {
-                slot.term = DVec3::new(f64::from(m[0][k]), f64::from(m[1][k]), f64::from(m[2][k]));
-                let direction = Vec3::new(lanes.point[0][k], lanes.point[1][k], lanes.point[2][k]);
-                let ray = Ray { origin: self.origin_point, direction, t_near: 0.0, t_far: f32::INFINITY };
-                slot.ray = Some(ShadowRay::new(ray));
+            for (k, w) in weights.iter().enumerate().take(lanes.count) {
+                let term = DVec3::new(f64::from(m[0][k]), f64::from(m[1][k]), f64::from(m[2][k]));
+                let value = term * *w;
+                let ray = (value != DVec3::ZERO).then(|| {
+                    let direction = Vec3::new(lanes.point[0][k], lanes.point[1][k], lanes.point[2][k]);
+                    ShadowRay::new(Ray { origin: self.origin_point, direction, t_near: 0.0, t_far: f32::INFINITY })
+                });
+                sink(k, value, ray);
             }
-            return out;
+            return;
         }
         let d = [point[0] - self.p[0], point[1] - self.p[1], point[2] - self.p[2]];
         let d2 = dot(&d, &d);
@@ -165,34 +190,40 @@ impl<'a, 'p> LightEvaluator<'a, 'p> {
                 cosine.fast_max(f32x4::ZERO).to_array()
             }
         });
+        // G = 1 / max(d^2, clamp^2) (times the emitter's cosine), in f64:
+        // an intensity up to 1e30 W/sr times G up to 1 / epsilon^2
+        // overflows f32. Four lanes at once, the same operations as one at
+        // a time.
+        let widen = |v: f32x4| f64x4::from(v.to_array().map(f64::from));
+        let mut g = f64x4::ONE / widen(d2).max(f64x4::splat(self.sp.min_distance_squared()));
+        if let Some(cosine) = emitted {
+            g *= f64x4::from(cosine.map(f64::from));
+        }
+        let terms = [widen(m[0]) * g, widen(m[1]) * g, widen(m[2]) * g].map(f64x4::to_array);
         // The shadow ray from the lifted origin, stopping epsilon short of the light.
         let direction = [point[0] - self.origin[0], point[1] - self.origin[1], point[2] - self.origin[2]];
         let length = dot(&direction, &direction).sqrt();
         let epsilon = f32x4::splat(self.sp.epsilon);
         let t_far = (f32x4::ONE - epsilon / length).to_array();
         let too_close = length.cmp_le(epsilon + epsilon).to_array();
-        let at_light = d2.cmp_eq(f32x4::ZERO).to_array();
-        let (d2, m) = (d2.to_array(), [m[0].to_array(), m[1].to_array(), m[2].to_array()]);
+        // At the light the direction is undefined and it contributes
+        // nothing (docs/design.md §5.4); nor does a light M is 0 for.
+        let nothing = (d2.cmp_eq(f32x4::ZERO)
+            | (m[0].cmp_eq(f32x4::ZERO) & m[1].cmp_eq(f32x4::ZERO) & m[2].cmp_eq(f32x4::ZERO)))
+        .to_array();
         let direction = [direction[0].to_array(), direction[1].to_array(), direction[2].to_array()];
-        for (k, slot) in out.iter_mut().enumerate().take(lanes.count) {
-            let mk = Vec3::new(m[0][k], m[1][k], m[2][k]);
-            // At the light the direction is undefined and it contributes
-            // nothing (docs/scene-format.md).
-            if at_light[k] != 0.0 || mk == Vec3::ZERO {
+        for (k, w) in weights.iter().enumerate().take(lanes.count) {
+            if nothing[k] != 0.0 {
+                sink(k, DVec3::ZERO, None);
                 continue;
             }
-            let mut g = 1.0 / f64::from(d2[k]).max(self.sp.min_distance_squared());
-            if let Some(cosine) = emitted {
-                g *= f64::from(cosine[k]);
-            }
-            slot.term = mk.as_dvec3() * g;
-            if too_close[k] == 0.0 {
+            let value = DVec3::new(terms[0][k], terms[1][k], terms[2][k]) * *w;
+            let ray = (value != DVec3::ZERO && too_close[k] == 0.0).then(|| {
                 let direction = Vec3::new(direction[0][k], direction[1][k], direction[2][k]);
-                let ray = Ray { origin: self.origin_point, direction, t_near: 0.0, t_far: t_far[k] };
-                slot.ray = Some(ShadowRay::new(ray));
-            }
+                ShadowRay::new(Ray { origin: self.origin_point, direction, t_near: 0.0, t_far: t_far[k] })
+            });
+            sink(k, value, ray);
         }
-        out
     }
 }
 

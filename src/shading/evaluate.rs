@@ -5,7 +5,7 @@
 //! lights four at a time at the shading point ([`LightEvaluator`]) and
 //! traces the shadow rays of those that can contribute as Embree packets.
 
-use glam::{DVec3, Vec3};
+use glam::DVec3;
 
 use super::direct::{Lanes, LightEvaluator};
 use super::surface::SurfacePoint;
@@ -21,30 +21,77 @@ pub const SHADOW_BATCH: usize = 256;
 /// single-ray calls on the exact renderer's rays (grid10k).
 pub const SHADOW_PACKET: PacketWidth = PacketWidth::Sixteen;
 
-/// A light a mode chose to evaluate at a shading point.
-#[derive(Debug, Clone, Copy)]
-pub struct Chosen {
-    pub kind: LightKind,
-    /// A tree leaf's data: the light's position (its direction for a
-    /// directional light), its normal (oriented lights; a spot's axis) and
-    /// a spot's cosines of its inner and outer angles.
-    pub point: Vec3,
-    pub normal: Vec3,
-    pub spread: [f32; 2],
-    /// What the light's M * G * V is multiplied by: its intensity (W/sr,
-    /// or W/m^2 for a directional light), its intensity over the
-    /// probability of drawing it, or 1 for the unit value a bounded cut
-    /// multiplies by a cluster's intensity.
-    pub weight: DVec3,
-    /// Where the caller credits the value (a light group).
-    pub slot: u32,
+/// The lights a mode chose to evaluate at a shading point, in order, each
+/// with the weight its M * G * V is multiplied by and the slot it is
+/// credited to. Stored four at a time as the evaluation reads them (lights
+/// of one kind in each group of four), so that choosing writes each light
+/// once, where it is evaluated.
+#[derive(Default)]
+pub struct Choices {
+    /// The quads in use are the first `used`; the others are kept from an
+    /// earlier point, so that a new quad is not written twice.
+    quads: Vec<Quad>,
+    used: usize,
+    len: usize,
 }
 
-impl Chosen {
-    /// `light` of `kind` with weight `weight`, credited to `slot`.
+/// Up to four chosen lights of one kind.
+#[derive(Clone, Copy)]
+struct Quad {
+    kind: LightKind,
+    lanes: Lanes,
+    weights: [DVec3; 4],
+    slots: [u32; 4],
+}
+
+impl Choices {
+    pub fn clear(&mut self) {
+        self.used = 0;
+        self.len = 0;
+    }
+
     #[must_use]
-    pub fn new(kind: LightKind, light: &TreeLight, weight: DVec3, slot: u32) -> Self {
-        Self { kind, point: light.point, normal: light.normal, spread: light.spread, weight, slot }
+    pub fn len(&self) -> usize {
+        self.len
+    }
+
+    #[must_use]
+    pub fn is_empty(&self) -> bool {
+        self.len == 0
+    }
+
+    /// Chooses a light of `kind` with its data as a tree stores it (its
+    /// position, or direction for a directional light; its normal, a spot's
+    /// axis; a spot's cosines), the weight its M * G * V is multiplied by
+    /// (its intensity in W/sr or W/m^2, that over the probability of drawing
+    /// it, or 1 for a value per unit intensity), and the slot the value is
+    /// credited to (a light group).
+    #[inline(always)]
+    pub fn push(&mut self, kind: LightKind, light: &TreeLight, weight: DVec3, slot: u32) {
+        let full = self.used == 0 || {
+            let last = &self.quads[self.used - 1];
+            last.lanes.count == 4 || last.kind != kind
+        };
+        if full {
+            if self.used == self.quads.len() {
+                self.quads.push(Quad { kind, lanes: Lanes::default(), weights: [DVec3::ZERO; 4], slots: [0; 4] });
+            }
+            let quad = &mut self.quads[self.used];
+            quad.kind = kind;
+            quad.lanes.count = 0;
+            self.used += 1;
+        }
+        let quad = &mut self.quads[self.used - 1];
+        let k = quad.lanes.count & 3;
+        quad.weights[k] = weight;
+        quad.slots[k] = slot;
+        quad.lanes.push_point(light.point, light.normal, light.spread);
+        self.len += 1;
+    }
+
+    /// The slot of each chosen light, in order.
+    pub fn slots(&self) -> impl Iterator<Item = u32> + '_ {
+        self.quads[..self.used].iter().flat_map(|q| q.slots[..q.lanes.count].iter().copied())
     }
 }
 
@@ -60,40 +107,29 @@ pub struct Evaluations {
 
 /// The value of each of `chosen` at `evaluator`'s shading point, in order:
 /// M * G * V * weight (0 when occluded, behind the surface or out of
-/// reach). The lights are evaluated four at a time (consecutive lights of
-/// one kind share lanes); the shadow rays of those whose value is not 0 are
-/// traced in one call as packets of `width`. Returns the values and the
-/// shadow rays cast.
+/// reach). The lights are evaluated four at a time; the shadow rays of
+/// those whose value is not 0 are traced in one call as packets of `width`.
+/// Returns the values and the shadow rays cast.
+#[inline(always)]
 pub fn evaluate_and_trace<'b>(
     evaluator: &LightEvaluator<'_, '_>,
     embree: &EmbreeScene,
     width: PacketWidth,
-    chosen: &[Chosen],
+    chosen: &Choices,
     buffers: &'b mut Evaluations,
 ) -> (&'b [DVec3], u64) {
     let Evaluations { values, rays, ray_entry, occluded } = buffers;
     values.clear();
     rays.clear();
     ray_entry.clear();
-    for run in chosen.chunk_by(|a, b| a.kind == b.kind) {
-        for quad in run.chunks(4) {
-            let mut lanes = Lanes::default();
-            for c in quad {
-                lanes.push_point(c.point, c.normal, c.spread);
+    for quad in &chosen.quads[..chosen.used] {
+        evaluator.each_term(quad.kind, &quad.lanes, &quad.weights, &mut |_, value, ray| {
+            if let Some(ray) = ray {
+                rays.push(ray);
+                ray_entry.push(values.len() as u32);
             }
-            for (c, found) in quad.iter().zip(evaluator.terms(quad[0].kind, &lanes)) {
-                let value = found.term * c.weight;
-                // No ray for a light that contributes nothing here, nor for
-                // one within the ray offset (nothing can lie between).
-                if value != DVec3::ZERO {
-                    if let Some(ray) = found.ray {
-                        rays.push(ray);
-                        ray_entry.push(values.len() as u32);
-                    }
-                }
-                values.push(value);
-            }
-        }
+            values.push(value);
+        });
     }
     embree.occluded_packets(rays, occluded, width);
     for (&entry, &blocked) in ray_entry.iter().zip(occluded.iter()) {
@@ -107,7 +143,7 @@ pub fn evaluate_and_trace<'b>(
 /// Reusable buffers for [`LightBatch`].
 #[derive(Default)]
 pub struct BatchBuffers {
-    chosen: Vec<Chosen>,
+    chosen: Choices,
     evaluations: Evaluations,
 }
 
@@ -133,25 +169,29 @@ pub struct LightBatch<'a, 'p> {
 }
 
 impl<'a, 'p> LightBatch<'a, 'p> {
+    #[inline(always)]
     pub fn new(embree: &'a EmbreeScene, sp: &'a SurfacePoint<'p>, buffers: &'a mut BatchBuffers) -> Self {
         buffers.chosen.clear();
         Self { embree, evaluator: LightEvaluator::new(sp), buffers, result: BatchResult::default() }
     }
 
     /// One light, with its own intensity.
+    #[inline(always)]
     pub fn add(&mut self, light: &Light) {
         self.add_tree_light(light.kind(), &TreeLight::of(light));
     }
 
     /// One light of `kind` as a tree stores it, with its own intensity.
+    #[inline(always)]
     pub fn add_tree_light(&mut self, kind: LightKind, light: &TreeLight) {
         self.result.lights += 1;
-        self.buffers.chosen.push(Chosen::new(kind, light, light.intensity.as_dvec3(), 0));
+        self.buffers.chosen.push(kind, light, light.intensity.as_dvec3(), 0);
         if self.buffers.chosen.len() == SHADOW_BATCH {
             self.flush();
         }
     }
 
+    #[inline(always)]
     fn flush(&mut self) {
         let b = &mut *self.buffers;
         let (values, rays) =
@@ -164,6 +204,7 @@ impl<'a, 'p> LightBatch<'a, 'p> {
     }
 
     /// Traces what is left and returns the sum and the counts.
+    #[inline(always)]
     pub fn finish(mut self) -> BatchResult {
         self.flush();
         self.result
