@@ -19,8 +19,9 @@ use wide::{f32x4, CmpEq, CmpGe, CmpGt};
 use crate::light::LightKind;
 use crate::light_tree::layout::{Block, Cones};
 use crate::scene::material::phong_normalisation;
+use crate::shading::pbr::{distribution, schlick_weight, visibility_cos, PbrLanes};
 use crate::shading::SurfacePoint;
-use crate::util::simd::pow_upper;
+use crate::util::simd::{dot3, pow_upper, splat3, V3};
 
 /// Slack of every cosine bound, relative and absolute: a bound takes a few
 /// f32 roundings (dot products, sqrt, divide), each within 2^-24 relative;
@@ -36,8 +37,6 @@ const PRODUCT_SLACK: f32 = 1.0 + 1.0 / 1_048_576.0;
 /// sums below.
 const LUMINANCE: Vec3 = Vec3::new(0.2126, 0.7152, 0.0722);
 
-type V3 = [f32x4; 3];
-
 /// Per lane: a cone's axis with its frame (tangent, bitangent), cos and
 /// sin of its half-angle, and for spots the cutoff (see
 /// `PointBounds::emission`).
@@ -48,9 +47,6 @@ struct ConeLanes {
     cutoff: Option<f32x4>,
 }
 
-fn splat3(v: Vec3) -> V3 {
-    [f32x4::splat(v.x), f32x4::splat(v.y), f32x4::splat(v.z)]
-}
 
 /// Lanes 0 and 1 from a slot pair (lanes 2 and 3 are 0).
 #[inline(always)]
@@ -58,10 +54,6 @@ fn lanes(pair: [f32; 2]) -> f32x4 {
     f32x4::new([pair[0], pair[1], 0.0, 0.0])
 }
 
-#[inline(always)]
-fn dot(a: &V3, b: &V3) -> f32x4 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
 
 #[inline(always)]
 fn abs3(a: &V3) -> V3 {
@@ -110,14 +102,28 @@ impl Frame {
     /// smallest |u|, |v|. 0 where the whole box is behind the plane.
     #[inline(always)]
     fn cos_bound(&self, c: &V3, h: &V3) -> f32x4 {
-        let z1 = dot(&self.axis, c) + dot(&self.abs_axis, h);
+        let z1 = dot3(&self.axis, c) + dot3(&self.abs_axis, h);
         let zero = f32x4::ZERO;
-        let mx = (dot(&self.tangent, c).abs() - dot(&self.abs_tangent, h)).fast_max(zero);
-        let my = (dot(&self.bitangent, c).abs() - dot(&self.abs_bitangent, h)).fast_max(zero);
+        let mx = (dot3(&self.tangent, c).abs() - dot3(&self.abs_tangent, h)).fast_max(zero);
+        let my = (dot3(&self.bitangent, c).abs() - dot3(&self.abs_bitangent, h)).fast_max(zero);
         let ratio = z1 / (mx * mx + my * my + z1 * z1).sqrt();
         let bound = (ratio * f32x4::splat(1.0 + COS_SLACK) + f32x4::splat(COS_SLACK)).fast_min(f32x4::ONE);
         z1.cmp_gt(zero).blend(bound, zero)
     }
+}
+
+/// Relative slack of the GGX lobe's bound: D and V take a dozen roundings
+/// each (2^-24 relative apiece) on top of their bounding cosines.
+const GGX_SLACK: f32 = 1e-4;
+
+/// What the metallic-roughness bound needs of a shading point.
+struct GgxBounds {
+    lanes: PbrLanes,
+    /// Frames around the mirror direction and around -wo.
+    mirror: Frame,
+    back: Frame,
+    /// 1 - max(f0): the diffuse part's largest weight (F >= f0).
+    diffuse_fresnel: f32x4,
 }
 
 /// What the bounds need of one shading point, prepared once per point.
@@ -126,11 +132,14 @@ pub struct PointBounds {
     normal: Frame,
     /// The Phong lobe's frame around the mirror direction, and its exponent.
     phong: Option<(Frame, f32)>,
+    /// A metallic-roughness material's lobe (instead of diffuse + Phong).
+    ggx: Option<GgxBounds>,
     /// Luminance weights times the diffuse BRDF k_d / pi, and times the
     /// Phong lobe's peak k_s (n + 2) / (2 pi): M's luminance against an
     /// intensity I is diffuse.I + cos_r^n lobe.I, times cos theta.
     diffuse: V3,
     lobe: V3,
+    luminance: V3,
     /// The distance clamp squared (f32, rounded down: 0 if it underflows,
     /// which makes G's bound infinite, still an upper bound).
     min_distance_squared: f32x4,
@@ -154,8 +163,15 @@ impl PointBounds {
             p: splat3(sp.p),
             normal: Frame::splat(sp.n),
             phong: m.has_specular().then(|| (Frame::splat(sp.r), m.exponent)),
+            ggx: sp.pbr.map(|pbr| GgxBounds {
+                lanes: PbrLanes::new(&pbr, sp.n.dot(sp.wo)),
+                mirror: Frame::splat(sp.r),
+                back: Frame::splat(-sp.wo),
+                diffuse_fresnel: f32x4::splat(1.0 - pbr.f0.max_element()),
+            }),
             diffuse: splat3(LUMINANCE * sp.kd * (1.0 / PI)),
             lobe: splat3(LUMINANCE * lobe),
+            luminance: splat3(LUMINANCE),
             min_distance_squared: f32x4::splat(clamp32),
             scale: f32x4::splat(scale),
         }
@@ -166,14 +182,43 @@ impl PointBounds {
     /// (c, h) (vectors from the shading point; any length).
     #[inline(always)]
     fn material(&self, c: &V3, h: &V3, intensity: &V3) -> (f32x4, f32x4) {
+        if let Some(ggx) = &self.ggx {
+            return self.ggx(ggx, c, h, intensity);
+        }
         let cos_theta = self.normal.cos_bound(c, h);
-        let mut weighted = dot(&self.diffuse, intensity);
+        let mut weighted = dot3(&self.diffuse, intensity);
         if let Some((frame, exponent)) = &self.phong {
             // cos^n is increasing in cos: the bound of cos_r, raised to n, bounds it.
             let lobe = pow_upper(frame.cos_bound(c, h), *exponent);
-            weighted += dot(&self.lobe, intensity) * lobe;
+            weighted += dot3(&self.lobe, intensity) * lobe;
         }
         (cos_theta, weighted)
+    }
+
+    /// A metallic-roughness material's bound (docs/design.md §8.3): every
+    /// factor of f_r cos theta is monotonic in one cosine, each bounded
+    /// over the box: n.l by the normal's cosine bound; n.h <= cos(half the
+    /// smallest angle between the mirror direction r and the box) (a
+    /// half-vector h tilted by delta from n reflects wo to within 2 delta
+    /// of r), so n.h <= sqrt((1 + cos_ub(r)) / 2); v.h = sqrt((1 + wo.wi) /
+    /// 2) >= sqrt((1 - cos_ub(-wo)) / 2), which bounds Schlick's weight.
+    /// Returns (1 where the box is above the surface's plane, else 0; the
+    /// luminance-weighted bound, cosine included).
+    #[inline(always)]
+    fn ggx(&self, ggx: &GgxBounds, c: &V3, h: &V3, intensity: &V3) -> (f32x4, f32x4) {
+        let (zero, one) = (f32x4::ZERO, f32x4::ONE);
+        let slack = |x: f32x4| (x * f32x4::splat(1.0 + COS_SLACK) + f32x4::splat(COS_SLACK)).fast_min(one);
+        let cos_theta = self.normal.cos_bound(c, h);
+        let n_dot_h = slack((f32x4::splat(0.5) * (one + ggx.mirror.cos_bound(c, h))).sqrt());
+        let v_dot_h = (f32x4::splat(0.5) * (one - ggx.back.cos_bound(c, h)).fast_max(zero)).sqrt();
+        let v_dot_h = (v_dot_h * f32x4::splat(1.0 - COS_SLACK) - f32x4::splat(COS_SLACK)).fast_max(zero);
+        let lanes = &ggx.lanes;
+        let specular = distribution(n_dot_h, lanes.alpha2)
+            * visibility_cos(cos_theta, lanes.n_dot_v, lanes.alpha2)
+            * f32x4::splat(1.0 + GGX_SLACK);
+        let m = lanes.combine(cos_theta, specular, schlick_weight(v_dot_h), ggx.diffuse_fresnel);
+        let weighted = dot3(&[m[0] * self.luminance[0], m[1] * self.luminance[1], m[2] * self.luminance[2]], intensity);
+        (cos_theta.cmp_gt(zero).blend(one, zero), weighted)
     }
 
     /// G's bound for point lights in the boxes: 1 / max(d_min^2, clamp^2),
@@ -188,7 +233,7 @@ impl PointBounds {
             // the clamp (pbrt-v4's LightBounds::Importance does the like).
             // Not a bound, only a weight: it is never 0.
             let d = sub3(c, &self.p);
-            return f32x4::ONE / dot(&d, &d).fast_max(dot(h, h)).fast_max(self.min_distance_squared);
+            return f32x4::ONE / dot3(&d, &d).fast_max(dot3(h, h)).fast_max(self.min_distance_squared);
         }
         let zero = f32x4::ZERO;
         let d = [
@@ -198,7 +243,7 @@ impl PointBounds {
         ];
         // Rounded down a little: the squared distance's roundings must not
         // make G's bound smaller.
-        let d2 = dot(&d, &d) * f32x4::splat(1.0 - 1.0 / 1_048_576.0);
+        let d2 = dot3(&d, &d) * f32x4::splat(1.0 - 1.0 / 1_048_576.0);
         f32x4::ONE / d2.fast_max(self.min_distance_squared)
     }
 

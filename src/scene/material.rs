@@ -1,12 +1,14 @@
 //! Materials: diffuse (constant or textured albedo) plus Phong specular, plus
-//! a perfect mirror layer: [LC05]'s model (docs/design.md §5.3; its bound
-//! over a cluster, §8.3).
+//! a perfect mirror layer: [LC05]'s model; or glTF's metallic-roughness
+//! material (`shading::pbr`), whose base colour is the albedo
+//! (docs/design.md §5.3; their bounds over a cluster, §8.3).
 
 use std::f32::consts::PI;
 
 use glam::{Affine2, Vec2, Vec3};
 
 use super::texture::Texture;
+use crate::shading::pbr::Pbr;
 
 #[derive(Debug, Clone)]
 pub enum Albedo {
@@ -37,6 +39,38 @@ pub struct Material {
     /// Where the surface is cut out (glTF's alphaMode MASK): rays pass
     /// through where the coverage is below the cutoff.
     pub cutout: Option<Cutout>,
+    /// glTF's metallic-roughness BRDF instead of diffuse + Phong: `albedo`
+    /// is its base colour, and `specular`, `exponent` and `mirror` are 0.
+    pub pbr: Option<PbrMaterial>,
+}
+
+/// The metallic-roughness parameters of a material (glTF 2.0's
+/// `pbrMetallicRoughness` and KHR_materials_specular).
+#[derive(Debug, Clone)]
+pub struct PbrMaterial {
+    pub metallic: f32,
+    pub roughness: f32,
+    /// KHR_materials_specular's factor and colour (1 and white without it).
+    pub specular: f32,
+    pub specular_colour: Vec3,
+    /// glTF's `metallicRoughnessTexture` (linear; G roughness, B metallic,
+    /// multiplying the factors): an index into `Scene::textures` and the
+    /// map from the mesh's uv to the texture's.
+    pub metallic_roughness: Option<(usize, Affine2)>,
+}
+
+impl PbrMaterial {
+    /// The BRDF's parameters at a point of base colour `base` and uv `uv`.
+    #[must_use]
+    pub fn at(&self, base: Vec3, uv: Vec2, textures: &[Texture]) -> Pbr {
+        let (mut metallic, mut roughness) = (self.metallic, self.roughness);
+        if let Some((texture, transform)) = &self.metallic_roughness {
+            let texel = textures[*texture].lookup(transform.transform_point2(uv));
+            roughness *= texel.y;
+            metallic *= texel.z;
+        }
+        Pbr::new(base, metallic.clamp(0.0, 1.0), roughness.clamp(0.0, 1.0), self.specular, self.specular_colour)
+    }
 }
 
 /// Coverage texels and the cutoff below which a surface is absent.
@@ -77,18 +111,6 @@ impl Material {
 #[must_use]
 pub fn phong_normalisation(exponent: f32) -> f32 {
     (exponent + 2.0) / (2.0 * PI)
-}
-
-/// f_r(wi, wo) = k_d / pi + k_s (n+2)/(2 pi) cos^n(alpha), alpha between wi and
-/// the mirror direction `r` of wo. All directions unit length.
-#[must_use]
-pub fn brdf(kd: Vec3, material: &Material, r: Vec3, wi: Vec3) -> Vec3 {
-    let diffuse = kd * (1.0 / PI);
-    if !material.has_specular() {
-        return diffuse;
-    }
-    let cos_alpha = r.dot(wi).max(0.0);
-    diffuse + material.specular * (phong_normalisation(material.exponent) * cos_alpha.powf(material.exponent))
 }
 
 /// Mirror direction of `wo` about `n` (both unit, pointing away from the surface).

@@ -13,11 +13,12 @@ use std::f32::consts::PI;
 use glam::{DVec3, Vec3};
 use wide::{f32x4, f64x4, CmpEq, CmpLe};
 
+use super::pbr::PbrLanes;
 use super::surface::SurfacePoint;
 use crate::embree::{Ray, ShadowRay};
 use crate::light::{Light, LightKind, SpotLight, TreeLight};
 use crate::scene::material::phong_normalisation;
-use crate::util::simd::pow;
+use crate::util::simd::{dot3, pow, splat3, V3};
 
 /// Up to four lights of one kind, one per lane: `point` is the position of
 /// an omni, oriented or spot light, the unit direction towards a
@@ -69,17 +70,7 @@ pub struct LightTerm {
     pub ray: Option<ShadowRay>,
 }
 
-type V3 = [f32x4; 3];
 
-fn splat3(v: Vec3) -> V3 {
-    [f32x4::splat(v.x), f32x4::splat(v.y), f32x4::splat(v.z)]
-}
-
-/// (a.x b.x + a.y b.y) + a.z b.z: glam's Vec3::dot, lane by lane.
-#[inline(always)]
-fn dot(a: &V3, b: &V3) -> f32x4 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
 
 /// A shading point prepared for evaluating lights four at a time.
 pub struct LightEvaluator<'a, 'p> {
@@ -88,6 +79,9 @@ pub struct LightEvaluator<'a, 'p> {
     n: V3,
     ng: V3,
     r: V3,
+    wo: V3,
+    /// A metallic-roughness material's BRDF (instead of diffuse + Phong).
+    pbr: Option<PbrLanes>,
     /// k_d / pi, per channel.
     diffuse: V3,
     /// k_s (n + 2) / (2 pi) and n, for a Phong lobe.
@@ -109,6 +103,8 @@ impl<'a, 'p> LightEvaluator<'a, 'p> {
             n: splat3(sp.n),
             ng: splat3(sp.ng),
             r: splat3(sp.r),
+            wo: splat3(sp.wo),
+            pbr: sp.pbr.map(|p| PbrLanes::new(&p, sp.n.dot(sp.wo))),
             diffuse: splat3(sp.kd * (1.0 / PI)),
             phong: m.has_specular().then(|| (m.specular, phong_normalisation(m.exponent))),
             origin: splat3(origin),
@@ -122,11 +118,15 @@ impl<'a, 'p> LightEvaluator<'a, 'p> {
     #[inline(always)]
     fn material(&self, wi: &V3) -> V3 {
         let zero = f32x4::ZERO;
-        let cos_theta = dot(&self.n, wi);
-        let below = cos_theta.cmp_le(zero) | dot(&self.ng, wi).cmp_le(zero);
+        let cos_theta = dot3(&self.n, wi);
+        let below = cos_theta.cmp_le(zero) | dot3(&self.ng, wi).cmp_le(zero);
+        if let Some(pbr) = &self.pbr {
+            let f = pbr.f_cos(&self.n, &self.wo, wi, cos_theta);
+            return [below.blend(zero, f[0]), below.blend(zero, f[1]), below.blend(zero, f[2])];
+        }
         let mut f = self.diffuse;
         if let Some((specular, normalisation)) = self.phong {
-            let cos_alpha = dot(&self.r, wi).fast_max(zero);
+            let cos_alpha = dot3(&self.r, wi).fast_max(zero);
             let lobe = f32x4::splat(normalisation) * pow(cos_alpha, self.sp.material.exponent);
             f = [
                 f[0] + f32x4::splat(specular.x) * lobe,
@@ -174,7 +174,7 @@ impl<'a, 'p> LightEvaluator<'a, 'p> {
             return;
         }
         let d = [point[0] - self.p[0], point[1] - self.p[1], point[2] - self.p[2]];
-        let d2 = dot(&d, &d);
+        let d2 = dot3(&d, &d);
         let s = d2.sqrt();
         let wi = [d[0] / s, d[1] / s, d[2] / s];
         let m = self.material(&wi);
@@ -182,7 +182,7 @@ impl<'a, 'p> LightEvaluator<'a, 'p> {
         // falloff at the cosine between its direction and -wi.
         let emitted = kind.has_cone().then(|| {
             let normal = [f32x4::new(lanes.normal[0]), f32x4::new(lanes.normal[1]), f32x4::new(lanes.normal[2])];
-            let cosine = dot(&normal, &[-wi[0], -wi[1], -wi[2]]);
+            let cosine = dot3(&normal, &[-wi[0], -wi[1], -wi[2]]);
             if kind == LightKind::Spot {
                 let cosine = cosine.to_array();
                 std::array::from_fn(|k| SpotLight::falloff(cosine[k], lanes.spread[0][k], lanes.spread[1][k]))
@@ -202,7 +202,7 @@ impl<'a, 'p> LightEvaluator<'a, 'p> {
         let terms = [widen(m[0]) * g, widen(m[1]) * g, widen(m[2]) * g].map(f64x4::to_array);
         // The shadow ray from the lifted origin, stopping epsilon short of the light.
         let direction = [point[0] - self.origin[0], point[1] - self.origin[1], point[2] - self.origin[2]];
-        let length = dot(&direction, &direction).sqrt();
+        let length = dot3(&direction, &direction).sqrt();
         let epsilon = f32x4::splat(self.sp.epsilon);
         let t_far = (f32x4::ONE - epsilon / length).to_array();
         let too_close = length.cmp_le(epsilon + epsilon).to_array();

@@ -112,7 +112,9 @@ impl<'s> Geometry<'s> {
             None => Vec2::new(u, v),
         };
         let material = &self.scene.materials[mesh.material];
-        let kd = material.albedo_at(uv, &self.scene.textures);
+        let base = material.albedo_at(uv, &self.scene.textures);
+        let pbr = material.pbr.as_ref().map(|m| m.at(base, uv, &self.scene.textures));
+        let kd = pbr.map_or(base, |p| p.diffuse_albedo());
         SurfacePoint {
             p,
             n,
@@ -121,6 +123,7 @@ impl<'s> Geometry<'s> {
             r: reflect(wo, n),
             kd,
             material,
+            pbr,
             distance: hit.t * ray.direction.length(),
             emitted: if front || material.emits_both_sides { material.emission } else { Vec3::ZERO },
             epsilon: self.ray_epsilon,

@@ -6,6 +6,7 @@
 pub mod direct;
 pub mod evaluate;
 pub mod geometry;
+pub mod pbr;
 pub mod surface;
 
 pub use direct::{light_sample, light_term, Lanes, LightEvaluator, LightTerm};

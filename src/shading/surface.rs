@@ -4,6 +4,7 @@
 use glam::Vec3;
 
 use crate::embree::{Ray, ShadowRay};
+use super::pbr::Pbr;
 use crate::scene::material::Material;
 
 /// A shading point: position, normals (facing the viewer), outgoing direction.
@@ -18,9 +19,13 @@ pub struct SurfacePoint<'s> {
     pub wo: Vec3,
     /// Mirror direction of wo about n.
     pub r: Vec3,
-    /// Diffuse albedo here (texture evaluated).
+    /// Diffuse albedo here (texture evaluated; a metallic-roughness
+    /// material's diffuse reflectance, `Pbr::diffuse_albedo`).
     pub kd: Vec3,
     pub material: &'s Material,
+    /// The metallic-roughness BRDF's parameters here (textures looked up),
+    /// for a material that has one.
+    pub pbr: Option<Pbr>,
     /// Distance from the ray origin, metres.
     pub distance: f32,
     /// Radiance the surface emits towards the viewer (area-light emitters).
@@ -33,18 +38,6 @@ pub struct SurfacePoint<'s> {
 }
 
 impl SurfacePoint<'_> {
-    /// The material term M = f_r(wi, wo) cos(theta_i) for a unit direction wi
-    /// ([LC05] eq. 1); 0 when wi is below the shading or the geometric
-    /// surface (light cannot reach this side through the surface).
-    #[must_use]
-    pub fn material_term(&self, wi: Vec3) -> Vec3 {
-        let cos_theta = self.n.dot(wi);
-        if cos_theta <= 0.0 || self.ng.dot(wi) <= 0.0 {
-            return Vec3::ZERO;
-        }
-        crate::scene::material::brdf(self.kd, self.material, self.r, wi) * cos_theta
-    }
-
     /// Origin for rays leaving the surface on the viewer's side.
     #[must_use]
     pub fn offset_origin(&self) -> Vec3 {

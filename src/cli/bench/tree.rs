@@ -161,6 +161,7 @@ fn shading_points(material: &Material, count: usize) -> Vec<SurfacePoint<'_>> {
                 r: reflect(wo, Vec3::Y),
                 kd: Vec3::splat(0.5),
                 material,
+                pbr: None,
                 distance: 1.0,
                 emitted: Vec3::ZERO,
                 epsilon: 1e-4,
@@ -200,6 +201,7 @@ pub fn measure_quality(
         emission: Vec3::ZERO,
         emits_both_sides: false,
         cutout: None,
+        pbr: None,
     };
     let points = shading_points(&material, 1000);
     let device = Device::try_new()?;

@@ -63,6 +63,9 @@ fn unit(rng: &mut Rng) -> Vec3 {
 }
 
 fn material(rng: &mut Rng) -> Material {
+    if rng.next_f32() < 0.4 {
+        return pbr_material(rng);
+    }
     let exponents = [0.0, 1.0, 7.5, 40.0, 500.0, 10_000.0];
     Material {
         name: "m".into(),
@@ -77,6 +80,37 @@ fn material(rng: &mut Rng) -> Material {
         emission: Vec3::ZERO,
         emits_both_sides: false,
         cutout: None,
+        pbr: None,
+    }
+}
+
+/// A metallic-roughness material: metallic 0, 1 or between, roughness
+/// from 0 (clamped to the lobe's smallest alpha) through 0.02 to 1,
+/// KHR_materials_specular's factor and colour sometimes.
+fn pbr_material(rng: &mut Rng) -> Material {
+    let roughness = [0.0, 0.02, 0.05, 0.2, 0.5, 1.0, rng.next_f32()][rng.below(7) as usize];
+    let metallic = [0.0, 1.0, rng.next_f32()][rng.below(3) as usize];
+    let (specular, specular_colour) = if rng.next_f32() < 0.7 {
+        (1.0, Vec3::ONE)
+    } else {
+        (rng.next_f32(), 3.0 * Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()))
+    };
+    Material {
+        name: "pbr".into(),
+        albedo: Albedo::Constant(Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32())),
+        specular: Vec3::ZERO,
+        exponent: 0.0,
+        mirror: Vec3::ZERO,
+        emission: Vec3::ZERO,
+        emits_both_sides: false,
+        cutout: None,
+        pbr: Some(crate::scene::material::PbrMaterial {
+            metallic,
+            roughness,
+            specular,
+            specular_colour,
+            metallic_roughness: None,
+        }),
     }
 }
 
@@ -90,17 +124,20 @@ fn surface<'m>(rng: &mut Rng, material: &'m Material) -> SurfacePoint<'m> {
     let ng = if rng.next_f32() < 0.5 { n } else { (n + 0.3 * unit(rng)).normalize() };
     let ng = if ng.dot(wo) < 0.0 { -ng } else { ng };
     let n = if n.dot(ng) < 0.0 { -n } else { n };
+    let base = match material.albedo {
+        Albedo::Constant(c) => c,
+        Albedo::Texture { .. } => unreachable!(),
+    };
+    let pbr = material.pbr.as_ref().map(|m| m.at(base, glam::Vec2::ZERO, &[]));
     SurfacePoint {
         p: Vec3::new(rng.range_f32(-3.0, 3.0), rng.range_f32(-3.0, 3.0), rng.range_f32(-3.0, 3.0)),
         n,
         ng,
         wo,
         r: reflect(wo, n),
-        kd: match material.albedo {
-            Albedo::Constant(c) => c,
-            Albedo::Texture { .. } => unreachable!(),
-        },
+        kd: pbr.map_or(base, |p| p.diffuse_albedo()),
         material,
+        pbr,
         distance: 1.0,
         emitted: Vec3::ZERO,
         epsilon: 1e-4,
@@ -365,6 +402,7 @@ fn a_point_inside_the_box_gets_a_finite_bound_above_every_light() {
         emission: Vec3::ZERO,
         emits_both_sides: false,
         cutout: None,
+        pbr: None,
     };
     let mut rng = Rng::seeded(3);
     let sp = surface(&mut rng, &m);

@@ -517,6 +517,7 @@ impl Importer<'_, '_> {
             emission,
             emits_both_sides: m.double_sided(),
             cutout,
+            pbr: None,
         });
         self.materials.insert(m.index(), index);
         Ok(index)

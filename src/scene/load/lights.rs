@@ -175,6 +175,7 @@ fn add_emitter(
         emission: radiance,
         emits_both_sides: false,
         cutout: None,
+        pbr: None,
     });
     meshes.push(mesh);
     LightSource::Area { mesh: meshes.len() - 1, radiance, samples, seed, both_sides: false }

@@ -57,6 +57,7 @@ pub(super) fn materials(
             emission: Vec3::ZERO,
             emits_both_sides: false,
             cutout: None,
+            pbr: None,
         });
     }
     Ok((materials, material_index))
