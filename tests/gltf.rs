@@ -5,6 +5,7 @@
 mod common;
 use common::gltf::{diffuse, floor_and_point_light, GltfBuilder};
 use common::*;
+use lightcuts::shading::pbr::Pbr;
 
 use glam::{DVec3, Vec3};
 use lightcuts::embree::{Device, Ray};
@@ -232,7 +233,7 @@ fn an_emissive_quad_lights_the_floor_with_its_irradiance_and_is_seen_from_both_s
 }
 
 #[test]
-fn materials_map_base_colour_textures_metal_and_mirrors() {
+fn materials_map_onto_the_metallic_roughness_brdf_with_their_textures() {
     let dir = TempDir::new("gltf-materials");
     let mut g = floor_and_point_light();
     // A 2 x 2 texture, white (sRGB 255, linear 1) at the top left, the
@@ -249,15 +250,28 @@ fn materials_map_base_colour_textures_metal_and_mirrors() {
             "roughnessFactor": 0.5,
         },
     });
-    let metal = g.material(json!({ "pbrMetallicRoughness": { "baseColorFactor": [0.9, 0.6, 0.3, 1.0], "metallicFactor": 1.0, "roughnessFactor": 0.0 } }));
+    // A metal whose metallic-roughness texture (linear: G roughness, B
+    // metallic) is a rough dielectric on its left half and a smoother metal
+    // on its right; sampled at the nearest texel.
+    let metal_roughness = g.png_texture(2, 1, &[0, 255, 0, 0, 64, 255]);
+    g.json["samplers"] = json!([{ "magFilter": 9728 }]);
+    g.json["textures"][metal_roughness]["sampler"] = json!(0);
+    let metal = g.material(json!({ "pbrMetallicRoughness": {
+        "baseColorFactor": [0.9, 0.6, 0.3, 1.0], "metallicFactor": 1.0, "roughnessFactor": 0.8,
+        "metallicRoughnessTexture": { "index": metal_roughness },
+    } }));
     let q = g.quad([0.0, 3.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], Some(metal));
     g.node(json!({ "mesh": q }), true);
     let scene = load(&dir, "s.gltf", &g.embedded());
+    // glTF's BRDF (shading::pbr), with the file's factors; the Phong and
+    // mirror layers unused.
     let floor = &scene.materials[scene.meshes[0].material];
-    // Dielectric: 4% specular, roughness 0.5 -> alpha 0.25 -> n = 2/alpha^2 - 2 = 30.
-    assert!((floor.specular - Vec3::splat(0.04)).length() < 1e-6 && (floor.exponent - 30.0).abs() < 1e-3);
+    let pbr = floor.pbr.as_ref().expect("a metallic-roughness material");
+    assert_eq!((pbr.metallic, pbr.roughness, pbr.specular, pbr.specular_colour), (0.0, 0.5, 1.0, Vec3::ONE));
+    assert_eq!((floor.specular, floor.exponent, floor.mirror), (Vec3::ZERO, 0.0, Vec3::ZERO));
     // The offset of half the texture moves the left column to u in [0.5, 1];
-    // the white texel stays at the top (small v).
+    // the white texel stays at the top (small v). The base colour is the
+    // texture times the factor, whatever the metallic.
     let at = |u: f32, v: f32| floor.albedo_at(glam::Vec2::new(u, v), &scene.textures);
     let grey = lightcuts::util::color::srgb_to_linear(128.0 / 255.0);
     assert!((at(0.75, 0.25) - Vec3::new(0.5, 1.0, 1.0)).length() < 1e-3, "{}", at(0.75, 0.25));
@@ -265,8 +279,21 @@ fn materials_map_base_colour_textures_metal_and_mirrors() {
         assert!((at(u, v).y - grey).abs() < 1e-3, "({u}, {v}): {}", at(u, v));
     }
     let metal = &scene.materials[scene.meshes[1].material];
-    assert_eq!(metal.mirror, Vec3::new(0.9, 0.6, 0.3), "roughness 0: a mirror of the base colour");
-    assert_eq!((metal.specular, metal.albedo_at(glam::Vec2::ZERO, &scene.textures)), (Vec3::ZERO, Vec3::ZERO));
+    let base = metal.albedo_at(glam::Vec2::ZERO, &scene.textures);
+    assert_eq!(base, Vec3::new(0.9, 0.6, 0.3), "a metal's base colour is its albedo");
+    let pbr = metal.pbr.as_ref().unwrap();
+    // The texture multiplies the factors, read as linear data (64 / 255 is
+    // 0.251, where an sRGB decode would give 0.051). glTF's uv (0.25, y) is
+    // the left texel; ours has v up.
+    let left = Pbr::of(pbr, base, glam::Vec2::new(0.25, 0.5), &scene.textures);
+    let right = Pbr::of(pbr, base, glam::Vec2::new(0.75, 0.5), &scene.textures);
+    assert_eq!(left.metallic, 0.0);
+    assert!((left.alpha - 0.8f32.powi(2)).abs() < 1e-6, "left roughness 0.8: alpha {}", left.alpha);
+    assert_eq!(right.metallic, 1.0);
+    let roughness = 0.8 * 64.0 / 255.0;
+    assert!((right.alpha - roughness * roughness).abs() < 1e-6, "right: alpha {}", right.alpha);
+    // The diffuse reflectance a bounce takes: none for a metal.
+    assert_eq!(right.diffuse_albedo(), Vec3::ZERO);
 }
 
 #[test]

@@ -47,13 +47,11 @@ struct ConeLanes {
     cutoff: Option<f32x4>,
 }
 
-
 /// Lanes 0 and 1 from a slot pair (lanes 2 and 3 are 0).
 #[inline(always)]
 fn lanes(pair: [f32; 2]) -> f32x4 {
     f32x4::new([pair[0], pair[1], 0.0, 0.0])
 }
-
 
 #[inline(always)]
 fn abs3(a: &V3) -> V3 {

@@ -48,22 +48,46 @@ pub enum ImageError {
 /// its sRGB values to linear.
 pub fn read_srgb_png(path: &Path) -> Result<RgbImage, ImageError> {
     let file = std::fs::File::open(path).map_err(ImageError::Open)?;
-    decode_png(std::io::BufReader::new(file))
+    decode_png(std::io::BufReader::new(file), Encoding::Srgb)
+}
+
+/// How an image's colour values are encoded.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Encoding {
+    /// sRGB-encoded colours (base colour, emission), decoded to linear.
+    Srgb,
+    /// Linear data (glTF's metallic-roughness texture), read as is.
+    Linear,
+}
+
+impl Encoding {
+    fn decode(self, value: f32) -> f32 {
+        match self {
+            Self::Srgb => srgb_to_linear(value),
+            Self::Linear => value,
+        }
+    }
 }
 
 /// Decodes an in-memory PNG or JPEG (told apart by their signatures) from
 /// sRGB to linear.
 pub fn decode_srgb(bytes: &[u8]) -> Result<RgbImage, ImageError> {
+    decode(bytes, Encoding::Srgb)
+}
+
+/// Decodes an in-memory PNG or JPEG (told apart by their signatures),
+/// colours encoded as `encoding` says.
+pub fn decode(bytes: &[u8], encoding: Encoding) -> Result<RgbImage, ImageError> {
     if bytes.starts_with(b"\x89PNG") {
-        decode_png(std::io::Cursor::new(bytes))
+        decode_png(std::io::Cursor::new(bytes), encoding)
     } else if bytes.starts_with(&[0xff, 0xd8]) {
-        decode_jpeg(bytes)
+        decode_jpeg(bytes, encoding)
     } else {
         Err(ImageError::UnknownFormat)
     }
 }
 
-fn decode_jpeg(bytes: &[u8]) -> Result<RgbImage, ImageError> {
+fn decode_jpeg(bytes: &[u8], encoding: Encoding) -> Result<RgbImage, ImageError> {
     let mut decoder = jpeg_decoder::Decoder::new(std::io::Cursor::new(bytes));
     // Refuse absurd headers before allocating for them (64 MiB of pixels).
     decoder.set_max_decoding_buffer_size(64 << 20);
@@ -80,14 +104,14 @@ fn decode_jpeg(bytes: &[u8]) -> Result<RgbImage, ImageError> {
     }
     let texels = (0..width * height)
         .map(|p| {
-            let c = |k: usize| srgb_to_linear(f32::from(pixels[p * channels + k.min(channels - 1)]) / 255.0);
+            let c = |k: usize| encoding.decode(f32::from(pixels[p * channels + k.min(channels - 1)]) / 255.0);
             Vec3::new(c(0), c(1), c(2))
         })
         .collect();
     Ok(RgbImage { width, height, texels, alpha: None })
 }
 
-fn decode_png(reader: impl std::io::Read) -> Result<RgbImage, ImageError> {
+fn decode_png(reader: impl std::io::Read, encoding: Encoding) -> Result<RgbImage, ImageError> {
     let mut decoder = png::Decoder::new(reader);
     // Expand palettes and low bit depths to 8 bits; keep 16-bit as is.
     decoder.set_transformations(png::Transformations::EXPAND);
@@ -111,7 +135,7 @@ fn decode_png(reader: impl std::io::Read) -> Result<RgbImage, ImageError> {
             1 | 2 => Vec3::splat(sample(base)),
             _ => Vec3::new(sample(base), sample(base + 1), sample(base + 2)),
         };
-        texels.push(Vec3::new(srgb_to_linear(rgb.x), srgb_to_linear(rgb.y), srgb_to_linear(rgb.z)));
+        texels.push(Vec3::new(encoding.decode(rgb.x), encoding.decode(rgb.y), encoding.decode(rgb.z)));
     }
     if texels.is_empty() {
         return Err(ImageError::Empty);

@@ -8,7 +8,6 @@ use std::f32::consts::PI;
 use glam::{Affine2, Vec2, Vec3};
 
 use super::texture::Texture;
-use crate::shading::pbr::Pbr;
 
 #[derive(Debug, Clone)]
 pub enum Albedo {
@@ -57,20 +56,6 @@ pub struct PbrMaterial {
     /// multiplying the factors): an index into `Scene::textures` and the
     /// map from the mesh's uv to the texture's.
     pub metallic_roughness: Option<(usize, Affine2)>,
-}
-
-impl PbrMaterial {
-    /// The BRDF's parameters at a point of base colour `base` and uv `uv`.
-    #[must_use]
-    pub fn at(&self, base: Vec3, uv: Vec2, textures: &[Texture]) -> Pbr {
-        let (mut metallic, mut roughness) = (self.metallic, self.roughness);
-        if let Some((texture, transform)) = &self.metallic_roughness {
-            let texel = textures[*texture].lookup(transform.transform_point2(uv));
-            roughness *= texel.y;
-            metallic *= texel.z;
-        }
-        Pbr::new(base, metallic.clamp(0.0, 1.0), roughness.clamp(0.0, 1.0), self.specular, self.specular_colour)
-    }
 }
 
 /// Coverage texels and the cutoff below which a surface is absent.

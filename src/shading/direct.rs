@@ -70,8 +70,6 @@ pub struct LightTerm {
     pub ray: Option<ShadowRay>,
 }
 
-
-
 /// A shading point prepared for evaluating lights four at a time.
 pub struct LightEvaluator<'a, 'p> {
     sp: &'a SurfacePoint<'p>,

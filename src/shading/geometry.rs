@@ -2,6 +2,7 @@
 
 use glam::{Vec2, Vec3};
 
+use super::pbr::Pbr;
 use super::surface::SurfacePoint;
 use crate::embree::{self, AlphaMask, Device, EmbreeError, Hit, MeshError, Ray};
 use crate::light::Lights;
@@ -113,7 +114,7 @@ impl<'s> Geometry<'s> {
         };
         let material = &self.scene.materials[mesh.material];
         let base = material.albedo_at(uv, &self.scene.textures);
-        let pbr = material.pbr.as_ref().map(|m| m.at(base, uv, &self.scene.textures));
+        let pbr = material.pbr.as_ref().map(|m| Pbr::of(m, base, uv, &self.scene.textures));
         let kd = pbr.map_or(base, |p| p.diffuse_albedo());
         SurfacePoint {
             p,

@@ -12,9 +12,11 @@
 
 use std::f32::consts::PI;
 
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 use wide::{f32x4, CmpGt};
 
+use crate::scene::material::PbrMaterial;
+use crate::scene::texture::Texture;
 use crate::util::simd::{dot3, splat3, V3};
 
 /// The smallest alpha (roughness^2) the lobe is evaluated with: a smooth
@@ -57,6 +59,20 @@ impl Pbr {
             f0: (0.04 * specular_colour).min(Vec3::ONE) * specular,
             f90: specular,
         }
+    }
+
+    /// The parameters of `material` at a point of base colour `base` and
+    /// uv `uv` (its metallic-roughness texture looked up).
+    #[must_use]
+    pub fn of(material: &PbrMaterial, base: Vec3, uv: Vec2, textures: &[Texture]) -> Self {
+        let (mut metallic, mut roughness) = (material.metallic, material.roughness);
+        if let Some((texture, transform)) = &material.metallic_roughness {
+            let texel = textures[*texture].lookup(transform.transform_point2(uv));
+            roughness *= texel.y;
+            metallic *= texel.z;
+        }
+        let (metallic, roughness) = (metallic.clamp(0.0, 1.0), roughness.clamp(0.0, 1.0));
+        Self::new(base, metallic, roughness, material.specular, material.specular_colour)
     }
 
     /// The diffuse reflectance: what a bounce of indirect light and the

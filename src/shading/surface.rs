@@ -3,8 +3,8 @@
 
 use glam::Vec3;
 
-use crate::embree::{Ray, ShadowRay};
 use super::pbr::Pbr;
+use crate::embree::{Ray, ShadowRay};
 use crate::scene::material::Material;
 
 /// A shading point: position, normals (facing the viewer), outgoing direction.

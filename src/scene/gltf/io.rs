@@ -12,7 +12,7 @@ use gltf::accessor::{DataType, Dimensions};
 use gltf::json::validation::Checked;
 
 use super::IMPLEMENTED;
-use crate::scene::image::{self, RgbImage};
+use crate::scene::image::{self, Encoding, RgbImage};
 use crate::scene::SceneError;
 
 /// Most vertices, indices or elements one accessor may hold (2^28): beyond
@@ -75,8 +75,8 @@ pub(super) struct Data<'a> {
     /// The directory relative URIs resolve against.
     base: PathBuf,
     buffers: Vec<Vec<u8>>,
-    /// Decoded images by glTF image index (linear RGB).
-    images: HashMap<usize, RgbImage>,
+    /// Decoded images by glTF image index and encoding (linear RGB).
+    images: HashMap<(usize, Encoding), RgbImage>,
     /// The buffer and image files read, in the order they were read.
     pub(super) inputs: Vec<PathBuf>,
 }
@@ -143,9 +143,15 @@ impl<'a> Data<'a> {
         std::fs::read(&path).map_err(|e| self.error(location, format!("cannot read '{}': {e}", path.display())))
     }
 
-    /// Decodes an image (PNG or JPEG, sRGB) once.
-    pub(super) fn image(&mut self, image: &gltf::Image<'_>, location: &str) -> Result<RgbImage, SceneError> {
-        if let Some(decoded) = self.images.get(&image.index()) {
+    /// Decodes an image (PNG or JPEG, its colours encoded as `encoding`
+    /// says) once.
+    pub(super) fn image(
+        &mut self,
+        image: &gltf::Image<'_>,
+        location: &str,
+        encoding: Encoding,
+    ) -> Result<RgbImage, SceneError> {
+        if let Some(decoded) = self.images.get(&(image.index(), encoding)) {
             return Ok(decoded.clone());
         }
         let at = format!("images[{}]", image.index());
@@ -159,11 +165,11 @@ impl<'a> Data<'a> {
                 (self.view_bytes(&view, &format!("{at}.bufferView"))?.to_vec(), None)
             }
         };
-        let decoded = image::decode_srgb(&bytes).map_err(|e| {
+        let decoded = image::decode(&bytes, encoding).map_err(|e| {
             let what = named.as_ref().map_or_else(String::new, |p| format!("'{}': ", p.display()));
             self.error(format!("{location} ({at})"), format!("{what}{e}"))
         })?;
-        self.images.insert(image.index(), decoded.clone());
+        self.images.insert((image.index(), encoding), decoded.clone());
         Ok(decoded)
     }
 

@@ -15,12 +15,14 @@ use glam::{Affine2, Mat2, Mat3, Mat4, Vec2, Vec3, Vec4};
 use gltf::json::extensions::scene::khr_lights_punctual::{Light as LightJson, Type as LightType};
 use gltf::json::validation::Checked;
 use gltf::mesh::Mode;
+use gltf::texture::{MagFilter, WrappingMode};
 
 use super::file::{CameraSpec, GltfSpec};
 use super::groups::GltfLightNames;
-use super::material::{Albedo, Cutout, Material};
+use super::image::{Encoding, RgbImage};
+use super::material::{Albedo, Cutout, Material, PbrMaterial};
 use super::mesh::Mesh;
-use super::texture::Texture;
+use super::texture::{Filter, Texture, Wrap};
 use super::{within_limits, LightSource, SceneError, MAX_COORDINATE, MAX_EMITTER_SAMPLES};
 
 /// Extensions whose absence from the renderer changes nothing it draws
@@ -427,39 +429,43 @@ impl Importer<'_, '_> {
             }
         }
         let base_rgb = base.truncate();
-        // Dielectric reflectance at normal incidence: 4% (IOR 1.5), scaled
-        // by KHR_materials_specular; metals reflect their base colour.
-        let (specular_factor, specular_colour) = m
+        // KHR_materials_specular: the dielectric's reflectance at normal
+        // incidence is 0.04 (IOR 1.5) times its colour, times its factor.
+        let (specular, specular_colour) = m
             .specular()
             .map_or((1.0, Vec3::ONE), |s| (s.specular_factor(), Vec3::from_array(s.specular_color_factor())));
-        let f0 = (0.04 * specular_colour * specular_factor).clamp(Vec3::ZERO, Vec3::ONE);
-        if !f0.is_finite() {
-            return Err(self.error(format!("{location}.extensions.KHR_materials_specular"), "must be finite"));
+        if !(specular.is_finite()
+            && specular_colour.is_finite()
+            && specular >= 0.0
+            && specular_colour.min_element() >= 0.0)
+        {
+            return Err(self.error(format!("{location}.extensions.KHR_materials_specular"), "must be finite and >= 0"));
         }
-        let specular = f0.lerp(base_rgb, metallic);
-        let diffuse_weight = 1.0 - metallic;
+        if m.specular().is_some_and(|s| s.specular_texture().is_some() || s.specular_color_texture().is_some()) {
+            self.warn(&location, "KHR_materials_specular's textures ignored: its factors are used");
+        }
         let mut coverage = None;
         let albedo = match pbr.base_color_texture() {
-            None => Albedo::Constant(base_rgb * diffuse_weight),
+            None => Albedo::Constant(base_rgb),
             Some(info) => {
                 let at = format!("{location}.pbrMetallicRoughness.baseColorTexture");
-                if info.tex_coord() != 0 {
-                    self.warn(&at, "uses TEXCOORD_1 or later: read with TEXCOORD_0");
-                }
-                let source = info.texture().source();
-                let image = self.data.image(&source, &at)?;
-                let tint = base_rgb * diffuse_weight;
-                let texels = image.texels.iter().map(|t| *t * tint).collect();
-                self.parts.textures.push(Texture::from_texels(image.width, image.height, texels));
-                let transform = uv_transform(info.texture_transform());
+                let (texture, transform, image) = self.texture(&info, &at, Encoding::Srgb, |t| t * base_rgb)?;
                 coverage = image.alpha.as_ref().map(|a| {
                     (a.iter().map(|x| x * base.w).collect::<Vec<f32>>(), image.width, image.height, transform)
                 });
-                Albedo::Texture { texture: self.parts.textures.len() - 1, transform }
+                Albedo::Texture { texture, transform }
             }
         };
-        if pbr.metallic_roughness_texture().is_some() {
-            self.warn(&location, "metallicRoughnessTexture ignored: the factors are used");
+        let metallic_roughness = match pbr.metallic_roughness_texture() {
+            None => None,
+            Some(info) => {
+                let at = format!("{location}.pbrMetallicRoughness.metallicRoughnessTexture");
+                let (texture, transform, _) = self.texture(&info, &at, Encoding::Linear, |t| t)?;
+                Some((texture, transform))
+            }
+        };
+        if m.normal_texture().is_some() {
+            self.warn(&location, "normalTexture ignored: the mesh's own normals are used");
         }
         let cutoff = match m.alpha_mode() {
             gltf::material::AlphaMode::Opaque => None,
@@ -483,15 +489,6 @@ impl Importer<'_, '_> {
                 cutoff,
             })
         });
-        // Phong's exponent from roughness: n = 2 / alpha^2 - 2 with alpha =
-        // roughness^2 (Walter et al. 2007's Beckmann-Phong correspondence);
-        // a perfectly smooth surface is a mirror of the same reflectance.
-        let alpha = roughness * roughness;
-        let (specular, exponent, mirror) = if roughness == 0.0 {
-            (Vec3::ZERO, 0.0, specular)
-        } else {
-            (specular, (2.0 / (alpha * alpha) - 2.0).clamp(0.0, 1e6), Vec3::ZERO)
-        };
         let strength = m.emissive_strength().unwrap_or(1.0);
         let mut emission = Vec3::from_array(m.emissive_factor()) * strength;
         if !emission.is_finite() || emission.min_element() < 0.0 {
@@ -502,7 +499,7 @@ impl Importer<'_, '_> {
         }
         if let Some(info) = m.emissive_texture() {
             let at = format!("{location}.emissiveTexture");
-            let image = self.data.image(&info.texture().source(), &at)?;
+            let image = self.data.image(&info.texture().source(), &at, Encoding::Srgb)?;
             let mean = image.texels.iter().fold(Vec3::ZERO, |a, t| a + *t) / image.texels.len() as f32;
             self.warn(&at, "emission is uniform over a surface here: the texture's mean colour is used");
             emission *= mean;
@@ -511,16 +508,51 @@ impl Importer<'_, '_> {
         self.parts.materials.push(Material {
             name: m.name().map_or_else(|| location.clone(), str::to_string),
             albedo,
-            specular,
-            exponent,
-            mirror,
+            specular: Vec3::ZERO,
+            exponent: 0.0,
+            mirror: Vec3::ZERO,
             emission,
             emits_both_sides: m.double_sided(),
             cutout,
-            pbr: None,
+            pbr: Some(PbrMaterial { metallic, roughness, specular, specular_colour, metallic_roughness }),
         });
         self.materials.insert(m.index(), index);
         Ok(index)
+    }
+}
+
+impl Importer<'_, '_> {
+    /// A texture of the file as the renderer's: its image decoded as
+    /// `encoding` says and mapped texel by texel through `map`, read with its
+    /// sampler's wrap modes and magnification filter. Returns the texture's
+    /// index, the map from the mesh's uv to the texture's
+    /// (KHR_texture_transform and glTF's v axis), and the decoded image.
+    fn texture(
+        &mut self,
+        info: &gltf::texture::Info<'_>,
+        at: &str,
+        encoding: Encoding,
+        map: impl Fn(Vec3) -> Vec3,
+    ) -> Result<(usize, Affine2, RgbImage), SceneError> {
+        if info.tex_coord() != 0 {
+            self.warn(at, "uses TEXCOORD_1 or later: read with TEXCOORD_0");
+        }
+        let image = self.data.image(&info.texture().source(), at, encoding)?;
+        let sampler = info.texture().sampler();
+        let wrap = |mode: WrappingMode| match mode {
+            WrappingMode::Repeat => Wrap::Repeat,
+            WrappingMode::ClampToEdge => Wrap::ClampToEdge,
+            WrappingMode::MirroredRepeat => Wrap::MirroredRepeat,
+        };
+        let filter = match sampler.mag_filter() {
+            Some(MagFilter::Nearest) => Filter::Nearest,
+            Some(MagFilter::Linear) | None => Filter::Linear,
+        };
+        let texels = image.texels.iter().map(|t| map(*t)).collect();
+        let texture = Texture::from_texels(image.width, image.height, texels)
+            .with_sampler([wrap(sampler.wrap_s()), wrap(sampler.wrap_t())], filter);
+        self.parts.textures.push(texture);
+        Ok((self.parts.textures.len() - 1, uv_transform(info.texture_transform()), image))
     }
 }
 
