@@ -45,6 +45,11 @@ albedo = [0.5, 0.5, 0.5]
 specular = [0.2, 0.2, 0.2]
 exponent = 30
 mirror = [0.1, 0.1, 0.1]
+[materials.b]
+type = "pbr"
+albedo = [0.9, 0.6, 0.3]
+metallic = 0.5
+roughness = 0.3
 [[shapes]]
 type = "quad"
 corner = [-3, 0, 3]
@@ -56,7 +61,7 @@ type = "sphere"
 center = [0, 0.5, 0]
 radius = 0.5
 segments = 12
-material = "a"
+material = "b"
 [[shapes]]
 type = "box"
 min = [1, 0, 0]
@@ -105,6 +110,9 @@ const TOKENS: &[&str] = &[
     "[[lights]]",
     "type = \"sphere\"",
     "type = \"grid\"",
+    "type = \"pbr\"",
+    "roughness = 0",
+    "metallic = 1",
     "count = [65536, 65536]",
     "radius = 0",
     "segments = 4096",

@@ -29,6 +29,12 @@ mirror = [0, 0, 0]
 texture = "wood.png"
 texture_scale = [2, 2]
 
+[materials.metal]
+type = "pbr"
+albedo = [0.9, 0.6, 0.3]
+metallic = 1
+roughness = 0.3
+
 [[shapes]]
 type = "quad"
 corner = [-3, 0, 3]
@@ -129,6 +135,11 @@ fn nan_inf_and_negative_values_in_every_numeric_field() {
         ("specular = [0.1, 0.1, 0.1]", "materials.plain.specular", &["[nan, 0, 0]", "[-1, 0, 0]"]),
         ("exponent = 10", "materials.plain.exponent", &["nan", "-1", "inf"]),
         ("mirror = [0, 0, 0]", "materials.plain.mirror", &["[nan, 0, 0]", "[-0.5, 0, 0]", "[2, 0, 0]"]),
+        ("metallic = 1", "materials.metal.metallic", &["nan", "-1", "1.5", "inf"]),
+        ("roughness = 0.3", "materials.metal.roughness", &["nan", "-0.1", "2", "inf"]),
+        ("type = \"pbr\"", "materials.metal", &["\"ggx\"", "1"]),
+        ("roughness = 0.3", "materials.metal.exponent", &["0.3\nexponent = 20"]),
+        ("exponent = 10", "materials.plain.metallic", &["10\nmetallic = 0.5"]),
         ("texture_scale = [2, 2]", "materials.wood.texture_scale", &["[nan, 2]", "[0, 2]", "[-1, 2]", "[inf, 2]"]),
         ("corner = [-3, 0, 3]", "shapes[0].corner", &["[nan, 0, 3]", "[-inf, 0, 3]"]),
         ("u = [6, 0, 0]", "shapes[0].u", &["[nan, 0, 0]", "[inf, 0, 0]"]),

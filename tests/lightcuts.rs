@@ -7,11 +7,34 @@ fn bits(image: &ExrImage, name: &str) -> Vec<f32> {
     image.channels[name].clone()
 }
 
+/// The small scene's floor and spheres with glTF's metallic-roughness
+/// material: a rough dielectric, a gold metal, a near-mirror chrome.
+fn small_pbr_scene(lights_per_side: u32) -> String {
+    use lightcuts::scene::builder::SceneText;
+    let pbr =
+        |metallic: f32, roughness: f32| format!("type = \"pbr\"\nmetallic = {metallic}\nroughness = {roughness}\n");
+    SceneText::new(96, 72)
+        .camera([0.0, 3.0, 6.0], [0.0, 0.5, 0.0], 45.0)
+        .material("floor", [0.7, 0.7, 0.7], &pbr(0.0, 0.6))
+        .material("gold", [1.0, 0.78, 0.34], &pbr(1.0, 0.3))
+        .material("chrome", [0.55, 0.56, 0.55], &pbr(1.0, 0.05))
+        .floor(0.0, 5.0, "floor")
+        .sphere([-0.8, 0.7, 0.0], 0.7, "gold")
+        .sphere([0.9, 0.5, 0.4], 0.5, "chrome")
+        .grid([-2.0, 3.0, -2.0], [4.0, 0.0, 0.0], [0.0, 0.0, 4.0], [lights_per_side; 2], [1.0, 0.9, 0.8])
+        .toml()
+}
+
 #[test]
 fn error_zero_reproduces_the_exact_image() {
-    let dir = TempDir::new("error-zero");
     // 16 x 16 = 256 lights: above the exhaustive limit, so the cut runs.
-    let scene = dir.write("s.toml", &small_scene(16));
+    error_zero_reproduces_the_exact_image_of(&small_scene(16), "error-zero");
+    error_zero_reproduces_the_exact_image_of(&small_pbr_scene(16), "error-zero-pbr");
+}
+
+fn error_zero_reproduces_the_exact_image_of(text: &str, name: &str) {
+    let dir = TempDir::new(name);
+    let scene = dir.write("s.toml", text);
     let (lc, exact) = (dir.path("lc.exr"), dir.path("exact.exr"));
     let stdout = lightcuts_ok(&["render", s(&scene), "-o", s(&lc), "--error", "0", "--max-cut", "100000", "--quiet"]);
     assert!(stdout.contains("cut size"), "{stdout}");
@@ -21,6 +44,7 @@ fn error_zero_reproduces_the_exact_image() {
         for (x, y) in bits(&a, name).iter().zip(bits(&b, name)) {
             // The two sum the same terms in different orders (in f64).
             assert!((x - y).abs() <= 1e-6 * y.abs().max(1e-30), "{name}: {x} vs {y}");
+            assert!(x.is_finite());
         }
     }
     assert!(a.channels.contains_key("lightcuts.cut_size") && a.channels.contains_key("lightcuts.shadow_rays"));

@@ -158,7 +158,12 @@ fn up_y() -> [f32; 3] {
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct MaterialSpec {
-    /// Diffuse albedo (reflectance, 0..1 per channel).
+    /// `phong` (the default: diffuse + Phong + mirror) or `pbr` (glTF's
+    /// metallic-roughness BRDF, `albedo` or `texture` its base colour).
+    #[serde(rename = "type", default)]
+    pub kind: MaterialKind,
+    /// Diffuse albedo (reflectance, 0..1 per channel); a `pbr` material's
+    /// base colour.
     pub albedo: Option<[f32; 3]>,
     /// A PNG whose sRGB colours are the diffuse albedo (relative to the scene file).
     pub texture: Option<String>,
@@ -174,6 +179,22 @@ pub struct MaterialSpec {
     /// Perfect mirror reflectance (0..1).
     #[serde(default)]
     pub mirror: [f32; 3],
+    /// `pbr`: metallic, 0..1.
+    pub metallic: Option<f32>,
+    /// `pbr`: roughness, 0..1 (alpha = roughness^2).
+    pub roughness: Option<f32>,
+    /// `pbr`: a PNG of linear data, G roughness and B metallic (glTF's
+    /// convention), multiplying `roughness` and `metallic`.
+    pub metallic_roughness_texture: Option<String>,
+}
+
+/// The BRDF of a `[materials.NAME]`.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum MaterialKind {
+    #[default]
+    Phong,
+    Pbr,
 }
 
 fn unit_scale() -> [f32; 2] {

@@ -47,8 +47,13 @@ pub enum ImageError {
 /// Reads a PNG (8 or 16 bits, grey or colour, palettes expanded) and decodes
 /// its sRGB values to linear.
 pub fn read_srgb_png(path: &Path) -> Result<RgbImage, ImageError> {
+    read_png(path, Encoding::Srgb)
+}
+
+/// Reads a PNG whose colours are encoded as `encoding` says.
+pub fn read_png(path: &Path, encoding: Encoding) -> Result<RgbImage, ImageError> {
     let file = std::fs::File::open(path).map_err(ImageError::Open)?;
-    decode_png(std::io::BufReader::new(file), Encoding::Srgb)
+    decode_png(std::io::BufReader::new(file), encoding)
 }
 
 /// How an image's colour values are encoded.
