@@ -5,12 +5,12 @@
 mod common;
 use common::gltf::{diffuse, floor_and_point_light, GltfBuilder};
 use common::*;
-use lightcuts::shading::pbr::Pbr;
 
 use glam::{DVec3, Vec3};
 use lightcuts::embree::{Device, Ray};
 use lightcuts::light::Lights;
 use lightcuts::scene::{LightSource, Scene};
+use lightcuts::shading::pbr::Pbr;
 use lightcuts::shading::{BatchBuffers, Geometry, LightBatch};
 use serde_json::json;
 use std::f64::consts::PI;
@@ -294,6 +294,35 @@ fn materials_map_onto_the_metallic_roughness_brdf_with_their_textures() {
     assert!((right.alpha - roughness * roughness).abs() < 1e-6, "right: alpha {}", right.alpha);
     // The diffuse reflectance a bounce takes: none for a metal.
     assert_eq!(right.diffuse_albedo(), Vec3::ZERO);
+}
+
+/// COLOR_0 multiplies the base colour (glTF's VertexColorTest): a floor
+/// whose four vertices are coloured c renders as the same floor with c in
+/// its base colour factor; a COLOR_0 the renderer ignored would render it
+/// grey.
+#[test]
+fn vertex_colours_multiply_the_base_colour() {
+    let dir = TempDir::new("gltf-colours");
+    let c = [0.8f32, 0.4, 0.1];
+    let render = |g: &GltfBuilder, name: &str| {
+        let (scene, out) = (dir.write(&format!("{name}.gltf"), &g.embedded()), dir.path(&format!("{name}.exr")));
+        lightcuts_ok(&["render", s(&scene), "-o", s(&out), "--exact", "--quiet", "--resolution", "48x32"]);
+        read_exr(&out).unwrap()
+    };
+    let mut factor = floor_and_point_light();
+    factor.json["materials"][0]["pbrMetallicRoughness"]["baseColorFactor"] =
+        json!([0.5 * c[0], 0.5 * c[1], 0.5 * c[2], 1.0]);
+    let mut vertices = floor_and_point_light();
+    let colours = vertices.floats(&c.repeat(4), "VEC3", 3);
+    vertices.json["meshes"][0]["primitives"][0]["attributes"]["COLOR_0"] = json!(colours);
+    let (a, b) = (render(&factor, "factor"), render(&vertices, "vertices"));
+    for channel in ["R", "G", "B"] {
+        for (x, y) in a.channels[channel].iter().zip(&b.channels[channel]) {
+            assert!((x - y).abs() <= 1e-5 * x.abs().max(1e-6), "{channel}: factor {x} vs vertex colours {y}");
+        }
+    }
+    let green_over_red = b.channels["G"][0] / b.channels["R"][0];
+    assert!(green_over_red < 0.6, "G / R = {green_over_red}: the vertex colours were not applied");
 }
 
 #[test]

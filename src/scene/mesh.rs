@@ -14,6 +14,9 @@ pub struct Mesh {
     pub normals: Option<Vec<Vec3>>,
     /// Per-vertex texture coordinates, when the shape has them.
     pub uvs: Option<Vec<Vec2>>,
+    /// Per-vertex colours (linear RGB) multiplying the base colour (glTF's
+    /// `COLOR_0`), when the shape has them.
+    pub colors: Option<Vec<Vec3>>,
     pub triangles: Vec<[u32; 3]>,
     /// Index into `Scene::materials`.
     pub material: usize,
@@ -29,6 +32,7 @@ impl Mesh {
         Self {
             positions: vec![corner, corner + u, corner + u + v, corner + v],
             normals: None,
+            colors: None,
             uvs: Some(vec![Vec2::new(0.0, 0.0), Vec2::new(1.0, 0.0), Vec2::new(1.0, 1.0), Vec2::new(0.0, 1.0)]),
             triangles: vec![[0, 1, 2], [0, 2, 3]],
             material,
@@ -90,7 +94,7 @@ impl Mesh {
                 }
             }
         }
-        Self { positions, normals: Some(normals), uvs: Some(uvs), triangles, material, name: String::new() }
+        Self { positions, normals: Some(normals), uvs: Some(uvs), triangles, material, ..Self::default() }
     }
 
     /// Appends another mesh's triangles (same material), keeping attributes
@@ -106,6 +110,10 @@ impl Mesh {
         match (&mut self.normals, &other.normals) {
             (Some(a), Some(b)) => a.extend_from_slice(b),
             _ => self.normals = None,
+        }
+        match (&mut self.colors, &other.colors) {
+            (Some(a), Some(b)) => a.extend_from_slice(b),
+            _ => self.colors = None,
         }
     }
 

@@ -113,7 +113,11 @@ impl<'s> Geometry<'s> {
             None => Vec2::new(u, v),
         };
         let material = &self.scene.materials[mesh.material];
-        let base = material.albedo_at(uv, &self.scene.textures);
+        let mut base = material.albedo_at(uv, &self.scene.textures);
+        if let Some(colors) = &mesh.colors {
+            let [c0, c1, c2] = tri.map(|i| colors[i as usize]);
+            base *= w * c0 + u * c1 + v * c2;
+        }
         let pbr = material.pbr.as_ref().map(|m| Pbr::of(m, base, uv, &self.scene.textures));
         let kd = pbr.map_or(base, |p| p.diffuse_albedo());
         SurfacePoint {

@@ -239,7 +239,8 @@ impl<'a> Data<'a> {
     ) -> Result<Vec<[f32; N]>, SceneError> {
         let want = match N {
             2 => Dimensions::Vec2,
-            _ => Dimensions::Vec3,
+            3 => Dimensions::Vec3,
+            _ => Dimensions::Vec4,
         };
         if a.dimensions() != want {
             return Err(self.error(location, format!("must be a {want:?} accessor, got {:?}", a.dimensions())));

@@ -301,11 +301,19 @@ impl Importer<'_, '_> {
                     Some(uvs.iter().map(|uv| Vec2::from_array(*uv)).collect())
                 }
             };
+            let colors = self.vertex_colors(&primitive, &location, count)?;
             let material = self.material(primitive.material())?;
             let emission = self.parts.materials[material].emission;
             let both_sides = self.parts.materials[material].emits_both_sides;
-            let mesh =
-                Mesh { positions: world_positions, normals, uvs, triangles, material, name: node_name.to_string() };
+            let mesh = Mesh {
+                positions: world_positions,
+                normals,
+                uvs,
+                colors,
+                triangles,
+                material,
+                name: node_name.to_string(),
+            };
             let has_area = mesh.triangles.iter().any(|t| {
                 let [a, b, c] = t.map(|i| mesh.positions[i as usize]);
                 (b - a).cross(c - a).length() > 0.0
@@ -522,6 +530,31 @@ impl Importer<'_, '_> {
 }
 
 impl Importer<'_, '_> {
+    /// A primitive's `COLOR_0` (VEC3 or VEC4 of floats or normalized
+    /// integers, linear; the alpha is not used): the colours that multiply
+    /// its base colour.
+    fn vertex_colors(
+        &mut self,
+        primitive: &gltf::Primitive<'_>,
+        location: &str,
+        count: usize,
+    ) -> Result<Option<Vec<Vec3>>, SceneError> {
+        let Some(a) = primitive.get(&gltf::Semantic::Colors(0)) else { return Ok(None) };
+        let at = format!("{location}.attributes.COLOR_0");
+        let colors: Vec<Vec3> = if a.dimensions() == gltf::accessor::Dimensions::Vec4 {
+            self.data.read_floats::<4>(&a, &at)?.iter().map(|c| Vec3::new(c[0], c[1], c[2])).collect()
+        } else {
+            self.data.read_floats::<3>(&a, &at)?.iter().map(|c| Vec3::from_array(*c)).collect()
+        };
+        if colors.len() != count {
+            return Err(self.error(at, format!("has {} colours for {count} vertices", colors.len())));
+        }
+        if colors.iter().any(|c| !c.is_finite() || c.min_element() < 0.0) {
+            return Err(self.error(at, "has colours that are not finite and >= 0"));
+        }
+        Ok(Some(colors))
+    }
+
     /// A texture of the file as the renderer's: its image decoded as
     /// `encoding` says and mapped texel by texel through `map`, read with its
     /// sampler's wrap modes and magnification filter. Returns the texture's
