@@ -405,6 +405,40 @@ fn the_lobby_matches_cycles() {
     assert!(c["blocks"]["blocks"].as_u64().unwrap() > 150, "most blocks compared: {}", c["blocks"]);
 }
 
+/// Two Khronos sample models (scenes/khronos/: metallic-roughness
+/// materials with base-colour and metallic-roughness textures), exported
+/// by Blender's glTF exporter, against Cycles' 4,096-spp render of the same
+/// scene: mean luminance within 2% and 8 x 8 blocks within 4% on average.
+#[test]
+fn khronos_models_match_cycles() {
+    let dir = TempDir::new("gltf-khronos");
+    for name in ["avocado", "water_bottle"] {
+        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/khronos").join(name);
+        let out = dir.path(&format!("{name}.exr"));
+        let model = root.join(format!("{name}.gltf"));
+        lightcuts_ok(&[
+            "render",
+            s(&model),
+            "--exact",
+            "--resolution",
+            "160x160",
+            "--spp",
+            "16",
+            "-o",
+            s(&out),
+            "--quiet",
+        ]);
+        let reference = root.join("cycles_4096.exr");
+        let json = lightcuts_ok(&["compare", s(&out), s(&reference), "--blocks", "8", "--json"]);
+        let c: serde_json::Value = serde_json::from_str(&json).unwrap();
+        let ratio = c["mean_luminance"].as_f64().unwrap() / c["reference_mean_luminance"].as_f64().unwrap();
+        assert!((ratio - 1.0).abs() < 0.02, "{name}: mean luminance ratio {ratio}");
+        let blocks = c["blocks"]["mean_relative_error"].as_f64().unwrap();
+        assert!(blocks < 0.04, "{name}: 8x8 blocks: mean relative error {blocks}");
+        assert!(c["blocks"]["blocks"].as_u64().unwrap() > 50, "{name}: blocks compared: {}", c["blocks"]);
+    }
+}
+
 /// A glTF scene goes through the same commands as a TOML one: render (both
 /// modes, above), sweep, bench rays and compare.
 #[test]
