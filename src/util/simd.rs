@@ -13,6 +13,11 @@
 //! instructions by the crate's compile-time features, the same for both),
 //! so the images are bit-identical either way (`tests/render_exact.rs`
 //! renders with `LIGHTCUTS_BASELINE_SIMD=1` to check).
+//!
+//! No `unsafe` is written here: calling a function compiled for AVX2 is
+//! unsafe in Rust, and the `multiversion` macro's generated dispatcher does
+//! it only after `is_x86_feature_detected!` has found AVX2 and FMA (the
+//! crate's own check, once per process).
 
 use std::sync::OnceLock;
 
