@@ -408,7 +408,9 @@ fn the_lobby_matches_cycles() {
 /// Two Khronos sample models (scenes/khronos/: metallic-roughness
 /// materials with base-colour and metallic-roughness textures), exported
 /// by Blender's glTF exporter, against Cycles' 4,096-spp render of the same
-/// scene: mean luminance within 2% and 8 x 8 blocks within 4% on average.
+/// scene: mean luminance within 2% and 8 x 8 blocks within 1.5% on average
+/// (ignoring the normal maps gives 2.3 to 2.6%, flipping their green
+/// channel 2.5 to 5.2%).
 #[test]
 fn khronos_models_match_cycles() {
     let dir = TempDir::new("gltf-khronos");
@@ -434,7 +436,7 @@ fn khronos_models_match_cycles() {
         let ratio = c["mean_luminance"].as_f64().unwrap() / c["reference_mean_luminance"].as_f64().unwrap();
         assert!((ratio - 1.0).abs() < 0.02, "{name}: mean luminance ratio {ratio}");
         let blocks = c["blocks"]["mean_relative_error"].as_f64().unwrap();
-        assert!(blocks < 0.04, "{name}: 8x8 blocks: mean relative error {blocks}");
+        assert!(blocks < 0.015, "{name}: 8x8 blocks: mean relative error {blocks}");
         assert!(c["blocks"]["blocks"].as_u64().unwrap() > 50, "{name}: blocks compared: {}", c["blocks"]);
     }
 }

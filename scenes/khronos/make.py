@@ -12,10 +12,8 @@ SAMPLE_MODELS_DIR holds `Avocado/glTF/` and `WaterBottle/glTF/` of the
 Khronos glTF sample models (both CC0 1.0; see LICENSE.md here).
 
 What is changed on import, and why (see README.md): textures are scaled
-down to 512 x 512 (the repository stays small); normal maps are
-disconnected and emission removed (this renderer does not read normal maps
-or place emission per texel yet: the comparison is of the BRDF and the
-base-colour and metallic-roughness textures); the Principled BSDF uses
+down to 512 x 512 (the repository stays small); emission is removed (this
+renderer does not place emission per texel yet); the Principled BSDF uses
 single-scattering GGX (glTF's BRDF has no multiple scattering).
 """
 
@@ -26,7 +24,9 @@ import sys
 import bpy
 from mathutils import Vector
 
-HERE = os.path.dirname(os.path.abspath(__file__))
+HERE = os.environ.get("OUT", os.path.dirname(os.path.abspath(__file__)))
+# NORMAL_MAPS=0 disconnects the models' normal maps (to measure what they add).
+NORMAL_MAPS = os.environ.get("NORMAL_MAPS", "1") == "1"
 SIZE = 160
 SAMPLES = int(os.environ.get("SAMPLES", "4096"))
 
@@ -46,7 +46,7 @@ def prepare_materials():
             if node.type == "BSDF_PRINCIPLED":
                 node.distribution = "GGX"
                 node.subsurface_method = "BURLEY"
-                for link in list(node.inputs["Normal"].links):
+                for link in list(node.inputs["Normal"].links) if not NORMAL_MAPS else []:
                     tree.links.remove(link)
                 for link in list(node.inputs["Emission Color"].links):
                     tree.links.remove(link)

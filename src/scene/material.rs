@@ -56,6 +56,21 @@ pub struct PbrMaterial {
     /// multiplying the factors): an index into `Scene::textures` and the
     /// map from the mesh's uv to the texture's.
     pub metallic_roughness: Option<(usize, Affine2)>,
+    /// glTF's `normalTexture`: tangent-space normals perturbing the
+    /// shading normal, where the mesh has tangents.
+    pub normal_map: Option<NormalMap>,
+}
+
+/// A tangent-space normal texture (linear; x, y, z = 2 texel - 1, +X along
+/// increasing u, +Y up the image, +Z out of the surface), its x and y
+/// scaled by `scale` (glTF's `normalTexture.scale`).
+#[derive(Debug, Clone)]
+pub struct NormalMap {
+    /// An index into `Scene::textures`, and the map from the mesh's uv to
+    /// the texture's.
+    pub texture: usize,
+    pub transform: Affine2,
+    pub scale: f32,
 }
 
 /// Coverage texels and the cutoff below which a surface is absent.

@@ -2,7 +2,7 @@
 
 use std::path::Path;
 
-use glam::{Vec2, Vec3};
+use glam::{Vec2, Vec3, Vec4};
 
 use super::error::SceneError;
 
@@ -17,6 +17,10 @@ pub struct Mesh {
     /// Per-vertex colours (linear RGB) multiplying the base colour (glTF's
     /// `COLOR_0`), when the shape has them.
     pub colors: Option<Vec<Vec3>>,
+    /// Per-vertex tangents (unit xyz along increasing u; w = +1 or -1, the
+    /// bitangent being w (normal x tangent), up the texture), for a normal
+    /// map: glTF's `TANGENT`s, or MikkTSpace's.
+    pub tangents: Option<Vec<Vec4>>,
     pub triangles: Vec<[u32; 3]>,
     /// Index into `Scene::materials`.
     pub material: usize,
@@ -33,6 +37,7 @@ impl Mesh {
             positions: vec![corner, corner + u, corner + u + v, corner + v],
             normals: None,
             colors: None,
+            tangents: None,
             uvs: Some(vec![Vec2::new(0.0, 0.0), Vec2::new(1.0, 0.0), Vec2::new(1.0, 1.0), Vec2::new(0.0, 1.0)]),
             triangles: vec![[0, 1, 2], [0, 2, 3]],
             material,
@@ -114,6 +119,10 @@ impl Mesh {
         match (&mut self.colors, &other.colors) {
             (Some(a), Some(b)) => a.extend_from_slice(b),
             _ => self.colors = None,
+        }
+        match (&mut self.tangents, &other.tangents) {
+            (Some(a), Some(b)) => a.extend_from_slice(b),
+            _ => self.tangents = None,
         }
     }
 

@@ -6,7 +6,8 @@ use super::pbr::Pbr;
 use super::surface::SurfacePoint;
 use crate::embree::{self, AlphaMask, Device, EmbreeError, Hit, MeshError, Ray};
 use crate::light::Lights;
-use crate::scene::material::reflect;
+use crate::scene::material::{reflect, NormalMap};
+use crate::scene::texture::Texture;
 use crate::scene::Scene;
 
 /// Embree's view of a scene plus what shading needs to interpret its hits.
@@ -92,19 +93,6 @@ impl<'s> Geometry<'s> {
         if ng.dot(wo) < 0.0 {
             ng = -ng;
         }
-        let mut n = match &mesh.normals {
-            Some(normals) => {
-                let [n0, n1, n2] = tri.map(|i| normals[i as usize]);
-                (w * n0 + u * n1 + v * n2).normalize_or_zero()
-            }
-            None => ng,
-        };
-        if n == Vec3::ZERO || !n.is_finite() {
-            n = ng;
-        }
-        if n.dot(ng) < 0.0 {
-            n = -n;
-        }
         let uv = match &mesh.uvs {
             Some(uvs) => {
                 let [t0, t1, t2] = tri.map(|i| uvs[i as usize]);
@@ -113,6 +101,29 @@ impl<'s> Geometry<'s> {
             None => Vec2::new(u, v),
         };
         let material = &self.scene.materials[mesh.material];
+        let mut n = match &mesh.normals {
+            Some(normals) => {
+                let [n0, n1, n2] = tri.map(|i| normals[i as usize]);
+                let n = (w * n0 + u * n1 + v * n2).normalize_or_zero();
+                // Seen from behind, the whole frame turns to the viewer's
+                // side (decided on the interpolated normal, so that a
+                // perturbed normal dipping below the surface is not turned).
+                let side = if n.dot(ng) < 0.0 { -1.0 } else { 1.0 };
+                let normal_map = material.pbr.as_ref().and_then(|p| p.normal_map.as_ref());
+                side * match (normal_map, &mesh.tangents) {
+                    (Some(map), Some(tangents)) if n != Vec3::ZERO => {
+                        let [t0, t1, t2] = tri.map(|i| tangents[i as usize]);
+                        let tangent = (w * t0 + u * t1 + v * t2).truncate();
+                        perturbed(n, tangent, t0.w, map, uv, &self.scene.textures)
+                    }
+                    _ => n,
+                }
+            }
+            None => ng,
+        };
+        if n == Vec3::ZERO || !n.is_finite() {
+            n = ng;
+        }
         let mut base = material.albedo_at(uv, &self.scene.textures);
         if let Some(colors) = &mesh.colors {
             let [c0, c1, c2] = tri.map(|i| colors[i as usize]);
@@ -137,6 +148,26 @@ impl<'s> Geometry<'s> {
     }
 }
 
+/// The shading normal `n` perturbed by a tangent-space normal map (glTF
+/// 2.0's normalTexture): the texel's (2 t - 1), x and y scaled by the map's
+/// scale, in the frame (tangent, w (n x tangent), n) with the tangent made
+/// orthogonal to n. `n` itself where the frame or the result degenerates.
+fn perturbed(n: Vec3, tangent: Vec3, w: f32, map: &NormalMap, uv: Vec2, textures: &[Texture]) -> Vec3 {
+    let t = (tangent - n * n.dot(tangent)).normalize_or_zero();
+    if t == Vec3::ZERO {
+        return n;
+    }
+    let b = n.cross(t) * w.signum();
+    let texel = textures[map.texture].lookup(map.transform.transform_point2(uv)) * 2.0 - Vec3::ONE;
+    let local = Vec3::new(texel.x * map.scale, texel.y * map.scale, texel.z);
+    let perturbed = (t * local.x + b * local.y + n * local.z).normalize_or_zero();
+    if perturbed == Vec3::ZERO || !perturbed.is_finite() {
+        n
+    } else {
+        perturbed
+    }
+}
+
 /// Failure to hand the scene to Embree.
 #[derive(Debug, thiserror::Error)]
 pub enum GeometryError {
@@ -146,4 +177,45 @@ pub enum GeometryError {
     /// Embree failed (out of memory, unsupported CPU).
     #[error(transparent)]
     Embree(#[from] EmbreeError),
+}
+
+#[cfg(test)]
+mod tests {
+    use glam::Affine2;
+
+    use super::*;
+
+    /// A map of one texel encoding the tangent-space normal `local`.
+    fn map_of(local: Vec3, scale: f32) -> (NormalMap, Vec<Texture>) {
+        let texel = (local + Vec3::ONE) * 0.5;
+        let map = NormalMap { texture: 0, transform: Affine2::IDENTITY, scale };
+        (map, vec![Texture::from_texels(1, 1, vec![texel])])
+    }
+
+    /// glTF's convention: +X along the tangent (increasing u), +Y along w (n
+    /// x tangent) (up the texture), +Z the normal; x and y scaled.
+    #[test]
+    fn a_normal_map_tilts_the_normal_in_the_tangent_frame() {
+        let (n, t) = (Vec3::Z, Vec3::X);
+        let close = |a: Vec3, b: Vec3| (a - b).length() < 1e-5;
+        let at = |local: Vec3, w: f32, scale: f32| {
+            let (map, textures) = map_of(local, scale);
+            perturbed(n, t, w, &map, Vec2::ZERO, &textures)
+        };
+        assert!(close(at(Vec3::Z, 1.0, 1.0), n), "a flat texel keeps the normal");
+        assert!(close(at(Vec3::new(0.6, 0.0, 0.8), 1.0, 1.0), Vec3::new(0.6, 0.0, 0.8)));
+        assert!(close(at(Vec3::new(0.0, 0.6, 0.8), 1.0, 1.0), Vec3::new(0.0, 0.6, 0.8)), "+Y is n x t");
+        assert!(close(at(Vec3::new(0.0, 0.6, 0.8), -1.0, 1.0), Vec3::new(0.0, -0.6, 0.8)), "w flips +Y");
+        assert!(close(at(Vec3::new(0.6, 0.0, 0.8), 1.0, 0.0), n), "scale 0 flattens the map");
+        let half = Vec3::new(0.3, 0.0, 0.8).normalize();
+        assert!(close(at(Vec3::new(0.6, 0.0, 0.8), 1.0, 0.5), half), "scale 0.5 halves x");
+        // A tangent not orthogonal to n is made so first.
+        let (map, textures) = map_of(Vec3::new(0.6, 0.0, 0.8), 1.0);
+        assert!(close(
+            perturbed(n, Vec3::new(1.0, 0.0, 1.0), 1.0, &map, Vec2::ZERO, &textures),
+            Vec3::new(0.6, 0.0, 0.8)
+        ));
+        // A tangent along n has no frame: the normal stays.
+        assert_eq!(perturbed(n, n, 1.0, &map, Vec2::ZERO, &textures), n);
+    }
 }

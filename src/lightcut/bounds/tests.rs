@@ -110,6 +110,7 @@ fn pbr_material(rng: &mut Rng) -> Material {
             specular,
             specular_colour,
             metallic_roughness: None,
+            normal_map: None,
         }),
     }
 }

@@ -20,7 +20,7 @@ use gltf::texture::{MagFilter, WrappingMode};
 use super::file::{CameraSpec, GltfSpec};
 use super::groups::GltfLightNames;
 use super::image::{Encoding, RgbImage};
-use super::material::{Albedo, Cutout, Material, PbrMaterial};
+use super::material::{Albedo, Cutout, Material, NormalMap, PbrMaterial};
 use super::mesh::Mesh;
 use super::texture::{Filter, Texture, Wrap};
 use super::{within_limits, LightSource, SceneError, MAX_COORDINATE, MAX_EMITTER_SAMPLES};
@@ -303,6 +303,13 @@ impl Importer<'_, '_> {
             };
             let colors = self.vertex_colors(&primitive, &location, count)?;
             let material = self.material(primitive.material())?;
+            let normal_mapped = self.parts.materials[material].pbr.as_ref().is_some_and(|p| p.normal_map.is_some());
+            let tangents = if normal_mapped {
+                let frame = Frame { world, mirrored, normals: normals.as_deref(), uvs: uvs.as_deref() };
+                self.tangents(&primitive, &location, count, &frame, &world_positions, &triangles)?
+            } else {
+                None
+            };
             let emission = self.parts.materials[material].emission;
             let both_sides = self.parts.materials[material].emits_both_sides;
             let mesh = Mesh {
@@ -310,6 +317,7 @@ impl Importer<'_, '_> {
                 normals,
                 uvs,
                 colors,
+                tangents,
                 triangles,
                 material,
                 name: node_name.to_string(),
@@ -457,7 +465,9 @@ impl Importer<'_, '_> {
             None => Albedo::Constant(base_rgb),
             Some(info) => {
                 let at = format!("{location}.pbrMetallicRoughness.baseColorTexture");
-                let (texture, transform, image) = self.texture(&info, &at, Encoding::Srgb, |t| t * base_rgb)?;
+                let transform = uv_transform(info.texture_transform());
+                let (texture, image) =
+                    self.texture(&info.texture(), info.tex_coord(), &at, Encoding::Srgb, |t| t * base_rgb)?;
                 coverage = image.alpha.as_ref().map(|a| {
                     (a.iter().map(|x| x * base.w).collect::<Vec<f32>>(), image.width, image.height, transform)
                 });
@@ -468,13 +478,21 @@ impl Importer<'_, '_> {
             None => None,
             Some(info) => {
                 let at = format!("{location}.pbrMetallicRoughness.metallicRoughnessTexture");
-                let (texture, transform, _) = self.texture(&info, &at, Encoding::Linear, |t| t)?;
-                Some((texture, transform))
+                let (texture, _) = self.texture(&info.texture(), info.tex_coord(), &at, Encoding::Linear, |t| t)?;
+                Some((texture, uv_transform(info.texture_transform())))
             }
         };
-        if m.normal_texture().is_some() {
-            self.warn(&location, "normalTexture ignored: the mesh's own normals are used");
-        }
+        let normal_map = match m.normal_texture() {
+            None => None,
+            Some(info) => {
+                let at = format!("{location}.normalTexture");
+                if !info.scale().is_finite() {
+                    return Err(self.error(format!("{at}.scale"), "must be finite"));
+                }
+                let (texture, _) = self.texture(&info.texture(), info.tex_coord(), &at, Encoding::Linear, |t| t)?;
+                Some(NormalMap { texture, transform: uv_transform(None), scale: info.scale() })
+            }
+        };
         let cutoff = match m.alpha_mode() {
             gltf::material::AlphaMode::Opaque => None,
             gltf::material::AlphaMode::Mask => Some(m.alpha_cutoff().unwrap_or(0.5)),
@@ -522,14 +540,62 @@ impl Importer<'_, '_> {
             emission,
             emits_both_sides: m.double_sided(),
             cutout,
-            pbr: Some(PbrMaterial { metallic, roughness, specular, specular_colour, metallic_roughness }),
+            pbr: Some(PbrMaterial { metallic, roughness, specular, specular_colour, metallic_roughness, normal_map }),
         });
         self.materials.insert(m.index(), index);
         Ok(index)
     }
 }
 
+/// What a primitive's tangents are made from: its node's transform and its
+/// world-space normals and (glTF) texture coordinates.
+struct Frame<'a> {
+    world: &'a Mat4,
+    mirrored: bool,
+    normals: Option<&'a [Vec3]>,
+    uvs: Option<&'a [Vec2]>,
+}
+
 impl Importer<'_, '_> {
+    /// A normal-mapped primitive's tangents in world space: its `TANGENT`s
+    /// (transformed by the node's matrix; w flipped by a mirroring one),
+    /// or MikkTSpace's from its normals and texture coordinates, as the
+    /// specification asks. None, with a warning, without normals or
+    /// texture coordinates (the normal map is then not used).
+    fn tangents(
+        &mut self,
+        primitive: &gltf::Primitive<'_>,
+        location: &str,
+        count: usize,
+        frame: &Frame<'_>,
+        positions: &[Vec3],
+        triangles: &[[u32; 3]],
+    ) -> Result<Option<Vec<Vec4>>, SceneError> {
+        let (Some(normals), Some(uvs)) = (frame.normals, frame.uvs) else {
+            self.warn(location, "normalTexture unused: the primitive has no NORMAL or no TEXCOORD_0");
+            return Ok(None);
+        };
+        let Some(a) = primitive.get(&gltf::Semantic::Tangents) else {
+            return Ok(mikktspace_tangents(positions, normals, uvs, triangles));
+        };
+        let at = format!("{location}.attributes.TANGENT");
+        let tangents = self.data.read_floats::<4>(&a, &at)?;
+        if tangents.len() != count {
+            return Err(self.error(at, format!("has {} tangents for {count} vertices", tangents.len())));
+        }
+        let linear = Mat3::from_mat4(*frame.world);
+        let sign = if frame.mirrored { -1.0 } else { 1.0 };
+        let tangents: Vec<Vec4> = tangents
+            .iter()
+            .map(|t| (linear * Vec3::new(t[0], t[1], t[2])).normalize_or_zero().extend(sign * t[3].signum()))
+            .collect();
+        if tangents.iter().any(|t| !t.is_finite() || t.truncate() == Vec3::ZERO) {
+            self.warn(&at, "has zero or non-finite tangents: MikkTSpace's are used");
+            return Ok(mikktspace_tangents(positions, normals, uvs, triangles));
+        }
+        Ok(Some(tangents))
+    }
+
     /// A primitive's `COLOR_0` (VEC3 or VEC4 of floats or normalized
     /// integers, linear; the alpha is not used): the colours that multiply
     /// its base colour.
@@ -558,20 +624,20 @@ impl Importer<'_, '_> {
     /// A texture of the file as the renderer's: its image decoded as
     /// `encoding` says and mapped texel by texel through `map`, read with its
     /// sampler's wrap modes and magnification filter. Returns the texture's
-    /// index, the map from the mesh's uv to the texture's
-    /// (KHR_texture_transform and glTF's v axis), and the decoded image.
+    /// index and the decoded image.
     fn texture(
         &mut self,
-        info: &gltf::texture::Info<'_>,
+        texture: &gltf::Texture<'_>,
+        tex_coord: u32,
         at: &str,
         encoding: Encoding,
         map: impl Fn(Vec3) -> Vec3,
-    ) -> Result<(usize, Affine2, RgbImage), SceneError> {
-        if info.tex_coord() != 0 {
+    ) -> Result<(usize, RgbImage), SceneError> {
+        if tex_coord != 0 {
             self.warn(at, "uses TEXCOORD_1 or later: read with TEXCOORD_0");
         }
-        let image = self.data.image(&info.texture().source(), at, encoding)?;
-        let sampler = info.texture().sampler();
+        let image = self.data.image(&texture.source(), at, encoding)?;
+        let sampler = texture.sampler();
         let wrap = |mode: WrappingMode| match mode {
             WrappingMode::Repeat => Wrap::Repeat,
             WrappingMode::ClampToEdge => Wrap::ClampToEdge,
@@ -585,8 +651,51 @@ impl Importer<'_, '_> {
         let texture = Texture::from_texels(image.width, image.height, texels)
             .with_sampler([wrap(sampler.wrap_s()), wrap(sampler.wrap_t())], filter);
         self.parts.textures.push(texture);
-        Ok((self.parts.textures.len() - 1, uv_transform(info.texture_transform()), image))
+        Ok((self.parts.textures.len() - 1, image))
     }
+}
+
+/// MikkTSpace tangents of a triangle mesh, one per vertex (a vertex shared
+/// by faces that MikkTSpace would split keeps one face's), from glTF's
+/// texture coordinates with v turned up, so that the bitangent points up
+/// the image as glTF's normal maps expect. None if MikkTSpace fails.
+fn mikktspace_tangents(
+    positions: &[Vec3],
+    normals: &[Vec3],
+    uvs: &[Vec2],
+    triangles: &[[u32; 3]],
+) -> Option<Vec<Vec4>> {
+    struct Faces<'a> {
+        positions: &'a [Vec3],
+        normals: &'a [Vec3],
+        uvs: &'a [Vec2],
+        triangles: &'a [[u32; 3]],
+        tangents: Vec<Vec4>,
+    }
+    impl bevy_mikktspace::Geometry for Faces<'_> {
+        fn num_faces(&self) -> usize {
+            self.triangles.len()
+        }
+        fn num_vertices_of_face(&self, _face: usize) -> usize {
+            3
+        }
+        fn position(&self, face: usize, vert: usize) -> [f32; 3] {
+            self.positions[self.triangles[face][vert] as usize].to_array()
+        }
+        fn normal(&self, face: usize, vert: usize) -> [f32; 3] {
+            self.normals[self.triangles[face][vert] as usize].to_array()
+        }
+        fn tex_coord(&self, face: usize, vert: usize) -> [f32; 2] {
+            let uv = self.uvs[self.triangles[face][vert] as usize];
+            [uv.x, 1.0 - uv.y]
+        }
+        fn set_tangent_encoded(&mut self, tangent: [f32; 4], face: usize, vert: usize) {
+            self.tangents[self.triangles[face][vert] as usize] = Vec4::from_array(tangent);
+        }
+    }
+    let mut faces =
+        Faces { positions, normals, uvs, triangles, tangents: vec![Vec4::new(1.0, 0.0, 0.0, 1.0); positions.len()] };
+    bevy_mikktspace::generate_tangents(&mut faces).then_some(faces.tangents)
 }
 
 /// Triangles of a primitive: lists as they are, strips and fans converted

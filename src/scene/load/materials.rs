@@ -124,5 +124,12 @@ fn pbr(
             Some((textures.len() - 1, Affine2::from_scale(Vec2::from_array(m.texture_scale))))
         }
     };
-    Ok(PbrMaterial { metallic, roughness, specular: 1.0, specular_colour: Vec3::ONE, metallic_roughness })
+    Ok(PbrMaterial {
+        metallic,
+        roughness,
+        specular: 1.0,
+        specular_colour: Vec3::ONE,
+        metallic_roughness,
+        normal_map: None,
+    })
 }
