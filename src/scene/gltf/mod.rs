@@ -287,20 +287,7 @@ impl Importer<'_, '_> {
                     }
                 }
             };
-            let uvs = match primitive.get(&gltf::Semantic::TexCoords(0)) {
-                None => None,
-                Some(a) => {
-                    let at = format!("{location}.attributes.TEXCOORD_0");
-                    let uvs = self.data.read_floats::<2>(&a, &at)?;
-                    if uvs.len() != count {
-                        return Err(self.error(at, format!("has {} coordinates for {count} vertices", uvs.len())));
-                    }
-                    if uvs.iter().flatten().any(|x| !x.is_finite()) {
-                        return Err(self.error(at, "has non-finite texture coordinates"));
-                    }
-                    Some(uvs.iter().map(|uv| Vec2::from_array(*uv)).collect())
-                }
-            };
+            let uvs = self.texture_coordinates(&primitive, &location, count)?;
             let colors = self.vertex_colors(&primitive, &location, count)?;
             let material = self.material(primitive.material())?;
             let normal_mapped = self.parts.materials[material].pbr.as_ref().is_some_and(|p| p.normal_map.is_some());
@@ -594,6 +581,30 @@ impl Importer<'_, '_> {
             return Ok(mikktspace_tangents(positions, normals, uvs, triangles));
         }
         Ok(Some(tangents))
+    }
+
+    /// A primitive's `TEXCOORD_0`, finite, one per vertex.
+    fn texture_coordinates(
+        &mut self,
+        primitive: &gltf::Primitive<'_>,
+        location: &str,
+        count: usize,
+    ) -> Result<Option<Vec<Vec2>>, SceneError> {
+        let uvs = match primitive.get(&gltf::Semantic::TexCoords(0)) {
+            None => None,
+            Some(a) => {
+                let at = format!("{location}.attributes.TEXCOORD_0");
+                let uvs = self.data.read_floats::<2>(&a, &at)?;
+                if uvs.len() != count {
+                    return Err(self.error(at, format!("has {} coordinates for {count} vertices", uvs.len())));
+                }
+                if uvs.iter().flatten().any(|x| !x.is_finite()) {
+                    return Err(self.error(at, "has non-finite texture coordinates"));
+                }
+                Some(uvs.iter().map(|uv| Vec2::from_array(*uv)).collect())
+            }
+        };
+        Ok(uvs)
     }
 
     /// A primitive's `COLOR_0` (VEC3 or VEC4 of floats or normalized
