@@ -75,7 +75,14 @@ fn the_camera_sets_the_film_aspect_and_can_be_chosen_by_name() {
     assert_eq!((chosen.film.width, chosen.film.height), (640, 320));
     assert_eq!(chosen.camera_spec.eye, [0.0, 1.0, 8.0]);
     let e = Scene::load_with_camera(&path, Some("nope")).unwrap_err().to_string();
-    assert!(e.contains("s.gltf") && e.contains("no camera named 'nope'") && e.contains("top, wide, plan"), "{e}");
+    assert!(
+        e.contains("s.gltf") && e.contains("no camera named 'nope'") && e.contains("top (#0), wide (#1), plan (#2)"),
+        "{e}"
+    );
+    // By index in node order: #1 is "wide"; past the end, the same list.
+    assert_eq!(Scene::load_with_camera(&path, Some("#1")).unwrap().camera_spec.eye, [0.0, 1.0, 8.0]);
+    let e = Scene::load_with_camera(&path, Some("#3")).unwrap_err().to_string();
+    assert!(e.contains("no camera named '#3'") && e.contains("plan (#2)"), "{e}");
     let e = Scene::load_with_camera(&path, Some("plan")).unwrap_err().to_string();
     assert!(e.contains("cameras[2]") && e.contains("orthographic"), "{e}");
     // The binary: --camera and --resolution.
@@ -589,4 +596,60 @@ fn gltf_lights_join_groups_by_light_node_or_material_name() {
     let path = dir.write("stale.toml", &rules("lamp"));
     let e = Scene::load(&path).unwrap_err().to_string();
     assert!(e.contains("stale.toml") && e.contains("gltf.groups[0].light") && e.contains("lamp"), "{e}");
+}
+
+/// A file with no camera and no light renders straight from the command
+/// line: a camera framing its bounds (with a note), a warning that names
+/// the fix when nothing lights it, and the light the flags add, with known
+/// answers on a diffuse floor of albedo a seen from above: a constant
+/// environment of radiance L gives L a; a sun of irradiance E at elevation
+/// e gives (a / pi) E sin e.
+#[test]
+fn a_file_without_camera_or_lights_renders_with_added_light() {
+    let dir = TempDir::new("gltf-bare");
+    let mut g = GltfBuilder::new();
+    let albedo = 0.5f32;
+    let grey = g.material(diffuse([albedo; 3]));
+    let floor = g.quad([-1.0, 0.0, 1.0], [2.0, 0.0, 0.0], [0.0, 0.0, -2.0], Some(grey));
+    g.node(json!({ "mesh": floor }), true);
+    let path = dir.write("bare.gltf", &g.embedded());
+    let scene = Scene::load(&path).unwrap();
+    // Framed from the front and above, the floor's centre in the middle.
+    assert_eq!(scene.camera_spec.look_at, [0.0, 0.0, 0.0]);
+    assert_eq!(scene.camera_spec.fov_y, 45.0);
+    assert!(scene.camera_spec.eye[2] > 1.0 && scene.camera_spec.eye[1] > 0.0, "{:?}", scene.camera_spec.eye);
+    assert!(scene.warnings.iter().any(|w| w.contains("no camera in the file")), "{:?}", scene.warnings);
+    // What the flags add is part of the scene's hash (a farm's tiles must agree).
+    let mut sunlit_scene = Scene::load(&path).unwrap();
+    sunlit_scene.add_lights(None, Some([30.0, 40.0, 2.0])).unwrap();
+    assert_ne!(scene.content_hash().unwrap(), sunlit_scene.content_hash().unwrap());
+    let out = dir.path("o.exr");
+    let render = |extra: &[&str]| {
+        let mut args = vec!["render", s(&path), "-o", s(&out), "--exact", "--resolution", "32x24", "--quiet"];
+        args.extend_from_slice(extra);
+        let output = lightcuts(&args);
+        assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
+        let centre = read_exr(&out).unwrap().channels["G"][12 * 32 + 16];
+        (centre, String::from_utf8_lossy(&output.stderr).into_owned())
+    };
+    let (black, stderr) = render(&[]);
+    assert_eq!(black, 0.0);
+    assert!(stderr.contains("no lights") && stderr.contains("--environment 1,1,1"), "{stderr}");
+    let (lit, stderr) = render(&["--environment", "1,1,1"]);
+    assert!(!stderr.contains("no lights"), "{stderr}");
+    assert!((lit - albedo).abs() < 0.01 * albedo, "constant environment: {lit} against {albedo}");
+    let (e, irradiance) = (40.0f32, 2.0f32);
+    let (sunlit, _) = render(&["--sun", &format!("30,{e},{irradiance}")]);
+    let expected = albedo / std::f32::consts::PI * irradiance * e.to_radians().sin();
+    assert!((sunlit - expected).abs() < 1e-4 * expected, "sun: {sunlit} against {expected}");
+    // Composable: both add up.
+    let (both, _) = render(&["--sun", &format!("30,{e},{irradiance}"), "--environment", "1,1,1"]);
+    assert!((both - (lit + sunlit)).abs() < 1e-4, "{both} against {lit} + {sunlit}");
+    // Bad values name the flag; nothing is written.
+    std::fs::remove_file(&out).unwrap();
+    let stderr = lightcuts_fails(&["render", s(&path), "-o", s(&out), "--sun", "0,91"]);
+    assert!(stderr.contains("--sun"), "{stderr}");
+    let stderr = lightcuts_fails(&["render", s(&path), "-o", s(&out), "--environment", "1,-1,1"]);
+    assert!(stderr.contains("--environment"), "{stderr}");
+    assert!(!out.exists());
 }

@@ -202,19 +202,38 @@ pub struct PassArgs {
     /// Render only this half-open window of the full frame, in pixels.
     #[arg(long, value_name = "x0,x1,y0,y1", value_parser = parse_pixel_bounds)]
     pub pixel_bounds: Option<[u32; 4]>,
-    /// Render through the glTF camera of this name (the scene's first camera
+    /// Render through the glTF camera of this name, or `#N` for the N-th
+    /// camera (from 0) in the file's node order (the scene's first camera
     /// otherwise; overrides a TOML's [camera]).
-    #[arg(long, value_name = "NAME")]
+    #[arg(long, value_name = "NAME|#N")]
     pub camera: Option<String>,
+    /// Add an environment: `R,G,B` (a constant radiance, W/(m^2 sr), e.g.
+    /// 1,1,1) or a lat-long OpenEXR file; 1,024 directional lights. It
+    /// replaces the scene's own environment.
+    #[arg(long, value_name = "R,G,B|FILE.exr")]
+    pub environment: Option<String>,
+    /// Add a sun: azimuth and elevation in degrees (azimuth from +Z towards
+    /// +X, elevation above the horizon, +Y up), irradiance in W/m^2
+    /// (default 3).
+    #[arg(long, value_name = "AZIMUTH,ELEVATION[,IRRADIANCE]", value_parser = parse_sun, allow_hyphen_values = true)]
+    pub sun: Option<[f32; 3]>,
 }
 
 impl PassArgs {
     /// Loads the scene (through `--camera` when given) and prints its
     /// warnings, one line each.
     pub fn load(&self, path: &Path) -> Result<Scene, CliError> {
-        let scene = Scene::load_with_camera(path, self.camera.as_deref())?;
+        let mut scene = Scene::load_with_camera(path, self.camera.as_deref())?;
+        scene.add_lights(self.environment.as_deref(), self.sun)?;
         for warning in &scene.warnings {
             eprintln!("warning: {warning}");
+        }
+        if !scene.has_light() {
+            eprintln!(
+                "warning: {}: the scene has no lights and renders black: add --environment 1,1,1 or --sun 30,45 \
+                 (or lights in a TOML scene that imports it)",
+                path.display()
+            );
         }
         Ok(scene)
     }
@@ -289,6 +308,19 @@ pub fn parse_resolution(s: &str) -> Result<(u32, u32), String> {
 }
 
 /// Parses `x0,x1,y0,y1`.
+/// `AZIMUTH,ELEVATION[,IRRADIANCE]` (degrees, degrees, W/m^2).
+pub fn parse_sun(s: &str) -> Result<[f32; 3], String> {
+    let parts: Vec<&str> = s.split(',').collect();
+    if !(2..=3).contains(&parts.len()) {
+        return Err(format!("expected AZIMUTH,ELEVATION[,IRRADIANCE], got '{s}'"));
+    }
+    let mut out = [0.0, 0.0, crate::scene::ADDED_SUN_IRRADIANCE];
+    for (o, p) in out.iter_mut().zip(&parts) {
+        *o = p.trim().parse().map_err(|_| format!("'{p}' is not a number"))?;
+    }
+    Ok(out)
+}
+
 pub fn parse_pixel_bounds(s: &str) -> Result<[u32; 4], String> {
     let parts: Vec<&str> = s.split(',').collect();
     if parts.len() != 4 {

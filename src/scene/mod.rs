@@ -12,7 +12,7 @@ pub mod file;
 pub mod gltf;
 pub mod groups;
 pub mod image;
-mod load;
+pub(crate) mod load;
 pub mod material;
 pub mod mesh;
 pub mod texture;
@@ -25,6 +25,7 @@ pub use camera::Camera;
 pub use environment::{Environment, EnvironmentMap};
 pub use error::SceneError;
 pub use groups::LightGroups;
+pub use load::additions::{ADDED_ENVIRONMENT_SAMPLES, ADDED_SUN_IRRADIANCE};
 pub use material::{Albedo, Material};
 pub use mesh::Mesh;
 use texture::Texture;
@@ -98,6 +99,10 @@ pub struct Scene {
     /// mask drawn opaque, a skin in its bind pose), one line each with the
     /// file and location: the commands print them.
     pub warnings: Vec<String>,
+    /// What the command line added (`--environment`, `--sun`), as text: part
+    /// of the scene's hash, so that a farm's tiles rendered with different
+    /// additions are not assembled together.
+    pub additions: Vec<String>,
 }
 
 /// Film width of a glTF file rendered without a TOML, pixels.
@@ -179,7 +184,8 @@ impl Scene {
                     .map_err(|e| SceneError::new(p, "file", format!("cannot read it to hash it: {e}")))
             })
             .collect::<Result<Vec<_>, _>>()?;
-        Ok(crate::util::hash::combined_hex(hashes))
+        let additions = self.additions.iter().map(|a| crate::util::hash::hash_bytes(a.as_bytes()));
+        Ok(crate::util::hash::combined_hex(hashes.into_iter().chain(additions)))
     }
 
     #[must_use]

@@ -186,9 +186,18 @@ impl Importer<'_, '_> {
         let chosen = match &self.spec.camera {
             None => cameras.first(),
             Some(name) => {
-                let found = cameras.iter().find(|(c, _, _)| c.name() == Some(name.as_str()));
+                // `#N`: the N-th camera in node order (unnamed ones too).
+                let found = match name.strip_prefix('#').and_then(|n| n.parse::<usize>().ok()) {
+                    Some(i) => cameras.get(i),
+                    None => cameras.iter().find(|(c, _, _)| c.name() == Some(name.as_str())),
+                };
                 if found.is_none() {
-                    let names: Vec<&str> = cameras.iter().filter_map(|(c, _, _)| c.name()).collect();
+                    let names: Vec<String> = cameras
+                        .iter()
+                        .enumerate()
+                        .map(|(i, (c, _, _))| c.name().map_or_else(|| format!("#{i}"), |n| format!("{n} (#{i})")))
+                        .collect();
+                    let names: Vec<&str> = names.iter().map(String::as_str).collect();
                     return Err(self.error(
                         "cameras",
                         format!("no camera named '{name}' in the scene (it has: {})", list_or_none(&names)),
@@ -745,7 +754,7 @@ fn uv_transform(transform: Option<gltf::texture::TextureTransform<'_>>) -> Affin
 
 fn list_or_none(names: &[&str]) -> String {
     if names.is_empty() {
-        "no named cameras".to_string()
+        "no cameras".to_string()
     } else {
         names.join(", ")
     }

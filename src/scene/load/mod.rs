@@ -5,6 +5,7 @@
 //! the file and the field path; relative paths resolve against the scene
 //! file's directory.
 
+pub(crate) mod additions;
 mod lights;
 mod materials;
 mod settings;
@@ -105,7 +106,7 @@ impl Scene {
                 camera
             }
         };
-        let (camera_spec, film) = settings::camera_and_film(&v, &spec, gltf_camera)?;
+        let (camera_spec, film) = settings::camera_and_film(&v, &spec, gltf_camera, &meshes, &mut warnings)?;
         let environment = settings::environment(&v, base, &spec, &mut inputs)?;
         let indirect = settings::indirect(&v, &spec)?;
         let groups = LightGroups::assign(
@@ -133,6 +134,7 @@ impl Scene {
             distance_clamp: clamp,
             inputs,
             warnings,
+            additions: Vec::new(),
         })
     }
 }

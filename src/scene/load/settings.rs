@@ -3,9 +3,12 @@
 
 use std::path::{Path, PathBuf};
 
+use glam::Vec3;
+
 use super::Validator;
 use crate::scene::file::{self, SceneFile};
 use crate::scene::gltf::GltfCamera;
+use crate::scene::mesh::Mesh;
 use crate::scene::{
     check_resolution, Environment, EnvironmentMap, Film, IndirectSettings, SceneError, DEFAULT_GLTF_WIDTH,
     MAX_VPL_PATHS,
@@ -49,12 +52,20 @@ fn check_camera(v: &Validator<'_>, cam: &file::CameraSpec, field: &str) -> Resul
     })
 }
 
-/// The camera (the TOML's, else the glTF file's) and the film (the TOML's,
-/// else 640 pixels wide at the glTF camera's aspect ratio).
+/// The vertical field of view of the camera made for a glTF file that has
+/// none, degrees.
+pub const FRAMING_FOV_Y: f32 = 45.0;
+
+/// The camera (the TOML's, else the glTF file's, else one framing the
+/// meshes, with a note in `warnings`) and the film (the TOML's, else 640
+/// pixels wide at the glTF camera's aspect ratio, 640 x 480 for a framing
+/// camera).
 pub(super) fn camera_and_film(
     v: &Validator<'_>,
     spec: &SceneFile,
     gltf_camera: Option<GltfCamera>,
+    meshes: &[Mesh],
+    warnings: &mut Vec<String>,
 ) -> Result<(file::CameraSpec, Film), SceneError> {
     let (camera_spec, aspect_ratio) = match (&spec.camera, gltf_camera) {
         (Some(c), _) => (c.clone(), None),
@@ -64,7 +75,18 @@ pub(super) fn camera_and_film(
             (c.spec, c.aspect_ratio)
         }
         (None, None) => {
-            return Err(v.error("camera", "missing: the TOML gives no [camera] and the glTF file has no camera"));
+            let Some(camera) = framing_camera(meshes) else {
+                return Err(v.error(
+                    "camera",
+                    "missing: the glTF file has no camera and no geometry to frame, and no [camera] is given",
+                ));
+            };
+            warnings.push(format!(
+                "{}: no camera in the file: one frames the scene's bounds from the front (+Z, 14 degrees above the \
+                 centre), {FRAMING_FOV_Y} degrees vertical field of view (--camera or a TOML's [camera] picks another)",
+                v.file.display()
+            ));
+            (camera, None)
         }
     };
     let film = match &spec.film {
@@ -76,6 +98,29 @@ pub(super) fn camera_and_film(
         }
     };
     Ok((camera_spec, film))
+}
+
+/// A camera that sees the whole of the meshes' bounding sphere, from the
+/// front (+Z) and a little above (the direction (0, 0.25, 1)), as glTF
+/// viewers show a file without a camera; None without geometry.
+fn framing_camera(meshes: &[Mesh]) -> Option<file::CameraSpec> {
+    let points = meshes.iter().flat_map(|m| m.positions.iter());
+    let (lo, hi) = points.fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), p| (lo.min(*p), hi.max(*p)));
+    if !(lo.is_finite() && hi.is_finite()) {
+        return None;
+    }
+    let centre = 0.5 * (lo + hi);
+    let radius = (0.5 * (hi - lo).length()).max(1e-3);
+    // The sphere fits the vertical field of view (the narrower at 4:3),
+    // with a 5% margin.
+    let distance = 1.05 * radius / (0.5 * FRAMING_FOV_Y).to_radians().sin();
+    let eye = centre + distance * Vec3::new(0.0, 0.25, 1.0).normalize();
+    Some(file::CameraSpec {
+        eye: eye.to_array(),
+        look_at: centre.to_array(),
+        up: [0.0, 1.0, 0.0],
+        fov_y: FRAMING_FOV_Y,
+    })
 }
 
 /// The `[environment]`: a constant radiance or a lat-long EXR.
