@@ -279,21 +279,21 @@ fn materials_map_onto_the_metallic_roughness_brdf_with_their_textures() {
     // The offset of half the texture moves the left column to u in [0.5, 1];
     // the white texel stays at the top (small v). The base colour is the
     // texture times the factor, whatever the metallic.
-    let at = |u: f32, v: f32| floor.albedo_at(glam::Vec2::new(u, v), &scene.textures);
+    let at = |u: f32, v: f32| floor.albedo_at(&[glam::Vec2::new(u, v); 2], &scene.textures);
     let grey = lightcuts::util::color::srgb_to_linear(128.0 / 255.0);
     assert!((at(0.75, 0.25) - Vec3::new(0.5, 1.0, 1.0)).length() < 1e-3, "{}", at(0.75, 0.25));
     for (u, v) in [(0.25, 0.25), (0.75, 0.75), (0.25, 0.75)] {
         assert!((at(u, v).y - grey).abs() < 1e-3, "({u}, {v}): {}", at(u, v));
     }
     let metal = &scene.materials[scene.meshes[1].material];
-    let base = metal.albedo_at(glam::Vec2::ZERO, &scene.textures);
+    let base = metal.albedo_at(&[glam::Vec2::ZERO; 2], &scene.textures);
     assert_eq!(base, Vec3::new(0.9, 0.6, 0.3), "a metal's base colour is its albedo");
     let pbr = metal.pbr.as_ref().unwrap();
     // The texture multiplies the factors, read as linear data (64 / 255 is
     // 0.251, where an sRGB decode would give 0.051). glTF's uv (0.25, y) is
     // the left texel; ours has v up.
-    let left = Pbr::of(pbr, base, glam::Vec2::new(0.25, 0.5), &scene.textures);
-    let right = Pbr::of(pbr, base, glam::Vec2::new(0.75, 0.5), &scene.textures);
+    let left = Pbr::of(pbr, base, &[glam::Vec2::new(0.25, 0.5); 2], &scene.textures);
+    let right = Pbr::of(pbr, base, &[glam::Vec2::new(0.75, 0.5); 2], &scene.textures);
     assert_eq!(left.metallic, 0.0);
     assert!((left.alpha - 0.8f32.powi(2)).abs() < 1e-6, "left roughness 0.8: alpha {}", left.alpha);
     assert_eq!(right.metallic, 1.0);
@@ -301,6 +301,38 @@ fn materials_map_onto_the_metallic_roughness_brdf_with_their_textures() {
     assert!((right.alpha - roughness * roughness).abs() < 1e-6, "right: alpha {}", right.alpha);
     // The diffuse reflectance a bounce takes: none for a metal.
     assert_eq!(right.diffuse_albedo(), Vec3::ZERO);
+}
+
+/// Each texture reads its own `texCoord` set: a 2 x 1 texture (red left,
+/// green right) on a quad whose TEXCOORD_0 is the left texel's centre
+/// everywhere and TEXCOORD_1 the right one's renders red through set 0 and
+/// green through set 1.
+#[test]
+fn each_texture_reads_its_own_texture_coordinates() {
+    let dir = TempDir::new("gltf-texcoord");
+    let render = |set: u32| {
+        let mut g = floor_and_point_light();
+        let texture = g.png_texture(2, 1, &[255, 0, 0, 0, 255, 0]);
+        g.json["materials"][0]["pbrMetallicRoughness"]["baseColorTexture"] =
+            json!({ "index": texture, "texCoord": set });
+        let left = g.floats(&[0.25, 0.5].repeat(4), "VEC2", 2);
+        let right = g.floats(&[0.75, 0.5].repeat(4), "VEC2", 2);
+        g.json["meshes"][0]["primitives"][0]["attributes"]["TEXCOORD_0"] = json!(left);
+        g.json["meshes"][0]["primitives"][0]["attributes"]["TEXCOORD_1"] = json!(right);
+        let (scene, out) = (dir.write(&format!("s{set}.gltf"), &g.embedded()), dir.path(&format!("s{set}.exr")));
+        let stderr = String::from_utf8_lossy(
+            &lightcuts(&["render", s(&scene), "-o", s(&out), "--exact", "--resolution", "16x12", "--quiet"]).stderr,
+        )
+        .into_owned();
+        assert!(!stderr.contains("TEXCOORD"), "{stderr}");
+        let image = read_exr(&out).unwrap();
+        let centre = 6 * 16 + 8;
+        (image.channels["R"][centre], image.channels["G"][centre])
+    };
+    let (r, g) = render(0);
+    assert!(r > 0.0 && g < 1e-3 * r, "set 0: R {r}, G {g}");
+    let (r, g) = render(1);
+    assert!(g > 0.0 && r < 1e-3 * g, "set 1: R {r}, G {g}");
 }
 
 /// COLOR_0 multiplies the base colour (glTF's VertexColorTest): a floor

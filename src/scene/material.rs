@@ -17,8 +17,15 @@ pub enum Albedo {
     Texture {
         texture: usize,
         transform: Affine2,
+        /// Which texture coordinates the lookup reads (glTF's `texCoord`:
+        /// 0 or 1).
+        set: usize,
     },
 }
+
+/// A shading point's texture coordinates: sets 0 and 1 (glTF's
+/// `TEXCOORD_0` and `TEXCOORD_1`; set 1 is set 0 where a mesh has one set).
+pub type TexCoords = [Vec2; 2];
 
 #[derive(Debug, Clone)]
 pub struct Material {
@@ -55,7 +62,7 @@ pub struct PbrMaterial {
     /// glTF's `metallicRoughnessTexture` (linear; G roughness, B metallic,
     /// multiplying the factors): an index into `Scene::textures` and the
     /// map from the mesh's uv to the texture's.
-    pub metallic_roughness: Option<(usize, Affine2)>,
+    pub metallic_roughness: Option<(usize, Affine2, usize)>,
     /// glTF's `normalTexture`: tangent-space normals perturbing the
     /// shading normal, where the mesh has tangents.
     pub normal_map: Option<NormalMap>,
@@ -71,6 +78,8 @@ pub struct NormalMap {
     pub texture: usize,
     pub transform: Affine2,
     pub scale: f32,
+    /// Which texture coordinates it reads.
+    pub set: usize,
 }
 
 /// Coverage texels and the cutoff below which a surface is absent.
@@ -88,10 +97,12 @@ pub struct Cutout {
 impl Material {
     /// Diffuse albedo k_d at a surface point.
     #[must_use]
-    pub fn albedo_at(&self, uv: Vec2, textures: &[Texture]) -> Vec3 {
+    pub fn albedo_at(&self, uvs: &TexCoords, textures: &[Texture]) -> Vec3 {
         match &self.albedo {
             Albedo::Constant(c) => *c,
-            Albedo::Texture { texture, transform } => textures[*texture].lookup(transform.transform_point2(uv)),
+            Albedo::Texture { texture, transform, set } => {
+                textures[*texture].lookup(transform.transform_point2(uvs[(*set).min(1)]))
+            }
         }
     }
 

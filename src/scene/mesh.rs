@@ -14,6 +14,8 @@ pub struct Mesh {
     pub normals: Option<Vec<Vec3>>,
     /// Per-vertex texture coordinates, when the shape has them.
     pub uvs: Option<Vec<Vec2>>,
+    /// A second set of texture coordinates (glTF's `TEXCOORD_1`).
+    pub uvs1: Option<Vec<Vec2>>,
     /// Per-vertex colours (linear RGB) multiplying the base colour (glTF's
     /// `COLOR_0`), when the shape has them.
     pub colors: Option<Vec<Vec3>>,
@@ -38,6 +40,7 @@ impl Mesh {
             normals: None,
             colors: None,
             tangents: None,
+            uvs1: None,
             uvs: Some(vec![Vec2::new(0.0, 0.0), Vec2::new(1.0, 0.0), Vec2::new(1.0, 1.0), Vec2::new(0.0, 1.0)]),
             triangles: vec![[0, 1, 2], [0, 2, 3]],
             material,
@@ -119,6 +122,10 @@ impl Mesh {
         match (&mut self.colors, &other.colors) {
             (Some(a), Some(b)) => a.extend_from_slice(b),
             _ => self.colors = None,
+        }
+        match (&mut self.uvs1, &other.uvs1) {
+            (Some(a), Some(b)) => a.extend_from_slice(b),
+            _ => self.uvs1 = None,
         }
         match (&mut self.tangents, &other.tangents) {
             (Some(a), Some(b)) => a.extend_from_slice(b),

@@ -100,6 +100,14 @@ impl<'s> Geometry<'s> {
             }
             None => Vec2::new(u, v),
         };
+        let uv1 = match &mesh.uvs1 {
+            Some(uvs) => {
+                let [t0, t1, t2] = tri.map(|i| uvs[i as usize]);
+                w * t0 + u * t1 + v * t2
+            }
+            None => uv,
+        };
+        let uvs = [uv, uv1];
         let material = &self.scene.materials[mesh.material];
         let mut n = match &mesh.normals {
             Some(normals) => {
@@ -114,7 +122,7 @@ impl<'s> Geometry<'s> {
                     (Some(map), Some(tangents)) if n != Vec3::ZERO => {
                         let [t0, t1, t2] = tri.map(|i| tangents[i as usize]);
                         let tangent = (w * t0 + u * t1 + v * t2).truncate();
-                        perturbed(n, tangent, t0.w, map, uv, &self.scene.textures)
+                        perturbed(n, tangent, t0.w, map, uvs[map.set.min(1)], &self.scene.textures)
                     }
                     _ => n,
                 }
@@ -124,12 +132,12 @@ impl<'s> Geometry<'s> {
         if n == Vec3::ZERO || !n.is_finite() {
             n = ng;
         }
-        let mut base = material.albedo_at(uv, &self.scene.textures);
+        let mut base = material.albedo_at(&uvs, &self.scene.textures);
         if let Some(colors) = &mesh.colors {
             let [c0, c1, c2] = tri.map(|i| colors[i as usize]);
             base *= w * c0 + u * c1 + v * c2;
         }
-        let pbr = material.pbr.as_ref().map(|m| Pbr::of(m, base, uv, &self.scene.textures));
+        let pbr = material.pbr.as_ref().map(|m| Pbr::of(m, base, &uvs, &self.scene.textures));
         let kd = pbr.map_or(base, |p| p.diffuse_albedo());
         SurfacePoint {
             p,
@@ -188,7 +196,7 @@ mod tests {
     /// A map of one texel encoding the tangent-space normal `local`.
     fn map_of(local: Vec3, scale: f32) -> (NormalMap, Vec<Texture>) {
         let texel = (local + Vec3::ONE) * 0.5;
-        let map = NormalMap { texture: 0, transform: Affine2::IDENTITY, scale };
+        let map = NormalMap { texture: 0, transform: Affine2::IDENTITY, scale, set: 0 };
         (map, vec![Texture::from_texels(1, 1, vec![texel])])
     }
 

@@ -12,10 +12,10 @@
 
 use std::f32::consts::PI;
 
-use glam::{Vec2, Vec3};
+use glam::Vec3;
 use wide::{f32x4, CmpGt};
 
-use crate::scene::material::PbrMaterial;
+use crate::scene::material::{PbrMaterial, TexCoords};
 use crate::scene::texture::Texture;
 use crate::util::simd::{dot3, splat3, V3};
 
@@ -62,12 +62,12 @@ impl Pbr {
     }
 
     /// The parameters of `material` at a point of base colour `base` and
-    /// uv `uv` (its metallic-roughness texture looked up).
+    /// texture coordinates `uvs` (its metallic-roughness texture looked up).
     #[must_use]
-    pub fn of(material: &PbrMaterial, base: Vec3, uv: Vec2, textures: &[Texture]) -> Self {
+    pub fn of(material: &PbrMaterial, base: Vec3, uvs: &TexCoords, textures: &[Texture]) -> Self {
         let (mut metallic, mut roughness) = (material.metallic, material.roughness);
-        if let Some((texture, transform)) = &material.metallic_roughness {
-            let texel = textures[*texture].lookup(transform.transform_point2(uv));
+        if let Some((texture, transform, set)) = &material.metallic_roughness {
+            let texel = textures[*texture].lookup(transform.transform_point2(uvs[(*set).min(1)]));
             roughness *= texel.y;
             metallic *= texel.z;
         }

@@ -129,7 +129,7 @@ fn surface<'m>(rng: &mut Rng, material: &'m Material) -> SurfacePoint<'m> {
         Albedo::Constant(c) => c,
         Albedo::Texture { .. } => unreachable!(),
     };
-    let pbr = material.pbr.as_ref().map(|m| crate::shading::pbr::Pbr::of(m, base, glam::Vec2::ZERO, &[]));
+    let pbr = material.pbr.as_ref().map(|m| crate::shading::pbr::Pbr::of(m, base, &[glam::Vec2::ZERO; 2], &[]));
     SurfacePoint {
         p: Vec3::new(rng.range_f32(-3.0, 3.0), rng.range_f32(-3.0, 3.0), rng.range_f32(-3.0, 3.0)),
         n,

@@ -296,12 +296,16 @@ impl Importer<'_, '_> {
                     }
                 }
             };
-            let uvs = self.texture_coordinates(&primitive, &location, count)?;
+            let uvs = self.texture_coordinates(&primitive, &location, count, 0)?;
+            let uvs1 = self.texture_coordinates(&primitive, &location, count, 1)?;
             let colors = self.vertex_colors(&primitive, &location, count)?;
             let material = self.material(primitive.material())?;
-            let normal_mapped = self.parts.materials[material].pbr.as_ref().is_some_and(|p| p.normal_map.is_some());
-            let tangents = if normal_mapped {
-                let frame = Frame { world, mirrored, normals: normals.as_deref(), uvs: uvs.as_deref() };
+            let normal_set =
+                self.parts.materials[material].pbr.as_ref().and_then(|p| p.normal_map.as_ref()).map(|m| m.set);
+            let tangents = if let Some(set) = normal_set {
+                // MikkTSpace works in the normal map's own texture coordinates.
+                let uvs = if set == 1 { uvs1.as_deref() } else { uvs.as_deref() };
+                let frame = Frame { world, mirrored, normals: normals.as_deref(), uvs };
                 self.tangents(&primitive, &location, count, &frame, &world_positions, &triangles)?
             } else {
                 None
@@ -312,6 +316,7 @@ impl Importer<'_, '_> {
                 positions: world_positions,
                 normals,
                 uvs,
+                uvs1,
                 colors,
                 tangents,
                 triangles,
@@ -462,20 +467,21 @@ impl Importer<'_, '_> {
             Some(info) => {
                 let at = format!("{location}.pbrMetallicRoughness.baseColorTexture");
                 let transform = uv_transform(info.texture_transform());
-                let (texture, image) =
+                let (texture, image, set) =
                     self.texture(&info.texture(), info.tex_coord(), &at, Encoding::Srgb, |t| t * base_rgb)?;
                 coverage = image.alpha.as_ref().map(|a| {
                     (a.iter().map(|x| x * base.w).collect::<Vec<f32>>(), image.width, image.height, transform)
                 });
-                Albedo::Texture { texture, transform }
+                Albedo::Texture { texture, transform, set }
             }
         };
         let metallic_roughness = match pbr.metallic_roughness_texture() {
             None => None,
             Some(info) => {
                 let at = format!("{location}.pbrMetallicRoughness.metallicRoughnessTexture");
-                let (texture, _) = self.texture(&info.texture(), info.tex_coord(), &at, Encoding::Linear, |t| t)?;
-                Some((texture, uv_transform(info.texture_transform())))
+                let (texture, _, set) =
+                    self.texture(&info.texture(), info.tex_coord(), &at, Encoding::Linear, |t| t)?;
+                Some((texture, uv_transform(info.texture_transform()), set))
             }
         };
         let normal_map = match m.normal_texture() {
@@ -485,8 +491,9 @@ impl Importer<'_, '_> {
                 if !info.scale().is_finite() {
                     return Err(self.error(format!("{at}.scale"), "must be finite"));
                 }
-                let (texture, _) = self.texture(&info.texture(), info.tex_coord(), &at, Encoding::Linear, |t| t)?;
-                Some(NormalMap { texture, transform: uv_transform(None), scale: info.scale() })
+                let (texture, _, set) =
+                    self.texture(&info.texture(), info.tex_coord(), &at, Encoding::Linear, |t| t)?;
+                Some(NormalMap { texture, transform: uv_transform(None), scale: info.scale(), set })
             }
         };
         let cutoff = match m.alpha_mode() {
@@ -568,7 +575,7 @@ impl Importer<'_, '_> {
         triangles: &[[u32; 3]],
     ) -> Result<Option<Vec<Vec4>>, SceneError> {
         let (Some(normals), Some(uvs)) = (frame.normals, frame.uvs) else {
-            self.warn(location, "normalTexture unused: the primitive has no NORMAL or no TEXCOORD_0");
+            self.warn(location, "normalTexture unused: the primitive has no NORMAL or not the TEXCOORD it reads");
             return Ok(None);
         };
         let Some(a) = primitive.get(&gltf::Semantic::Tangents) else {
@@ -592,17 +599,18 @@ impl Importer<'_, '_> {
         Ok(Some(tangents))
     }
 
-    /// A primitive's `TEXCOORD_0`, finite, one per vertex.
+    /// A primitive's `TEXCOORD_<set>`, finite, one per vertex.
     fn texture_coordinates(
         &mut self,
         primitive: &gltf::Primitive<'_>,
         location: &str,
         count: usize,
+        set: u32,
     ) -> Result<Option<Vec<Vec2>>, SceneError> {
-        let uvs = match primitive.get(&gltf::Semantic::TexCoords(0)) {
+        let uvs = match primitive.get(&gltf::Semantic::TexCoords(set)) {
             None => None,
             Some(a) => {
-                let at = format!("{location}.attributes.TEXCOORD_0");
+                let at = format!("{location}.attributes.TEXCOORD_{set}");
                 let uvs = self.data.read_floats::<2>(&a, &at)?;
                 if uvs.len() != count {
                     return Err(self.error(at, format!("has {} coordinates for {count} vertices", uvs.len())));
@@ -644,7 +652,8 @@ impl Importer<'_, '_> {
     /// A texture of the file as the renderer's: its image decoded as
     /// `encoding` says and mapped texel by texel through `map`, read with its
     /// sampler's wrap modes and magnification filter. Returns the texture's
-    /// index and the decoded image.
+    /// index, the decoded image and the texture coordinates it reads (0 or
+    /// 1).
     fn texture(
         &mut self,
         texture: &gltf::Texture<'_>,
@@ -652,10 +661,13 @@ impl Importer<'_, '_> {
         at: &str,
         encoding: Encoding,
         map: impl Fn(Vec3) -> Vec3,
-    ) -> Result<(usize, RgbImage), SceneError> {
-        if tex_coord != 0 {
-            self.warn(at, "uses TEXCOORD_1 or later: read with TEXCOORD_0");
-        }
+    ) -> Result<(usize, RgbImage, usize), SceneError> {
+        let set = if tex_coord <= 1 {
+            tex_coord as usize
+        } else {
+            self.warn(at, &format!("uses TEXCOORD_{tex_coord}: read with TEXCOORD_0 (sets 0 and 1 are read)"));
+            0
+        };
         let image = self.data.image(&texture.source(), at, encoding)?;
         let sampler = texture.sampler();
         let wrap = |mode: WrappingMode| match mode {
@@ -671,7 +683,7 @@ impl Importer<'_, '_> {
         let texture = Texture::from_texels(image.width, image.height, texels)
             .with_sampler([wrap(sampler.wrap_s()), wrap(sampler.wrap_t())], filter);
         self.parts.textures.push(texture);
-        Ok((self.parts.textures.len() - 1, image))
+        Ok((self.parts.textures.len() - 1, image, set))
     }
 }
 

@@ -42,7 +42,7 @@ pub(super) fn materials(
                 let image = image::read_srgb_png(&texture_path)
                     .map_err(|e| SceneError::new(&texture_path, field("texture"), e.to_string()))?;
                 textures.push(Texture::from_image(image));
-                Albedo::Texture { texture: textures.len() - 1, transform: Affine2::from_scale(scale) }
+                Albedo::Texture { texture: textures.len() - 1, transform: Affine2::from_scale(scale), set: 0 }
             }
         };
         if m.kind == MaterialKind::Pbr {
@@ -121,7 +121,7 @@ fn pbr(
             let image = image::read_png(&path, Encoding::Linear)
                 .map_err(|e| SceneError::new(&path, field("metallic_roughness_texture"), e.to_string()))?;
             textures.push(Texture::from_image(image));
-            Some((textures.len() - 1, Affine2::from_scale(Vec2::from_array(m.texture_scale))))
+            Some((textures.len() - 1, Affine2::from_scale(Vec2::from_array(m.texture_scale)), 0))
         }
     };
     Ok(PbrMaterial {
