@@ -95,6 +95,24 @@ pub struct Cutout {
 }
 
 impl Material {
+    /// A diffuse material of `albedo` alone: no Phong, mirror or emission
+    /// layer, no cut-out, not metallic-roughness. Other materials are this
+    /// with fields replaced (`Material { pbr, ..Material::diffuse(..) }`).
+    #[must_use]
+    pub fn diffuse(name: impl Into<String>, albedo: Albedo) -> Self {
+        Self {
+            name: name.into(),
+            albedo,
+            specular: Vec3::ZERO,
+            exponent: 0.0,
+            mirror: Vec3::ZERO,
+            emission: Vec3::ZERO,
+            emits_both_sides: false,
+            cutout: None,
+            pbr: None,
+        }
+    }
+
     /// Diffuse albedo k_d at a surface point.
     #[must_use]
     pub fn albedo_at(&self, uvs: &TexCoords, textures: &[Texture]) -> Vec3 {

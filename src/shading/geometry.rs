@@ -93,20 +93,14 @@ impl<'s> Geometry<'s> {
         if ng.dot(wo) < 0.0 {
             ng = -ng;
         }
-        let uv = match &mesh.uvs {
-            Some(uvs) => {
+        let interpolate = |uvs: &Option<Vec<Vec2>>| {
+            uvs.as_ref().map(|uvs| {
                 let [t0, t1, t2] = tri.map(|i| uvs[i as usize]);
                 w * t0 + u * t1 + v * t2
-            }
-            None => Vec2::new(u, v),
+            })
         };
-        let uv1 = match &mesh.uvs1 {
-            Some(uvs) => {
-                let [t0, t1, t2] = tri.map(|i| uvs[i as usize]);
-                w * t0 + u * t1 + v * t2
-            }
-            None => uv,
-        };
+        let uv = interpolate(&mesh.uvs).unwrap_or(Vec2::new(u, v));
+        let uv1 = interpolate(&mesh.uvs1).unwrap_or(uv);
         let uvs = [uv, uv1];
         let material = &self.scene.materials[mesh.material];
         let mut n = match &mesh.normals {

@@ -192,17 +192,7 @@ pub fn measure_quality(
     let start = Instant::now();
     let greedy_tree = greedy::build(kind, &lights, seed);
     let greedy_build_seconds = start.elapsed().as_secs_f64();
-    let material = Material {
-        name: "bench".into(),
-        albedo: Albedo::Constant(Vec3::splat(0.5)),
-        specular: Vec3::ZERO,
-        exponent: 0.0,
-        mirror: Vec3::ZERO,
-        emission: Vec3::ZERO,
-        emits_both_sides: false,
-        cutout: None,
-        pbr: None,
-    };
+    let material = Material::diffuse("bench", Albedo::Constant(Vec3::splat(0.5)));
     let points = shading_points(&material, 1000);
     let device = Device::try_new()?;
     let empty = device.try_new_scene()?.commit()?;

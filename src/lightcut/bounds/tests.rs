@@ -67,20 +67,15 @@ fn material(rng: &mut Rng) -> Material {
         return pbr_material(rng);
     }
     let exponents = [0.0, 1.0, 7.5, 40.0, 500.0, 10_000.0];
+    let albedo = Albedo::Constant(Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()));
     Material {
-        name: "m".into(),
-        albedo: Albedo::Constant(Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32())),
         specular: if rng.next_f32() < 0.3 {
             Vec3::ZERO
         } else {
             Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32())
         },
         exponent: exponents[rng.below(exponents.len() as u64) as usize],
-        mirror: Vec3::ZERO,
-        emission: Vec3::ZERO,
-        emits_both_sides: false,
-        cutout: None,
-        pbr: None,
+        ..Material::diffuse("m", albedo)
     }
 }
 
@@ -95,15 +90,8 @@ fn pbr_material(rng: &mut Rng) -> Material {
     } else {
         (rng.next_f32(), 3.0 * Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()))
     };
+    let albedo = Albedo::Constant(Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()));
     Material {
-        name: "pbr".into(),
-        albedo: Albedo::Constant(Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32())),
-        specular: Vec3::ZERO,
-        exponent: 0.0,
-        mirror: Vec3::ZERO,
-        emission: Vec3::ZERO,
-        emits_both_sides: false,
-        cutout: None,
         pbr: Some(crate::scene::material::PbrMaterial {
             metallic,
             roughness,
@@ -112,6 +100,7 @@ fn pbr_material(rng: &mut Rng) -> Material {
             metallic_roughness: None,
             normal_map: None,
         }),
+        ..Material::diffuse("pbr", albedo)
     }
 }
 
@@ -394,17 +383,7 @@ fn directional_bounds_hold_at_random_points() {
 
 #[test]
 fn a_point_inside_the_box_gets_a_finite_bound_above_every_light() {
-    let m = Material {
-        name: "m".into(),
-        albedo: Albedo::Constant(Vec3::ONE),
-        specular: Vec3::ZERO,
-        exponent: 0.0,
-        mirror: Vec3::ZERO,
-        emission: Vec3::ZERO,
-        emits_both_sides: false,
-        cutout: None,
-        pbr: None,
-    };
+    let m = Material::diffuse("m", Albedo::Constant(Vec3::ONE));
     let mut rng = Rng::seeded(3);
     let sp = surface(&mut rng, &m);
     let (lo, hi) = (sp.p - Vec3::ONE, sp.p + Vec3::ONE);

@@ -534,16 +534,13 @@ impl Importer<'_, '_> {
             emission *= mean;
         }
         let index = self.parts.materials.len();
+        let name = m.name().map_or_else(|| location.clone(), str::to_string);
         self.parts.materials.push(Material {
-            name: m.name().map_or_else(|| location.clone(), str::to_string),
-            albedo,
-            specular: Vec3::ZERO,
-            exponent: 0.0,
-            mirror: Vec3::ZERO,
             emission,
             emits_both_sides: m.double_sided(),
             cutout,
             pbr: Some(PbrMaterial { metallic, roughness, specular, specular_colour, metallic_roughness, normal_map }),
+            ..Material::diffuse(name, albedo)
         });
         self.materials.insert(m.index(), index);
         Ok(index)

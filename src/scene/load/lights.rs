@@ -167,15 +167,8 @@ fn add_emitter(
     mesh.material = materials.len();
     mesh.normals = None; // emission is one-sided by the triangles' winding
     materials.push(Material {
-        name: format!("emitter {seed}"),
-        albedo: Albedo::Constant(Vec3::ZERO),
-        specular: Vec3::ZERO,
-        exponent: 0.0,
-        mirror: Vec3::ZERO,
         emission: radiance,
-        emits_both_sides: false,
-        cutout: None,
-        pbr: None,
+        ..Material::diffuse(format!("emitter {seed}"), Albedo::Constant(Vec3::ZERO))
     });
     meshes.push(mesh);
     LightSource::Area { mesh: meshes.len() - 1, radiance, samples, seed, both_sides: false }

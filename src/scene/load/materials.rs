@@ -48,17 +48,7 @@ pub(super) fn materials(
         if m.kind == MaterialKind::Pbr {
             let pbr = pbr(v, base, m, &field, inputs, textures)?;
             material_index.insert(name.clone(), materials.len());
-            materials.push(Material {
-                name: name.clone(),
-                albedo,
-                specular: Vec3::ZERO,
-                exponent: 0.0,
-                mirror: Vec3::ZERO,
-                emission: Vec3::ZERO,
-                emits_both_sides: false,
-                cutout: None,
-                pbr: Some(pbr),
-            });
+            materials.push(Material { pbr: Some(pbr), ..Material::diffuse(name.clone(), albedo) });
             continue;
         }
         for (name, given) in [
@@ -74,17 +64,7 @@ pub(super) fn materials(
         })?;
         let mirror = v.unit_rgb(m.mirror, &field("mirror"))?;
         material_index.insert(name.clone(), materials.len());
-        materials.push(Material {
-            name: name.clone(),
-            albedo,
-            specular,
-            exponent: m.exponent,
-            mirror,
-            emission: Vec3::ZERO,
-            emits_both_sides: false,
-            cutout: None,
-            pbr: None,
-        });
+        materials.push(Material { specular, exponent: m.exponent, mirror, ..Material::diffuse(name.clone(), albedo) });
     }
     Ok((materials, material_index))
 }
