@@ -42,7 +42,10 @@ pub(super) fn parse(path: &Path, bytes: &[u8]) -> Result<gltf::Gltf, SceneError>
             ));
         }
     }
-    let root = gltf.document.clone().into_json();
+    let mut root = gltf.document.clone().into_json();
+    // gltf-json's validator refuses required extensions it does not model
+    // itself, ours among them: we checked that list above.
+    root.extensions_required.retain(|name| !IMPLEMENTED.contains(&name.as_str()));
     // gltf-json 1.4.1's validator indexes the POSITION accessor before
     // checking that it exists (a panic on a hostile file): check it first.
     for (m, mesh) in root.meshes.iter().enumerate() {
@@ -192,7 +195,9 @@ impl<'a> Data<'a> {
         }
     }
 
-    /// An accessor's elements, as raw bytes per element: (bytes, stride, count).
+    /// An accessor's dense elements, as bytes from its first element and
+    /// the stride between elements; None when it has no buffer view (all
+    /// zeros, before any sparse substitution).
     fn elements(
         &self,
         a: &gltf::Accessor<'_>,
@@ -200,9 +205,6 @@ impl<'a> Data<'a> {
         size: usize,
     ) -> Result<Option<(&[u8], usize)>, SceneError> {
         let at = format!("accessors[{}]", a.index());
-        if a.sparse().is_some() {
-            return Err(self.error(format!("{at}.sparse"), format!("sparse accessors are not supported ({location})")));
-        }
         if a.count() > MAX_ACCESSOR_COUNT {
             return Err(self.error(
                 format!("{at}.count"),
@@ -231,39 +233,117 @@ impl<'a> Data<'a> {
         }
     }
 
-    /// A float accessor of N components (FLOAT, or normalized integers).
+    /// An accessor's `count` elements of `size` bytes, each read by `read`:
+    /// the dense ones (zeros without a buffer view), then the sparse
+    /// substitution the specification defines (§3.6.2.3: `sparse.count`
+    /// strictly increasing indices, each element at one replaced by the
+    /// next tightly packed value).
+    fn read_elements<T: Clone>(
+        &self,
+        a: &gltf::Accessor<'_>,
+        location: &str,
+        (size, zero): (usize, T),
+        read: impl Fn(&[u8]) -> T,
+    ) -> Result<Vec<T>, SceneError> {
+        let mut out = match self.elements(a, location, size)? {
+            None => vec![zero; a.count()],
+            Some((bytes, stride)) => (0..a.count()).map(|i| read(&bytes[i * stride..])).collect(),
+        };
+        let Some(sparse) = a.sparse() else { return Ok(out) };
+        let at = format!("accessors[{}].sparse", a.index());
+        let n = sparse.count();
+        if n == 0 || n > a.count() {
+            return Err(self.error(
+                format!("{at}.count"),
+                format!("{n} must be between 1 and the accessor's count {} ({location})", a.count()),
+            ));
+        }
+        let index_size = match sparse.indices().index_type() {
+            gltf::accessor::sparse::IndexType::U8 => 1,
+            gltf::accessor::sparse::IndexType::U16 => 2,
+            gltf::accessor::sparse::IndexType::U32 => 4,
+        };
+        let packed = |view: gltf::buffer::View<'_>, offset: usize, each: usize, field: &str| {
+            let bytes = self.view_bytes(&view, location)?;
+            match n.checked_mul(each).and_then(|x| x.checked_add(offset)) {
+                Some(end) if end <= bytes.len() => Ok(&bytes[offset..end]),
+                _ => Err(self.error(
+                    format!("{at}.{field}"),
+                    format!("{n} elements of {each} bytes from byte {offset} overrun bufferViews[{}] ({} bytes) ({location})", view.index(), bytes.len()),
+                )),
+            }
+        };
+        let indices = sparse.indices();
+        let index_bytes = packed(indices.view(), indices.offset(), index_size, "indices")?;
+        let values = sparse.values();
+        let value_bytes = packed(values.view(), values.offset(), size, "values")?;
+        let mut previous = None;
+        for k in 0..n {
+            let b = &index_bytes[k * index_size..];
+            let index = match index_size {
+                1 => usize::from(b[0]),
+                2 => usize::from(u16::from_le_bytes([b[0], b[1]])),
+                _ => u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as usize,
+            };
+            if index >= a.count() || previous.is_some_and(|p| index <= p) {
+                return Err(self.error(
+                    format!("{at}.indices"),
+                    format!(
+                        "index {k} is {index}: sparse indices must strictly increase and stay below the accessor's count {} ({location})",
+                        a.count()
+                    ),
+                ));
+            }
+            previous = Some(index);
+            out[index] = read(&value_bytes[k * size..]);
+        }
+        Ok(out)
+    }
+
+    /// A float accessor of N components (2, 3, 4 or 16 for a MAT4): FLOAT,
+    /// normalized integers, or (KHR_mesh_quantization) integers read as
+    /// their values.
     pub(super) fn read_floats<const N: usize>(
         &self,
         a: &gltf::Accessor<'_>,
         location: &str,
     ) -> Result<Vec<[f32; N]>, SceneError> {
         let want = match N {
+            1 => Dimensions::Scalar,
             2 => Dimensions::Vec2,
             3 => Dimensions::Vec3,
+            16 => Dimensions::Mat4,
             _ => Dimensions::Vec4,
         };
         if a.dimensions() != want {
             return Err(self.error(location, format!("must be a {want:?} accessor, got {:?}", a.dimensions())));
         }
         let kind = a.data_type();
-        if kind != DataType::F32 && !a.normalized() {
-            return Err(self.error(location, format!("must be FLOAT or normalized integers, got {kind:?}")));
+        let normalized = a.normalized();
+        if kind == DataType::F32 && normalized {
+            return Err(self.error(location, "a FLOAT accessor cannot be normalized"));
         }
         let component = kind.size();
-        let Some((bytes, stride)) = self.elements(a, location, component * N)? else {
-            return Ok(vec![[0.0; N]; a.count()]);
-        };
-        let read = |b: &[u8]| -> f32 {
-            match kind {
-                DataType::F32 => f32::from_le_bytes([b[0], b[1], b[2], b[3]]),
-                DataType::U8 => f32::from(b[0]) / 255.0,
-                DataType::I8 => (f32::from(b[0] as i8) / 127.0).max(-1.0),
-                DataType::U16 => f32::from(u16::from_le_bytes([b[0], b[1]])) / 65535.0,
-                DataType::I16 => (f32::from(i16::from_le_bytes([b[0], b[1]])) / 32767.0).max(-1.0),
-                DataType::U32 => u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as f32 / u32::MAX as f32,
+        // The specification's decoding of normalized integers (§3.11).
+        let read = move |b: &[u8]| -> f32 {
+            match (kind, normalized) {
+                (DataType::F32, _) => f32::from_le_bytes([b[0], b[1], b[2], b[3]]),
+                (DataType::U8, true) => f32::from(b[0]) / 255.0,
+                (DataType::I8, true) => (f32::from(b[0] as i8) / 127.0).max(-1.0),
+                (DataType::U16, true) => f32::from(u16::from_le_bytes([b[0], b[1]])) / 65535.0,
+                (DataType::I16, true) => (f32::from(i16::from_le_bytes([b[0], b[1]])) / 32767.0).max(-1.0),
+                (DataType::U32, true) => u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as f32 / u32::MAX as f32,
+                (DataType::U8, false) => f32::from(b[0]),
+                (DataType::I8, false) => f32::from(b[0] as i8),
+                (DataType::U16, false) => f32::from(u16::from_le_bytes([b[0], b[1]])),
+                (DataType::I16, false) => f32::from(i16::from_le_bytes([b[0], b[1]])),
+                (DataType::U32, false) => u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as f32,
             }
         };
-        Ok((0..a.count()).map(|i| std::array::from_fn(|c| read(&bytes[i * stride + c * component..]))).collect())
+        // Column-major; a MAT4's columns need no padding (§3.6.2.4).
+        self.read_elements(a, location, (N * component, [0.0; N]), |b| {
+            std::array::from_fn(|c| read(&b[c * component..]))
+        })
     }
 
     /// An index accessor (unsigned byte, short or int scalars).
@@ -274,20 +354,11 @@ impl<'a> Data<'a> {
                 self.error(location, format!("indices must be unsigned scalars, got {:?} {kind:?}", a.dimensions()))
             );
         }
-        let size = kind.size();
-        let Some((bytes, stride)) = self.elements(a, location, size)? else {
-            return Ok(vec![0; a.count()]);
-        };
-        Ok((0..a.count())
-            .map(|i| {
-                let b = &bytes[i * stride..];
-                match kind {
-                    DataType::U8 => u32::from(b[0]),
-                    DataType::U16 => u32::from(u16::from_le_bytes([b[0], b[1]])),
-                    _ => u32::from_le_bytes([b[0], b[1], b[2], b[3]]),
-                }
-            })
-            .collect())
+        self.read_elements(a, location, (kind.size(), 0), |b| match kind {
+            DataType::U8 => u32::from(b[0]),
+            DataType::U16 => u32::from(u16::from_le_bytes([b[0], b[1]])),
+            _ => u32::from_le_bytes([b[0], b[1], b[2], b[3]]),
+        })
     }
 }
 
