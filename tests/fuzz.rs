@@ -352,7 +352,10 @@ fn fuzz(iterations: u64, seed: u64, deadline: Option<std::time::Instant>) -> (Co
 }
 
 /// The glTF the fuzzer mutates: a floor, a point light, a spot, a sun, an
-/// emissive double-sided panel and a camera (JSON text, and as GLB).
+/// emissive double-sided panel, a camera, and the paths the importer
+/// grew for exporters' files: a skinned, morphed triangle with a sparse
+/// accessor and quantised (SHORT) positions, and GPU instances of it (JSON
+/// text, and as GLB).
 fn small_gltf() -> (Vec<u8>, Vec<u8>) {
     use serde_json::json;
     let mut g = common::gltf::floor_and_point_light();
@@ -368,6 +371,32 @@ fn small_gltf() -> (Vec<u8>, Vec<u8>) {
     let quad = g.quad([-0.5, 1.5, -0.5], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0], Some(panel));
     g.node(json!({ "mesh": quad, "scale": [1.0, 1.0, 1.0] }), true);
     g.json["scenes"][0]["nodes"] = json!([0, 1, 2, 3, 4, 5]);
+    g.use_extension("KHR_mesh_quantization");
+    g.use_extension("EXT_mesh_gpu_instancing");
+    let shorts: Vec<u8> = [0i16, 0, 0, 0, 100, 0, 0, 0, 0, 100, 0, 0].iter().flat_map(|x| x.to_le_bytes()).collect();
+    let position = g.raw(&shorts, 5122, 3, "VEC3", false);
+    let view = g.json["accessors"][position]["bufferView"].clone();
+    g.json["bufferViews"][view.as_u64().unwrap() as usize]["byteStride"] = json!(8);
+    g.json["accessors"][position]["min"] = json!([0, 0, 0]);
+    g.json["accessors"][position]["max"] = json!([100, 100, 0]);
+    let joints = g.raw(&[0u8, 0, 0, 0, 0, 0, 0, 0, 1, 0, 0, 0], 5121, 3, "VEC4", false);
+    let weights = g.floats(&[1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.5, 0.5, 0.0, 0.0], "VEC4", 4);
+    let target = g.floats(&[0.0; 9], "VEC3", 3);
+    let (indices, values) = (g.bytes_view(&[2u8]), g.bytes_view(&[0.0f32, 0.0, 20.0].map(f32::to_le_bytes).concat()));
+    g.json["accessors"][target]["sparse"] = json!({ "count": 1,
+        "indices": { "bufferView": indices, "componentType": 5121 }, "values": { "bufferView": values } });
+    let mesh = g.push_mesh(json!({ "primitives": [{
+        "attributes": { "POSITION": position, "JOINTS_0": joints, "WEIGHTS_0": weights },
+        "targets": [{ "POSITION": target }] }], "weights": [0.5] }));
+    let j1 = g.node(json!({ "translation": [0.0, 0.5, 0.0] }), false);
+    let j0 = g.node(json!({ "children": [j1], "translation": [2.0, 0.0, 0.0], "scale": [0.01, 0.01, 0.01] }), true);
+    g.json["skins"] = json!([{ "joints": [j0, j1] }]);
+    g.node(json!({ "mesh": mesh, "skin": 0 }), true);
+    let translations = g.floats(&[0.0, 0.0, 0.0, -2.0, 0.0, 0.0], "VEC3", 3);
+    g.node(
+        json!({ "mesh": 1, "extensions": { "EXT_mesh_gpu_instancing": { "attributes": { "TRANSLATION": translations } } } }),
+        true,
+    );
     // A small film for the in-process renders.
     g.json["cameras"][0]["perspective"]["aspectRatio"] = json!(1.33);
     (g.embedded().into_bytes(), g.glb())

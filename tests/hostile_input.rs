@@ -421,6 +421,65 @@ fn hostile_gltf_files() {
         },
         &["lights[0].spot.innerConeAngle"],
     );
+    // The paths of this round: sparse accessors, skins, GPU instances.
+    case(
+        "sparse.gltf",
+        &|g| {
+            let indices = g.bytes_view(&[9u8]);
+            let values = g.bytes_view(&[0u8; 12]);
+            g.json["accessors"][0]["sparse"] = json!({ "count": 1,
+                "indices": { "bufferView": indices, "componentType": 5121 }, "values": { "bufferView": values } });
+        },
+        &["accessors[0].sparse.indices", "index 0 is 9", "below the accessor's count 4"],
+    );
+    case(
+        "sparse_count.gltf",
+        &|g| {
+            let indices = g.bytes_view(&[0u8]);
+            let values = g.bytes_view(&[0u8; 12]);
+            g.json["accessors"][0]["sparse"] = json!({ "count": 100000,
+                "indices": { "bufferView": indices, "componentType": 5121 }, "values": { "bufferView": values } });
+        },
+        &["accessors[0].sparse.count", "100000"],
+    );
+    let skinned = |g: &mut GltfBuilder, joints: serde_json::Value| {
+        let joint_indices = g.raw(&[0u8, 0, 0, 0].repeat(4), 5121, 4, "VEC4", false);
+        let weights = g.floats(&[1.0, 0.0, 0.0, 0.0].repeat(4), "VEC4", 4);
+        let attributes = &mut g.json["meshes"][0]["primitives"][0]["attributes"];
+        attributes["JOINTS_0"] = json!(joint_indices);
+        attributes["WEIGHTS_0"] = json!(weights);
+        g.json["skins"] = json!([{ "joints": joints }]);
+        g.json["nodes"][0]["skin"] = json!(0);
+    };
+    case("joints.gltf", &|g| skinned(g, json!(vec![1; 70000])), &["skins[0].joints", "70000 joints"]);
+    case(
+        "joint_index.gltf",
+        &|g| {
+            skinned(g, json!([1]));
+            let bad = g.raw(&[5u8, 0, 0, 0].repeat(4), 5121, 4, "VEC4", false);
+            g.json["meshes"][0]["primitives"][0]["attributes"]["JOINTS_0"] = json!(bad);
+        },
+        &["JOINTS_0", "names joint 5, but the skin has 1"],
+    );
+    case(
+        "instances.gltf",
+        &|g| {
+            let t = g.floats(&[0.0; 6], "VEC3", 3);
+            let s = g.floats(&[1.0; 9], "VEC3", 3);
+            g.json["nodes"][0]["extensions"] =
+                json!({ "EXT_mesh_gpu_instancing": { "attributes": { "TRANSLATION": t, "SCALE": s } } });
+        },
+        &["nodes[0].extensions.EXT_mesh_gpu_instancing.attributes", "one element an instance"],
+    );
+    case(
+        "instance_nan.gltf",
+        &|g| {
+            let t = g.floats(&[f32::NAN, 0.0, 0.0], "VEC3", 3);
+            g.json["nodes"][0]["extensions"] =
+                json!({ "EXT_mesh_gpu_instancing": { "attributes": { "TRANSLATION": t } } });
+        },
+        &["EXT_mesh_gpu_instancing", "instance 0's transform is not finite"],
+    );
     let bad_base64 = floor_and_point_light().embedded().replace(";base64,", ";base64,!!");
     rejects(&dir, "base64.gltf", bad_base64.as_bytes(), &["base64.gltf", "buffers[0].uri", "base64"]);
     case(

@@ -14,7 +14,7 @@ use crate::lightcut::stochastic::{STOCHASTIC_DEFAULTS, STOCHASTIC_FROM_SPP};
 use crate::lightcut::{CutSettings, GroupError};
 use crate::render::session::Mode;
 use crate::render::{Aovs, PassSettings, PixelBounds};
-use crate::scene::{check_resolution, Scene};
+use crate::scene::{check_resolution, LoadOptions, Scene};
 
 #[derive(Debug, Args)]
 pub struct RenderArgs {
@@ -217,13 +217,19 @@ pub struct PassArgs {
     /// (default 3).
     #[arg(long, value_name = "AZIMUTH,ELEVATION[,IRRADIANCE]", value_parser = parse_sun, allow_hyphen_values = true)]
     pub sun: Option<[f32; 3]>,
+    /// Luminous efficacy converting a glTF file's light units (candela,
+    /// lux) to W/sr and W/m^2: 683 (Blender's convention) unless given; 1
+    /// matches glTF viewers, which take 1 cd as 1 W/sr.
+    #[arg(long, value_name = "LM_PER_W")]
+    pub lumens_per_watt: Option<f32>,
 }
 
 impl PassArgs {
     /// Loads the scene (through `--camera` when given) and prints its
     /// warnings, one line each.
     pub fn load(&self, path: &Path) -> Result<Scene, CliError> {
-        let mut scene = Scene::load_with_camera(path, self.camera.as_deref())?;
+        let options = LoadOptions { camera: self.camera.as_deref(), lumens_per_watt: self.lumens_per_watt };
+        let mut scene = Scene::load_with(path, &options)?;
         scene.add_lights(self.environment.as_deref(), self.sun)?;
         for warning in &scene.warnings {
             eprintln!("warning: {warning}");

@@ -34,6 +34,10 @@ pub type SampleKey = [u64; 4];
 /// is keyed by the same sample.
 const STOCHASTIC_STREAM: u64 = 0x5107_c4a5;
 
+/// Most culled back faces a camera or mirror ray passes through before it
+/// is taken to see nothing (a bound on a hostile stack of coplanar faces).
+const MAX_CULLED_FACES: usize = 64;
+
 /// Reusable per-thread buffers (no allocation per shading point).
 #[derive(Default)]
 pub struct Scratch {
@@ -156,7 +160,7 @@ impl Integrator<'_> {
         let mut throughput = DVec3::ONE;
         let scene = self.geometry.scene;
         for depth in 0..=self.max_mirror_depth {
-            let Some(hit) = self.geometry.embree.intersect(&ray) else {
+            let Some(hit) = self.first_hit(&mut ray) else {
                 // The environment, seen directly or in a mirror.
                 let seen_directly = depth == 0;
                 if let Some(environment) = scene.environment.as_ref().filter(|_| !(seen_directly && transparent)) {
@@ -185,6 +189,9 @@ impl Integrator<'_> {
                     *slot += seen;
                 }
             }
+            if sp.material.unlit {
+                break;
+            }
             scratch.point_groups.clear();
             scratch.point_groups.resize(groups.len(), DVec3::ZERO);
             let direct = self.direct_light(&sp, sample, depth, scratch, &mut result.stats);
@@ -199,6 +206,21 @@ impl Integrator<'_> {
             ray = sp.mirror_ray();
         }
         result
+    }
+
+    /// The first surface `ray` sees: back faces that cull are passed
+    /// through (moving the ray's start past them), up to
+    /// `MAX_CULLED_FACES` of them.
+    fn first_hit(&self, ray: &mut crate::embree::Ray) -> Option<crate::embree::Hit> {
+        for _ in 0..MAX_CULLED_FACES {
+            let hit = self.geometry.embree.intersect(ray)?;
+            if !self.geometry.culls(ray, &hit) {
+                return Some(hit);
+            }
+            // Past the culled triangle: the next float after its distance.
+            ray.t_near = f32::from_bits(hit.t.to_bits() + 1).max(hit.t * (1.0 + 1e-6));
+        }
+        None
     }
 
     fn direct_light(

@@ -70,8 +70,11 @@ pub struct GroupRule {
     pub material: Option<String>,
 }
 
+/// Blender's luminous efficacy for glTF's photometric lights, lm/W.
+pub const DEFAULT_LUMENS_PER_WATT: f32 = 683.0;
+
 fn lumens_per_watt() -> f32 {
-    683.0
+    DEFAULT_LUMENS_PER_WATT
 }
 
 fn emitter_samples() -> u32 {

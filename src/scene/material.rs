@@ -48,6 +48,13 @@ pub struct Material {
     /// glTF's metallic-roughness BRDF instead of diffuse + Phong: `albedo`
     /// is its base colour, and `specular`, `exponent` and `mirror` are 0.
     pub pbr: Option<PbrMaterial>,
+    /// glTF's KHR_materials_unlit: the camera (and mirrors) see the base
+    /// colour as radiance, W/(m^2 sr); it reflects no light, and lights
+    /// nothing unless `emission` is also set.
+    pub unlit: bool,
+    /// glTF's `doubleSided: false`: camera rays (and mirror rays) pass
+    /// through the back of its triangles; shadow rays do not.
+    pub culls_back_faces: bool,
 }
 
 /// The metallic-roughness parameters of a material (glTF 2.0's
@@ -110,6 +117,8 @@ impl Material {
             emits_both_sides: false,
             cutout: None,
             pbr: None,
+            unlit: false,
+            culls_back_faces: false,
         }
     }
 

@@ -26,6 +26,7 @@ pub use environment::{Environment, EnvironmentMap};
 pub use error::SceneError;
 pub use groups::LightGroups;
 pub use load::additions::{ADDED_ENVIRONMENT_SAMPLES, ADDED_SUN_IRRADIANCE};
+pub use load::LoadOptions;
 pub use material::{Albedo, Material};
 pub use mesh::Mesh;
 use texture::Texture;

@@ -74,6 +74,19 @@ impl<'s> Geometry<'s> {
         self.mesh_of_geometry[hit.geometry as usize]
     }
 
+    /// Whether a camera (or mirror) ray passes through `hit`: the back of
+    /// a triangle whose material culls back faces (glTF's `doubleSided:
+    /// false`).
+    #[must_use]
+    pub fn culls(&self, ray: &Ray, hit: &Hit) -> bool {
+        let mesh = &self.scene.meshes[self.mesh_of_geometry[hit.geometry as usize]];
+        if !self.scene.materials[mesh.material].culls_back_faces {
+            return false;
+        }
+        let [p0, p1, p2] = mesh.triangles[hit.primitive as usize].map(|i| mesh.positions[i as usize]);
+        (p1 - p0).cross(p2 - p0).dot(ray.direction) > 0.0
+    }
+
     pub fn surface(&self, ray: &Ray, hit: &Hit) -> SurfacePoint<'s> {
         let mesh = &self.scene.meshes[self.mesh_of_geometry[hit.geometry as usize]];
         let tri = mesh.triangles[hit.primitive as usize];
@@ -131,8 +144,10 @@ impl<'s> Geometry<'s> {
             let [c0, c1, c2] = tri.map(|i| colors[i as usize]);
             base *= w * c0 + u * c1 + v * c2;
         }
-        let pbr = material.pbr.as_ref().map(|m| Pbr::of(m, base, &uvs, &self.scene.textures));
-        let kd = pbr.map_or(base, |p| p.diffuse_albedo());
+        // An unlit surface shows its base colour and reflects nothing.
+        let pbr =
+            material.pbr.as_ref().filter(|_| !material.unlit).map(|m| Pbr::of(m, base, &uvs, &self.scene.textures));
+        let kd = if material.unlit { Vec3::ZERO } else { pbr.map_or(base, |p| p.diffuse_albedo()) };
         SurfacePoint {
             p,
             n,
@@ -143,7 +158,13 @@ impl<'s> Geometry<'s> {
             material,
             pbr,
             distance: hit.t * ray.direction.length(),
-            emitted: if front || material.emits_both_sides { material.emission } else { Vec3::ZERO },
+            emitted: if material.unlit {
+                base
+            } else if front || material.emits_both_sides {
+                material.emission
+            } else {
+                Vec3::ZERO
+            },
             epsilon: self.ray_epsilon,
             min_distance: self.ray_epsilon.max(self.distance_clamp),
         }

@@ -68,6 +68,21 @@ impl GltfBuilder {
         self.push("accessors", accessor)
     }
 
+    /// An accessor of `count` elements of `kind` over raw little-endian
+    /// `bytes` of `component_type` (5120 BYTE ... 5126 FLOAT).
+    pub fn raw(&mut self, bytes: &[u8], component_type: u32, count: usize, kind: &str, normalized: bool) -> usize {
+        let view = self.view(bytes);
+        self.push(
+            "accessors",
+            json!({ "bufferView": view, "componentType": component_type, "count": count, "type": kind, "normalized": normalized }),
+        )
+    }
+
+    /// A buffer view of `bytes`, for sparse accessors.
+    pub fn bytes_view(&mut self, bytes: &[u8]) -> usize {
+        self.view(bytes)
+    }
+
     /// An UNSIGNED_INT index accessor.
     pub fn indices(&mut self, data: &[u32]) -> usize {
         let bytes: Vec<u8> = data.iter().flat_map(|x| x.to_le_bytes()).collect();
@@ -118,6 +133,16 @@ impl GltfBuilder {
         let positions = [at(0.0, 0.0), at(1.0, 0.0), at(1.0, 1.0), at(0.0, 1.0)];
         let uvs = [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]];
         self.mesh(&positions, Some(&[0, 1, 2, 0, 2, 3]), None, Some(&uvs), material, None)
+    }
+
+    /// A mesh given as its JSON; returns its index.
+    pub fn push_mesh(&mut self, value: Value) -> usize {
+        self.push("meshes", value)
+    }
+
+    /// An accessor given as its JSON; returns its index.
+    pub fn push_accessor(&mut self, value: Value) -> usize {
+        self.push("accessors", value)
     }
 
     pub fn material(&mut self, value: Value) -> usize {

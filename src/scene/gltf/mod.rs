@@ -17,7 +17,7 @@ use gltf::json::validation::Checked;
 use gltf::mesh::Mode;
 use gltf::texture::{MagFilter, WrappingMode};
 
-use super::file::{CameraSpec, GltfSpec};
+use super::file::{CameraSpec, GltfSpec, DEFAULT_LUMENS_PER_WATT};
 use super::groups::GltfLightNames;
 use super::image::{Encoding, RgbImage};
 use super::material::{Albedo, Cutout, Material, NormalMap, PbrMaterial};
@@ -28,11 +28,45 @@ use super::{within_limits, LightSource, SceneError, MAX_COORDINATE, MAX_EMITTER_
 /// Extensions whose absence from the renderer changes nothing it draws
 /// (when merely used) and which it implements; anything else listed in
 /// `extensionsRequired` is refused by name.
-const IMPLEMENTED: [&str; 4] =
-    ["KHR_lights_punctual", "KHR_materials_emissive_strength", "KHR_materials_specular", "KHR_texture_transform"];
+const IMPLEMENTED: [&str; 7] = [
+    "KHR_lights_punctual",
+    "KHR_materials_emissive_strength",
+    "KHR_materials_specular",
+    "KHR_materials_unlit",
+    "KHR_mesh_quantization",
+    "KHR_texture_transform",
+    "EXT_mesh_gpu_instancing",
+];
+
+/// Extensions the renderer knows but does not implement, with what a
+/// render of a file that uses them does instead (named once on stderr).
+const IGNORED: [(&str, &str); 15] = [
+    ("KHR_materials_transmission", "surfaces are opaque"),
+    ("KHR_materials_volume", "surfaces only, no volume absorption"),
+    ("KHR_materials_ior", "the dielectric's IOR is 1.5 (reflectance 0.04)"),
+    ("KHR_materials_clearcoat", "the base layer alone, no clear coat"),
+    ("KHR_materials_sheen", "no sheen"),
+    ("KHR_materials_iridescence", "no thin-film iridescence"),
+    ("KHR_materials_anisotropy", "isotropic roughness"),
+    ("KHR_materials_dispersion", "no dispersion"),
+    ("KHR_materials_diffuse_transmission", "surfaces are opaque"),
+    ("KHR_materials_variants", "the default material of each primitive"),
+    ("KHR_materials_pbrSpecularGlossiness", "the material's pbrMetallicRoughness (or its defaults)"),
+    ("KHR_texture_basisu", "each texture's PNG or JPEG source"),
+    ("EXT_texture_webp", "each texture's PNG or JPEG source"),
+    ("KHR_draco_mesh_compression", "each primitive's uncompressed attributes"),
+    ("EXT_meshopt_compression", "each buffer view's uncompressed fallback"),
+];
 
 /// Deepest node hierarchy followed.
 const MAX_DEPTH: usize = 1024;
+
+/// Most joints a skin may have.
+const MAX_JOINTS: usize = 1 << 16;
+
+/// Most triangles an import may make, instances and repeated meshes
+/// counted once per copy (2^28).
+const MAX_TRIANGLES: usize = 1 << 28;
 
 /// Where the imported parts go: the scene's own lists, which the TOML's
 /// parts may already fill (indices are into these lists).
@@ -97,6 +131,8 @@ pub fn import(
         parts,
         skipped_primitives: 0,
         emitters: 0,
+        triangles: 0,
+        punctual: 0,
     };
     let camera = importer.import_scene(want_camera)?;
     // The buffer and image files, after the glTF file, in the order read.
@@ -114,6 +150,10 @@ struct Importer<'a, 'p> {
     parts: Parts<'p>,
     skipped_primitives: usize,
     emitters: u64,
+    /// Triangles imported so far (every copy counted).
+    triangles: usize,
+    /// KHR_lights_punctual lights imported.
+    punctual: usize,
 }
 
 impl Importer<'_, '_> {
@@ -125,14 +165,13 @@ impl Importer<'_, '_> {
         self.parts.warnings.push(format!("{}: {location}: {message}", self.file.display()));
     }
 
-    fn import_scene(&mut self, want_camera: bool) -> Result<Option<GltfCamera>, SceneError> {
-        let Some(scene) = self.doc.default_scene().or_else(|| self.doc.scenes().next()) else {
-            return Err(self.error("scenes", "the file has no scene to render"));
-        };
-        let mut cameras = Vec::new();
+    /// The scene's nodes depth-first with their world transforms and JSON
+    /// locations, each node once (a cycle or a node with two parents is an
+    /// error), with an explicit stack (a hostile file cannot overflow ours).
+    #[allow(clippy::type_complexity)]
+    fn visit<'d>(&self, scene: &gltf::Scene<'d>) -> Result<Vec<(gltf::Node<'d>, Mat4, String)>, SceneError> {
         let mut visited = vec![false; self.doc.nodes().len()];
-        // Depth-first, with an explicit stack (a hostile file cannot
-        // overflow ours) and each node visited once (no cycles).
+        let mut visits = Vec::new();
         let mut stack: Vec<(gltf::Node<'_>, Mat4, usize)> =
             scene.nodes().map(|n| (n, Mat4::IDENTITY, 0)).collect::<Vec<_>>().into_iter().rev().collect();
         while let Some((node, parent, depth)) = stack.pop() {
@@ -159,12 +198,44 @@ impl Importer<'_, '_> {
                     format!("the world transform places it outside +/-{MAX_COORDINATE:e} m or is not finite"),
                 ));
             }
+            for child in node.children().collect::<Vec<_>>().into_iter().rev() {
+                stack.push((child, world, depth + 1));
+            }
+            visits.push((node, world, location));
+        }
+        Ok(visits)
+    }
+
+    fn import_scene(&mut self, want_camera: bool) -> Result<Option<GltfCamera>, SceneError> {
+        let Some(scene) = self.doc.default_scene().or_else(|| self.doc.scenes().next()) else {
+            return Err(self.error("scenes", "the file has no scene to render"));
+        };
+        self.name_ignored_extensions();
+        let visits = self.visit(&scene)?;
+        // Every node's world transform first: a skin's joints may come
+        // after the mesh they pose.
+        let mut worlds = vec![None; self.doc.nodes().len()];
+        for (node, world, _) in &visits {
+            worlds[node.index()] = Some(*world);
+        }
+        let mut cameras = Vec::new();
+        let mut skinned = 0;
+        for (node, world, location) in visits {
             let node_name = node.name().map_or_else(|| location.clone(), str::to_string);
             if let Some(mesh) = node.mesh() {
-                if node.skin().is_some() {
-                    self.warn(&location, "has a skin: rendered in its bind pose");
+                let weights = node.weights().or_else(|| mesh.weights()).unwrap_or(&[]);
+                if let Some(skin) = node.skin() {
+                    skinned += 1;
+                    let joints = self.joint_matrices(&skin, &worlds)?;
+                    self.import_mesh(&mesh, &Placement::Skinned(joints), weights, &node_name)?;
+                } else if let Some(value) = node.extension_value("EXT_mesh_gpu_instancing") {
+                    for (i, instance) in self.instances(value, &location)?.into_iter().enumerate() {
+                        let placement = Placement::Rigid(world * instance);
+                        self.import_mesh(&mesh, &placement, weights, &format!("{node_name}[{i}]"))?;
+                    }
+                } else {
+                    self.import_mesh(&mesh, &Placement::Rigid(world), weights, &node_name)?;
                 }
-                self.import_mesh(&mesh, &world, &node_name)?;
             }
             if let Some(camera) = node.camera() {
                 cameras.push((camera, world, location.clone()));
@@ -172,9 +243,31 @@ impl Importer<'_, '_> {
             if let Some(light) = node.light() {
                 self.import_light(light.index(), &world, &node_name)?;
             }
-            for child in node.children().collect::<Vec<_>>().into_iter().rev() {
-                stack.push((child, world, depth + 1));
-            }
+        }
+        if self.punctual > 0 {
+            let lpw = self.spec.lumens_per_watt;
+            let convention = if lpw == DEFAULT_LUMENS_PER_WATT {
+                format!(
+                    "{lpw} lm/W, Blender's convention; a file made for glTF viewers (1 cd taken as 1 W/sr) needs \
+                     --lumens-per-watt 1 or [gltf] lumens_per_watt = 1, {:.1} stops brighter",
+                    lpw.log2()
+                )
+            } else {
+                format!("{lpw} lm/W as asked ({DEFAULT_LUMENS_PER_WATT}, Blender's convention, is the default)")
+            };
+            let n = self.punctual;
+            self.warn(
+                "extensions.KHR_lights_punctual",
+                &format!("{n} light(s) in candela and lux converted to W/sr and W/m^2 at {convention}"),
+            );
+        }
+        if skinned > 0 {
+            self.warn(
+                "skins",
+                &format!(
+                    "{skinned} skinned mesh node(s) posed by their joints' node transforms (no animation is played)"
+                ),
+            );
         }
         if self.skipped_primitives > 0 {
             let n = self.skipped_primitives;
@@ -233,9 +326,13 @@ impl Importer<'_, '_> {
         }))
     }
 
-    fn import_mesh(&mut self, mesh: &gltf::Mesh<'_>, world: &Mat4, node_name: &str) -> Result<(), SceneError> {
-        let normal_matrix = Mat3::from_mat4(*world).inverse().transpose();
-        let mirrored = Mat3::from_mat4(*world).determinant() < 0.0;
+    fn import_mesh(
+        &mut self,
+        mesh: &gltf::Mesh<'_>,
+        placement: &Placement,
+        weights: &[f32],
+        node_name: &str,
+    ) -> Result<(), SceneError> {
         for primitive in mesh.primitives() {
             let location = format!("meshes[{}].primitives[{}]", mesh.index(), primitive.index());
             let mode = primitive.mode();
@@ -243,26 +340,22 @@ impl Importer<'_, '_> {
                 self.skipped_primitives += 1;
                 continue;
             }
-            if primitive.morph_targets().next().is_some() {
-                self.warn(&location, "has morph targets: rendered without them (base shape)");
-            }
-            let Some(positions) = primitive.get(&gltf::Semantic::Positions) else {
-                return Err(self.error(format!("{location}.attributes"), "has no POSITION"));
-            };
-            let positions = self.data.read_floats::<3>(&positions, &format!("{location}.attributes.POSITION"))?;
+            let (mut positions, mut triangles) = self.read_triangles(&primitive, &location)?;
             let count = positions.len();
-            let indices = match primitive.indices() {
+            let mut normals = match primitive.get(&gltf::Semantic::Normals) {
+                None => None,
                 Some(a) => {
-                    let at = format!("{location}.indices");
-                    let indices = self.data.read_indices(&a, &at)?;
-                    if let Some(k) = indices.iter().position(|&i| i as usize >= count) {
-                        return Err(self.error(at, format!("index {k} is {}, past the {count} vertices", indices[k])));
+                    let at = format!("{location}.attributes.NORMAL");
+                    let normals = self.data.read_floats::<3>(&a, &at)?;
+                    if normals.len() != count {
+                        return Err(self.error(at, format!("has {} normals for {count} vertices", normals.len())));
                     }
-                    indices
+                    Some(normals)
                 }
-                None => (0..count as u32).collect(),
             };
-            let mut triangles = triangulate(mode, &indices);
+            self.morph(&primitive, &location, weights, &mut positions, normals.as_mut())?;
+            let transforms = self.vertex_transforms(&primitive, &location, placement, count)?;
+            let mirrored = transforms.mirrored();
             if mirrored {
                 // A mirroring transform turns the winding around; keep the
                 // front (emitting) side where the file's author saw it.
@@ -271,25 +364,26 @@ impl Importer<'_, '_> {
                 }
             }
             let world_positions: Vec<Vec3> =
-                positions.iter().map(|p| world.transform_point3(Vec3::from_array(*p))).collect();
+                positions.iter().enumerate().map(|(i, p)| transforms.point(i, Vec3::from_array(*p))).collect();
             if let Some(bad) = world_positions.iter().position(|p| !within_limits(*p)) {
                 return Err(self.error(
                     format!("{location}.attributes.POSITION"),
                     format!("vertex {bad} is at {} in the world: coordinates must be finite and within +/-{MAX_COORDINATE:e} m", world_positions[bad]),
                 ));
             }
-            let normals = match primitive.get(&gltf::Semantic::Normals) {
+            let normals = match normals {
                 None => None,
-                Some(a) => {
-                    let at = format!("{location}.attributes.NORMAL");
-                    let normals = self.data.read_floats::<3>(&a, &at)?;
-                    if normals.len() != count {
-                        return Err(self.error(at, format!("has {} normals for {count} vertices", normals.len())));
-                    }
-                    let normals: Vec<Vec3> =
-                        normals.iter().map(|n| (normal_matrix * Vec3::from_array(*n)).normalize_or_zero()).collect();
+                Some(normals) => {
+                    let normals: Vec<Vec3> = normals
+                        .iter()
+                        .enumerate()
+                        .map(|(i, n)| transforms.normal(i, Vec3::from_array(*n)).normalize_or_zero())
+                        .collect();
                     if normals.iter().any(|n| *n == Vec3::ZERO || !n.is_finite()) {
-                        self.warn(&at, "has zero or non-finite normals: shaded flat");
+                        self.warn(
+                            &format!("{location}.attributes.NORMAL"),
+                            "has zero or non-finite normals: shaded flat",
+                        );
                         None
                     } else {
                         Some(normals)
@@ -305,7 +399,7 @@ impl Importer<'_, '_> {
             let tangents = if let Some(set) = normal_set {
                 // MikkTSpace works in the normal map's own texture coordinates.
                 let uvs = if set == 1 { uvs1.as_deref() } else { uvs.as_deref() };
-                let frame = Frame { world, mirrored, normals: normals.as_deref(), uvs };
+                let frame = Frame { transforms: &transforms, mirrored, normals: normals.as_deref(), uvs };
                 self.tangents(&primitive, &location, count, &frame, &world_positions, &triangles)?
             } else {
                 None
@@ -345,6 +439,42 @@ impl Importer<'_, '_> {
             }
         }
         Ok(())
+    }
+
+    /// A primitive's POSITIONs (in its mesh's space) and its triangles,
+    /// every index checked, the import's triangle count kept under
+    /// `MAX_TRIANGLES`.
+    #[allow(clippy::type_complexity)]
+    fn read_triangles(
+        &mut self,
+        primitive: &gltf::Primitive<'_>,
+        location: &str,
+    ) -> Result<(Vec<[f32; 3]>, Vec<[u32; 3]>), SceneError> {
+        let Some(positions) = primitive.get(&gltf::Semantic::Positions) else {
+            return Err(self.error(format!("{location}.attributes"), "has no POSITION"));
+        };
+        let positions = self.data.read_floats::<3>(&positions, &format!("{location}.attributes.POSITION"))?;
+        let count = positions.len();
+        let indices = match primitive.indices() {
+            Some(a) => {
+                let at = format!("{location}.indices");
+                let indices = self.data.read_indices(&a, &at)?;
+                if let Some(k) = indices.iter().position(|&i| i as usize >= count) {
+                    return Err(self.error(at, format!("index {k} is {}, past the {count} vertices", indices[k])));
+                }
+                indices
+            }
+            None => (0..count as u32).collect(),
+        };
+        let triangles = triangulate(primitive.mode(), &indices);
+        self.triangles = self.triangles.saturating_add(triangles.len());
+        if self.triangles > MAX_TRIANGLES {
+            return Err(self.error(
+                location,
+                format!("the scene expands to more than {MAX_TRIANGLES} triangles (every instance is a copy)"),
+            ));
+        }
+        Ok((positions, triangles))
     }
 
     /// KHR_lights_punctual light `index` placed by `world`: photometric
@@ -419,6 +549,7 @@ impl Importer<'_, '_> {
             },
         };
         self.parts.lights.push(source);
+        self.punctual += 1;
         self.parts.light_names.push(GltfLightNames {
             light: light.name.clone(),
             node: Some(node_name.to_string()),
@@ -540,6 +671,8 @@ impl Importer<'_, '_> {
             emits_both_sides: m.double_sided(),
             cutout,
             pbr: Some(PbrMaterial { metallic, roughness, specular, specular_colour, metallic_roughness, normal_map }),
+            unlit: m.unlit(),
+            culls_back_faces: !m.double_sided(),
             ..Material::diffuse(name, albedo)
         });
         self.materials.insert(m.index(), index);
@@ -547,10 +680,258 @@ impl Importer<'_, '_> {
     }
 }
 
+/// Where a mesh's vertices go: one node transform, or (a skin) each
+/// vertex's blend of its joints' matrices.
+enum Placement {
+    Rigid(Mat4),
+    /// Each joint's world transform times its inverse bind matrix.
+    Skinned(Vec<Mat4>),
+}
+
+/// A primitive's object-to-world transform, for all its vertices or one
+/// per vertex (skinned), with the inverse transposes for normals.
+enum VertexTransforms {
+    Rigid { matrix: Mat4, normal: Mat3 },
+    PerVertex { matrices: Vec<Mat4>, normals: Vec<Mat3> },
+}
+
+impl VertexTransforms {
+    fn of(matrices: Vec<Mat4>) -> Self {
+        let normals = matrices.iter().map(|m| Mat3::from_mat4(*m).inverse().transpose()).collect();
+        Self::PerVertex { matrices, normals }
+    }
+
+    fn rigid(matrix: Mat4) -> Self {
+        Self::Rigid { matrix, normal: Mat3::from_mat4(matrix).inverse().transpose() }
+    }
+
+    fn matrix(&self, vertex: usize) -> &Mat4 {
+        match self {
+            Self::Rigid { matrix, .. } => matrix,
+            Self::PerVertex { matrices, .. } => &matrices[vertex],
+        }
+    }
+
+    fn point(&self, vertex: usize, p: Vec3) -> Vec3 {
+        self.matrix(vertex).transform_point3(p)
+    }
+
+    fn vector(&self, vertex: usize, v: Vec3) -> Vec3 {
+        self.matrix(vertex).transform_vector3(v)
+    }
+
+    fn normal(&self, vertex: usize, n: Vec3) -> Vec3 {
+        match self {
+            Self::Rigid { normal, .. } => *normal * n,
+            Self::PerVertex { normals, .. } => normals[vertex] * n,
+        }
+    }
+
+    /// Whether the transform mirrors (a skin: its first vertex's does).
+    fn mirrored(&self) -> bool {
+        match self {
+            Self::Rigid { matrix, .. } => Mat3::from_mat4(*matrix).determinant() < 0.0,
+            Self::PerVertex { matrices, .. } => {
+                matrices.first().is_some_and(|m| Mat3::from_mat4(*m).determinant() < 0.0)
+            }
+        }
+    }
+}
+
+impl Importer<'_, '_> {
+    /// Names, once each, the extensions the file uses but the renderer does
+    /// not implement, with what the render does instead (a required one was
+    /// refused in `io::parse`).
+    fn name_ignored_extensions(&mut self) {
+        let used: Vec<String> = self.doc.extensions_used().map(str::to_string).collect();
+        for name in used {
+            if IMPLEMENTED.contains(&name.as_str()) {
+                continue;
+            }
+            let instead = IGNORED
+                .iter()
+                .find(|(n, _)| *n == name)
+                .map_or("ignored: the render is what the file gives without it", |(_, instead)| instead);
+            self.warn("extensionsUsed", &format!("{name} is not implemented: {instead}"));
+        }
+    }
+
+    /// glTF's morph targets at `weights` (the node's, else the mesh's; 0
+    /// where none is given): POSITION and NORMAL displaced by the weighted
+    /// sum of the targets' (the specification's §3.7.2.2), in the mesh's
+    /// own space.
+    fn morph(
+        &mut self,
+        primitive: &gltf::Primitive<'_>,
+        location: &str,
+        weights: &[f32],
+        positions: &mut [[f32; 3]],
+        mut normals: Option<&mut Vec<[f32; 3]>>,
+    ) -> Result<(), SceneError> {
+        for (k, target) in primitive.morph_targets().enumerate() {
+            let weight = weights.get(k).copied().unwrap_or(0.0);
+            if !weight.is_finite() {
+                return Err(self.error(format!("{location} (weights[{k}])"), "morph target weights must be finite"));
+            }
+            if weight == 0.0 {
+                continue;
+            }
+            let add = |accessor: Option<gltf::Accessor<'_>>, field: &str, into: &mut [[f32; 3]]| {
+                let Some(a) = accessor else { return Ok(()) };
+                let at = format!("{location}.targets[{k}].{field}");
+                let deltas = self.data.read_floats::<3>(&a, &at)?;
+                if deltas.len() != into.len() {
+                    return Err(self.error(at, format!("has {} elements for {} vertices", deltas.len(), into.len())));
+                }
+                for (v, d) in into.iter_mut().zip(&deltas) {
+                    for c in 0..3 {
+                        v[c] += weight * d[c];
+                    }
+                }
+                Ok(())
+            };
+            add(target.positions(), "POSITION", positions)?;
+            if let Some(normals) = normals.as_deref_mut() {
+                add(target.normals(), "NORMAL", normals)?;
+            }
+        }
+        Ok(())
+    }
+
+    /// The transforms that place a primitive's vertices: the node's, or
+    /// for a skin each vertex's JOINTS_0 matrices blended by its WEIGHTS_0
+    /// (the specification's §3.7.3: the skinned node's own transform is
+    /// not applied).
+    fn vertex_transforms(
+        &mut self,
+        primitive: &gltf::Primitive<'_>,
+        location: &str,
+        placement: &Placement,
+        count: usize,
+    ) -> Result<VertexTransforms, SceneError> {
+        let joints = match placement {
+            Placement::Rigid(matrix) => return Ok(VertexTransforms::rigid(*matrix)),
+            Placement::Skinned(joints) => joints,
+        };
+        let (Some(indices), Some(weights)) =
+            (primitive.get(&gltf::Semantic::Joints(0)), primitive.get(&gltf::Semantic::Weights(0)))
+        else {
+            return Err(self.error(format!("{location}.attributes"), "is skinned but has no JOINTS_0 and WEIGHTS_0"));
+        };
+        let at_joints = format!("{location}.attributes.JOINTS_0");
+        let indices = self.data.read_floats::<4>(&indices, &at_joints)?;
+        let at_weights = format!("{location}.attributes.WEIGHTS_0");
+        let weights = self.data.read_floats::<4>(&weights, &at_weights)?;
+        if indices.len() != count || weights.len() != count {
+            return Err(
+                self.error(at_joints, format!("JOINTS_0 and WEIGHTS_0 must have {count} elements, one a vertex"))
+            );
+        }
+        let mut matrices = Vec::with_capacity(count);
+        for (v, (j, w)) in indices.iter().zip(&weights).enumerate() {
+            let mut m = Mat4::ZERO;
+            for k in 0..4 {
+                if w[k] == 0.0 {
+                    continue;
+                }
+                let Some(joint) = joints.get(j[k] as usize) else {
+                    return Err(self.error(
+                        &at_joints,
+                        format!("vertex {v} names joint {}, but the skin has {}", j[k], joints.len()),
+                    ));
+                };
+                if !w[k].is_finite() {
+                    return Err(self.error(&at_weights, format!("vertex {v}'s weights are not finite")));
+                }
+                m += *joint * w[k];
+            }
+            matrices.push(m);
+        }
+        Ok(VertexTransforms::of(matrices))
+    }
+
+    /// A skin's joint matrices: each joint node's world transform times its
+    /// inverse bind matrix (identity without them).
+    fn joint_matrices(&mut self, skin: &gltf::Skin<'_>, worlds: &[Option<Mat4>]) -> Result<Vec<Mat4>, SceneError> {
+        let location = format!("skins[{}]", skin.index());
+        let joints: Vec<gltf::Node<'_>> = skin.joints().collect();
+        if joints.is_empty() || joints.len() > MAX_JOINTS {
+            return Err(self.error(
+                format!("{location}.joints"),
+                format!("has {} joints: a skin has 1 to {MAX_JOINTS}", joints.len()),
+            ));
+        }
+        let inverse_binds = match skin.inverse_bind_matrices() {
+            None => vec![Mat4::IDENTITY; joints.len()],
+            Some(a) => {
+                let at = format!("{location}.inverseBindMatrices");
+                let m = self.data.read_floats::<16>(&a, &at)?;
+                if m.len() < joints.len() {
+                    return Err(self.error(at, format!("has {} matrices for {} joints", m.len(), joints.len())));
+                }
+                m.iter().map(Mat4::from_cols_array).collect()
+            }
+        };
+        let mut matrices = Vec::with_capacity(joints.len());
+        for (k, (joint, inverse_bind)) in joints.iter().zip(&inverse_binds).enumerate() {
+            let Some(world) = worlds[joint.index()] else {
+                return Err(self.error(
+                    format!("{location}.joints[{k}]"),
+                    format!("nodes[{}] is not in the rendered scene", joint.index()),
+                ));
+            };
+            let m = world * *inverse_bind;
+            if !m.is_finite() {
+                return Err(self.error(format!("{location}.inverseBindMatrices"), format!("matrix {k} is not finite")));
+            }
+            matrices.push(m);
+        }
+        Ok(matrices)
+    }
+
+    /// EXT_mesh_gpu_instancing's per-instance transforms (translation x
+    /// rotation x scale, each optional), relative to the node.
+    fn instances(&mut self, value: &serde_json::Value, location: &str) -> Result<Vec<Mat4>, SceneError> {
+        let at = format!("{location}.extensions.EXT_mesh_gpu_instancing.attributes");
+        let attributes = value.get("attributes").and_then(serde_json::Value::as_object);
+        let Some(attributes) = attributes else { return Err(self.error(at, "missing")) };
+        let accessor = |name: &str| -> Result<Option<gltf::Accessor<'_>>, SceneError> {
+            let Some(index) = attributes.get(name) else { return Ok(None) };
+            let found = index.as_u64().and_then(|i| self.doc.accessors().nth(i as usize));
+            found.map(Some).ok_or_else(|| self.error(format!("{at}.{name}"), format!("{index} is not an accessor")))
+        };
+        let (t, r, sc) = (accessor("TRANSLATION")?, accessor("ROTATION")?, accessor("SCALE")?);
+        let read3 = |a: &Option<gltf::Accessor<'_>>, name: &str| {
+            a.as_ref().map(|a| self.data.read_floats::<3>(a, &format!("{at}.{name}"))).transpose()
+        };
+        let translations = read3(&t, "TRANSLATION")?;
+        let scales = read3(&sc, "SCALE")?;
+        let rotations = r.as_ref().map(|a| self.data.read_floats::<4>(a, &format!("{at}.ROTATION"))).transpose()?;
+        let counts =
+            [translations.as_ref().map(Vec::len), scales.as_ref().map(Vec::len), rotations.as_ref().map(Vec::len)];
+        let count = counts.iter().flatten().copied().max().unwrap_or(0);
+        if counts.iter().flatten().any(|&n| n != count) {
+            return Err(self.error(at, "TRANSLATION, ROTATION and SCALE must have one element an instance each"));
+        }
+        let mut matrices = Vec::with_capacity(count);
+        for i in 0..count {
+            let t = translations.as_ref().map_or(Vec3::ZERO, |v| Vec3::from_array(v[i]));
+            let s = scales.as_ref().map_or(Vec3::ONE, |v| Vec3::from_array(v[i]));
+            let q = rotations.as_ref().map_or(glam::Quat::IDENTITY, |v| glam::Quat::from_array(v[i]).normalize());
+            let m = Mat4::from_scale_rotation_translation(s, q, t);
+            if !m.is_finite() {
+                return Err(self.error(at, format!("instance {i}'s transform is not finite")));
+            }
+            matrices.push(m);
+        }
+        Ok(matrices)
+    }
+}
+
 /// What a primitive's tangents are made from: its node's transform and its
 /// world-space normals and (glTF) texture coordinates.
 struct Frame<'a> {
-    world: &'a Mat4,
+    transforms: &'a VertexTransforms,
     mirrored: bool,
     normals: Option<&'a [Vec3]>,
     uvs: Option<&'a [Vec2]>,
@@ -583,11 +964,13 @@ impl Importer<'_, '_> {
         if tangents.len() != count {
             return Err(self.error(at, format!("has {} tangents for {count} vertices", tangents.len())));
         }
-        let linear = Mat3::from_mat4(*frame.world);
         let sign = if frame.mirrored { -1.0 } else { 1.0 };
         let tangents: Vec<Vec4> = tangents
             .iter()
-            .map(|t| (linear * Vec3::new(t[0], t[1], t[2])).normalize_or_zero().extend(sign * t[3].signum()))
+            .enumerate()
+            .map(|(i, t)| {
+                frame.transforms.vector(i, Vec3::new(t[0], t[1], t[2])).normalize_or_zero().extend(sign * t[3].signum())
+            })
             .collect();
         if tangents.iter().any(|t| !t.is_finite() || t.truncate() == Vec3::ZERO) {
             self.warn(&at, "has zero or non-finite tangents: MikkTSpace's are used");

@@ -18,6 +18,15 @@ use glam::Vec3;
 use super::file::{self, SceneFile};
 use super::{gltf, groups, within_limits, LightGroups, Scene, SceneError, MAX_COORDINATE, MAX_EMITTER_SAMPLES};
 
+/// What the command line overrides in a scene file.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct LoadOptions<'a> {
+    /// `--camera`: the glTF camera by name, or `#N` by node order.
+    pub camera: Option<&'a str>,
+    /// `--lumens-per-watt`: the glTF import's luminous efficacy.
+    pub lumens_per_watt: Option<f32>,
+}
+
 impl Scene {
     /// Reads, parses and validates a scene file (`.json` as JSON, anything
     /// else as TOML).
@@ -30,6 +39,12 @@ impl Scene {
     /// or `.glb` file is a scene by itself: the import of `[gltf]` with
     /// every default.
     pub fn load_with_camera(path: &Path, camera: Option<&str>) -> Result<Self, SceneError> {
+        Self::load_with(path, &LoadOptions { camera, lumens_per_watt: None })
+    }
+
+    /// [`Scene::load`] with the command line's overrides of the scene file.
+    pub fn load_with(path: &Path, options: &LoadOptions<'_>) -> Result<Self, SceneError> {
+        let camera = options.camera;
         let extension = |x: &str| path.extension().is_some_and(|e| e.eq_ignore_ascii_case(x));
         let mut spec = if extension("gltf") || extension("glb") {
             let file = path.file_name().map_or_else(String::new, |f| f.to_string_lossy().into_owned());
@@ -62,12 +77,29 @@ impl Scene {
             // The TOML's own camera would win over the one asked for.
             spec.camera = None;
         }
+        if let Some(lpw) = options.lumens_per_watt {
+            let Some(gltf) = spec.gltf.as_mut() else {
+                return Err(SceneError::new(
+                    path,
+                    "--lumens-per-watt",
+                    "converts a glTF file's lights, but the scene imports no glTF file",
+                ));
+            };
+            if !(lpw.is_finite() && lpw > 0.0) {
+                return Err(SceneError::new(path, "--lumens-per-watt", format!("must be finite and > 0, got {lpw}")));
+            }
+            gltf.lumens_per_watt = lpw;
+        }
         let imports_itself =
             spec.gltf.as_ref().is_some_and(|g| path.file_name() == Some(std::ffi::OsStr::new(&g.file)))
                 && (extension("gltf") || extension("glb"));
         let mut scene = Self::from_spec(path, spec)?;
         if !imports_itself {
             scene.inputs.insert(0, path.to_path_buf());
+        }
+        if let Some(lpw) = options.lumens_per_watt {
+            // Not a file the scene read: part of its hash all the same.
+            scene.additions.push(format!("--lumens-per-watt {lpw}"));
         }
         Ok(scene)
     }
