@@ -342,21 +342,10 @@ impl Importer<'_, '_> {
             }
             let (mut positions, mut triangles) = self.read_triangles(&primitive, &location)?;
             let count = positions.len();
-            let mut normals = match primitive.get(&gltf::Semantic::Normals) {
-                None => None,
-                Some(a) => {
-                    let at = format!("{location}.attributes.NORMAL");
-                    let normals = self.data.read_floats::<3>(&a, &at)?;
-                    if normals.len() != count {
-                        return Err(self.error(at, format!("has {} normals for {count} vertices", normals.len())));
-                    }
-                    Some(normals)
-                }
-            };
+            let mut normals = self.attribute::<3>(&primitive, &location, gltf::Semantic::Normals, "normals", count)?;
             self.morph(&primitive, &location, weights, &mut positions, normals.as_mut())?;
             let transforms = self.vertex_transforms(&primitive, &location, placement, count)?;
-            let mirrored = transforms.mirrored();
-            if mirrored {
+            if transforms.mirrored() {
                 // A mirroring transform turns the winding around; keep the
                 // front (emitting) side where the file's author saw it.
                 for t in &mut triangles {
@@ -399,7 +388,7 @@ impl Importer<'_, '_> {
             let tangents = if let Some(set) = normal_set {
                 // MikkTSpace works in the normal map's own texture coordinates.
                 let uvs = if set == 1 { uvs1.as_deref() } else { uvs.as_deref() };
-                let frame = Frame { transforms: &transforms, mirrored, normals: normals.as_deref(), uvs };
+                let frame = Frame { transforms: &transforms, normals: normals.as_deref(), uvs };
                 self.tangents(&primitive, &location, count, &frame, &world_positions, &triangles)?
             } else {
                 None
@@ -932,7 +921,6 @@ impl Importer<'_, '_> {
 /// world-space normals and (glTF) texture coordinates.
 struct Frame<'a> {
     transforms: &'a VertexTransforms,
-    mirrored: bool,
     normals: Option<&'a [Vec3]>,
     uvs: Option<&'a [Vec2]>,
 }
@@ -956,15 +944,11 @@ impl Importer<'_, '_> {
             self.warn(location, "normalTexture unused: the primitive has no NORMAL or not the TEXCOORD it reads");
             return Ok(None);
         };
-        let Some(a) = primitive.get(&gltf::Semantic::Tangents) else {
+        let Some(tangents) = self.attribute::<4>(primitive, location, gltf::Semantic::Tangents, "tangents", count)?
+        else {
             return Ok(mikktspace_tangents(positions, normals, uvs, triangles));
         };
-        let at = format!("{location}.attributes.TANGENT");
-        let tangents = self.data.read_floats::<4>(&a, &at)?;
-        if tangents.len() != count {
-            return Err(self.error(at, format!("has {} tangents for {count} vertices", tangents.len())));
-        }
-        let sign = if frame.mirrored { -1.0 } else { 1.0 };
+        let sign = if frame.transforms.mirrored() { -1.0 } else { 1.0 };
         let tangents: Vec<Vec4> = tangents
             .iter()
             .enumerate()
@@ -973,10 +957,32 @@ impl Importer<'_, '_> {
             })
             .collect();
         if tangents.iter().any(|t| !t.is_finite() || t.truncate() == Vec3::ZERO) {
-            self.warn(&at, "has zero or non-finite tangents: MikkTSpace's are used");
+            self.warn(
+                &format!("{location}.attributes.TANGENT"),
+                "has zero or non-finite tangents: MikkTSpace's are used",
+            );
             return Ok(mikktspace_tangents(positions, normals, uvs, triangles));
         }
         Ok(Some(tangents))
+    }
+
+    /// A primitive's float attribute `semantic` of N components, one per
+    /// vertex (`noun` names its elements in the error); None when absent.
+    fn attribute<const N: usize>(
+        &self,
+        primitive: &gltf::Primitive<'_>,
+        location: &str,
+        semantic: gltf::Semantic,
+        noun: &str,
+        count: usize,
+    ) -> Result<Option<Vec<[f32; N]>>, SceneError> {
+        let Some(a) = primitive.get(&semantic) else { return Ok(None) };
+        let at = format!("{location}.attributes.{}", semantic.to_string());
+        let values = self.data.read_floats::<N>(&a, &at)?;
+        if values.len() != count {
+            return Err(self.error(at, format!("has {} {noun} for {count} vertices", values.len())));
+        }
+        Ok(Some(values))
     }
 
     /// A primitive's `TEXCOORD_<set>`, finite, one per vertex.
@@ -987,21 +993,16 @@ impl Importer<'_, '_> {
         count: usize,
         set: u32,
     ) -> Result<Option<Vec<Vec2>>, SceneError> {
-        let uvs = match primitive.get(&gltf::Semantic::TexCoords(set)) {
-            None => None,
-            Some(a) => {
-                let at = format!("{location}.attributes.TEXCOORD_{set}");
-                let uvs = self.data.read_floats::<2>(&a, &at)?;
-                if uvs.len() != count {
-                    return Err(self.error(at, format!("has {} coordinates for {count} vertices", uvs.len())));
-                }
-                if uvs.iter().flatten().any(|x| !x.is_finite()) {
-                    return Err(self.error(at, "has non-finite texture coordinates"));
-                }
-                Some(uvs.iter().map(|uv| Vec2::from_array(*uv)).collect())
-            }
+        let semantic = gltf::Semantic::TexCoords(set);
+        let Some(uvs) = self.attribute::<2>(primitive, location, semantic, "coordinates", count)? else {
+            return Ok(None);
         };
-        Ok(uvs)
+        if uvs.iter().flatten().any(|x| !x.is_finite()) {
+            return Err(
+                self.error(format!("{location}.attributes.TEXCOORD_{set}"), "has non-finite texture coordinates")
+            );
+        }
+        Ok(Some(uvs.iter().map(|uv| Vec2::from_array(*uv)).collect()))
     }
 
     /// A primitive's `COLOR_0` (VEC3 or VEC4 of floats or normalized
