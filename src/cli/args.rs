@@ -10,6 +10,7 @@ use clap::Args;
 
 use super::farm::tile_rows;
 use super::CliError;
+use crate::lightcut::multidimensional::MULTIDIMENSIONAL_DEFAULTS;
 use crate::lightcut::stochastic::{STOCHASTIC_DEFAULTS, STOCHASTIC_FROM_SPP};
 use crate::lightcut::{CutSettings, GroupError};
 use crate::render::session::Mode;
@@ -121,7 +122,7 @@ impl RenderArgs {
 #[derive(Debug, Args)]
 pub struct ModeArgs {
     /// Reference mode: every light, one shadow ray each.
-    #[arg(long, conflicts_with_all = ["bounded", "stochastic", "error", "max_cut"])]
+    #[arg(long, conflicts_with_all = ["bounded", "stochastic", "multidimensional", "error", "max_cut"])]
     pub exact: bool,
     /// Lightcuts [LC05]: each cluster's error is bounded, its representative
     /// fixed when the tree is built.
@@ -131,6 +132,11 @@ pub struct ModeArgs {
     /// sample, so the error falls with samples per pixel.
     #[arg(long)]
     pub stochastic: bool,
+    /// Multidimensional lightcuts [MDLC06]: one cut per pixel through
+    /// (gather cluster, light cluster) pairs over all its samples (pixel
+    /// area, lens, mirror paths); --error is relative to the pixel's total.
+    #[arg(long, conflicts_with_all = ["bounded", "stochastic"])]
+    pub multidimensional: bool,
     /// Relative error threshold: a cluster is split while its bound exceeds
     /// this fraction of the point's total (bounded: of the estimate, default
     /// 0.02; stochastic: of the summed bounds, default in `lightcut::stochastic`).
@@ -164,6 +170,11 @@ impl ModeArgs {
     pub fn mode(&self, spp: u32) -> Result<Mode, CliError> {
         let stochastic = if self.exact {
             return Ok(Mode::Exact);
+        } else if self.multidimensional {
+            let d = MULTIDIMENSIONAL_DEFAULTS;
+            let mut cut = cut_settings(self.error.unwrap_or(d.error), self.max_cut.unwrap_or(d.max_cut))?;
+            cut.group_error = self.group_error.unwrap_or(d.group_error);
+            return Ok(Mode::Multidimensional(cut));
         } else if self.bounded || self.stochastic {
             self.stochastic
         } else {

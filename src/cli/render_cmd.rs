@@ -110,7 +110,20 @@ fn print_summary(scene: &Scene, settings: &PassSettings, mode: Mode, result: &Pa
     println!("  camera rays      {}", stats.camera_rays);
     println!("  shadow rays      {rays} ({:.1} per pixel)", rays as f64 / pixels);
     println!("  shadow rays/s    {:.2} M", rays as f64 / stats.time.as_secs_f64().max(1e-9) / 1e6);
-    if mode.cut().is_some() {
+    if let Mode::Multidimensional(_) = mode {
+        // Its cuts are per pixel, through (gather cluster, light cluster) pairs.
+        let cut_pixels = stats.shading.shading_points.max(1) as f64;
+        println!(
+            "  cut size         average {:.1} pairs per pixel, maximum {}",
+            stats.shading.cut_nodes as f64 / cut_pixels,
+            stats.shading.max_cut
+        );
+        println!(
+            "  gather tree      average {:.1} gather points, {:.1} nodes per pixel",
+            stats.shading.gather_points as f64 / cut_pixels,
+            stats.shading.gather_nodes as f64 / cut_pixels
+        );
+    } else if mode.cut().is_some() {
         let points = stats.shading.shading_points.max(1) as f64;
         println!(
             "  cut size         average {:.1}, maximum {}",

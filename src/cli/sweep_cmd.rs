@@ -15,6 +15,7 @@ use serde::{Deserialize, Serialize};
 use super::args::{cut_settings, PassArgs};
 use super::progress::Progress;
 use super::CliError;
+use crate::lightcut::multidimensional::MULTIDIMENSIONAL_DEFAULTS;
 use crate::lightcut::stochastic::STOCHASTIC_DEFAULTS;
 use crate::lightcut::CutSettings;
 use crate::output::compare::compare_rgb;
@@ -32,6 +33,7 @@ use crate::scene::Scene;
 pub enum SweepMode {
     Bounded,
     Stochastic,
+    Multidimensional,
 }
 
 impl SweepMode {
@@ -39,6 +41,7 @@ impl SweepMode {
         match self {
             Self::Bounded => Mode::Bounded(cut),
             Self::Stochastic => Mode::Stochastic(cut),
+            Self::Multidimensional => Mode::Multidimensional(cut),
         }
     }
 
@@ -46,6 +49,7 @@ impl SweepMode {
         match self {
             Self::Bounded => "bounded",
             Self::Stochastic => "stochastic",
+            Self::Multidimensional => "multidimensional",
         }
     }
 }
@@ -238,6 +242,7 @@ pub fn run(args: &SweepArgs) -> Result<(), CliError> {
             let defaults = match sweep_mode {
                 SweepMode::Bounded => CutSettings::default(),
                 SweepMode::Stochastic => STOCHASTIC_DEFAULTS,
+                SweepMode::Multidimensional => MULTIDIMENSIONAL_DEFAULTS,
             };
             for &error in &args.errors {
                 let cut = cut_settings(error, args.max_cut.unwrap_or(defaults.max_cut))?;
@@ -359,7 +364,7 @@ fn plot(scene: &Scene, rows: &[SweepRow], references: &[(u32, ReferenceRecord, f
     };
     let mut series = Vec::new();
     for (i, (spp, record, _)) in references.iter().enumerate() {
-        for mode in [SweepMode::Bounded, SweepMode::Stochastic] {
+        for mode in [SweepMode::Bounded, SweepMode::Stochastic, SweepMode::Multidimensional] {
             let points: Vec<_> = rows
                 .iter()
                 .filter(|r| r.spp == *spp && r.mode == mode)
@@ -369,7 +374,7 @@ fn plot(scene: &Scene, rows: &[SweepRow], references: &[(u32, ReferenceRecord, f
                 series.push(Series {
                     name: format!("{} {spp} spp (exact {:.1} s)", mode.name(), record.seconds),
                     colour: COLOURS[i % COLOURS.len()],
-                    dashed: mode == SweepMode::Stochastic,
+                    dashed: mode != SweepMode::Bounded,
                     points,
                 });
             }

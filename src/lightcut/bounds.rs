@@ -124,9 +124,50 @@ struct GgxBounds {
     diffuse_fresnel: f32x4,
 }
 
-/// What the bounds need of one shading point, prepared once per point.
+/// What a gather cluster's bounds know of its points' materials
+/// ([MDLC06]; docs/design.md §13.3), instead of one point's lobe.
+struct ClusterMaterial {
+    /// cos and sin of the normal cone's half-angle about `normal`'s axis.
+    cos_cone: f32x4,
+    sin_cone: f32x4,
+    /// Luminance weights x summed strength x the largest f_r cos theta
+    /// over every direction, of the cluster's glossy points (Phong or
+    /// metallic-roughness): a bound that ignores where the light is.
+    glossy: V3,
+}
+
+/// A gather cluster ([MDLC06]) as its bounds see it: the box of its
+/// points, their normals' cone, the summed strength of its points, the
+/// largest diffuse coefficient k_d / pi of its diffuse points and the
+/// largest f_r cos theta of its glossy points (per channel, luminance
+/// weights not applied), and the smallest distance clamp.
+#[derive(Debug, Clone, Copy)]
+pub struct GatherBounds {
+    pub lo: Vec3,
+    pub hi: Vec3,
+    pub axis: Vec3,
+    pub cos_cone: f32,
+    pub strength: Vec3,
+    pub diffuse: Vec3,
+    pub glossy: Vec3,
+    pub min_distance_squared: f32,
+}
+
+/// Relative slack of a gather cluster's sums and maxima (each a few f32
+/// roundings).
+const GATHER_SLACK: f32 = 1.0 + 1e-5;
+
+/// What the bounds need of one shading point, prepared once per point, or
+/// of a gather cluster (`PointBounds::gather_cluster`).
 pub struct PointBounds {
     p: V3,
+    /// Half-extent of a gather cluster's box about `p` (0 for a point):
+    /// the vectors from the cluster to a light box of half-extent h lie in
+    /// a box of half-extent h + extent, so every bound below holds for the
+    /// pair of boxes by bounding over that box.
+    extent: V3,
+    /// A gather cluster's material bound (None: one point's, below).
+    cluster: Option<ClusterMaterial>,
     normal: Frame,
     /// The Phong lobe's frame around the mirror direction, and its exponent.
     phong: Option<(Frame, f32)>,
@@ -159,6 +200,8 @@ impl PointBounds {
         }
         Self {
             p: splat3(sp.p),
+            extent: splat3(Vec3::ZERO),
+            cluster: None,
             normal: Frame::splat(sp.n),
             phong: m.has_specular().then(|| (Frame::splat(sp.r), m.exponent)),
             ggx: sp.pbr.map(|pbr| GgxBounds {
@@ -175,11 +218,65 @@ impl PointBounds {
         }
     }
 
+    /// The bounds of a gather cluster ([MDLC06]): for every pair of one of
+    /// its points and one light of a slot, a bound of S M G I (S the
+    /// point's strength), which also bounds the representative pair's
+    /// estimate S_sum M_rep G_rep I (docs/design.md §13.3).
+    #[must_use]
+    pub fn gather_cluster(g: &GatherBounds, scale: f32) -> Self {
+        let (centre, half) = crate::light_tree::layout::centre_half(g.lo, g.hi);
+        let cos_cone = g.cos_cone.clamp(-1.0, 1.0);
+        let sin_cone = (1.0 - cos_cone * cos_cone).max(0.0).sqrt();
+        let weights = LUMINANCE * g.strength * GATHER_SLACK * GATHER_SLACK;
+        Self {
+            p: splat3(centre),
+            extent: splat3(half),
+            cluster: Some(ClusterMaterial {
+                cos_cone: f32x4::splat(cos_cone),
+                sin_cone: f32x4::splat(sin_cone * GATHER_SLACK),
+                glossy: splat3(weights * g.glossy),
+            }),
+            normal: Frame::splat(g.axis),
+            phong: None,
+            ggx: None,
+            diffuse: splat3(weights * g.diffuse),
+            lobe: splat3(Vec3::ZERO),
+            luminance: splat3(LUMINANCE),
+            min_distance_squared: f32x4::splat(g.min_distance_squared),
+            scale: f32x4::splat(scale),
+        }
+    }
+
+    /// One point's terms for a gather cluster ([`GatherBounds`]): (k_d /
+    /// pi, 0) for a diffuse material; (0, the largest f_r cos theta over
+    /// every direction) for a glossy one, which is this point's own bound
+    /// over a box holding every unit vector.
+    #[must_use]
+    pub fn gather_terms(&self, kd: Vec3) -> (Vec3, Vec3) {
+        if self.phong.is_none() && self.ggx.is_none() {
+            return (kd * (1.0 / PI), Vec3::ZERO);
+        }
+        let (c, h) = (splat3(Vec3::ZERO), splat3(Vec3::ONE));
+        let peak = |axis: Vec3| {
+            let (cos_theta, weighted) = self.material(&c, &h, &splat3(axis));
+            (cos_theta * weighted).to_array()[0]
+        };
+        let luminance_weighted = Vec3::new(peak(Vec3::X), peak(Vec3::Y), peak(Vec3::Z));
+        (Vec3::ZERO, luminance_weighted / LUMINANCE)
+    }
+
     /// M's bound against the slots' intensities, luminance-weighted:
     /// cos_theta * (diffuse.I + cos_r^n lobe.I), for directions in the boxes
     /// (c, h) (vectors from the shading point; any length).
     #[inline(always)]
     fn material(&self, c: &V3, h: &V3, intensity: &V3) -> (f32x4, f32x4) {
+        if let Some(cluster) = &self.cluster {
+            // cos(n, v) <= cos(max(0, theta_min - beta)) for n in the cone.
+            let cos_theta =
+                widen(self.normal.cos_bound(c, h), cluster.cos_cone, cluster.sin_cone).fast_max(f32x4::ZERO);
+            let weighted = cos_theta * dot3(&self.diffuse, intensity) + dot3(&cluster.glossy, intensity);
+            return (weighted.cmp_gt(f32x4::ZERO).blend(f32x4::ONE, f32x4::ZERO), weighted);
+        }
         if let Some(ggx) = &self.ggx {
             return self.ggx(ggx, c, h, intensity);
         }
@@ -361,6 +458,8 @@ impl PointBounds {
                 (cos_theta, weighted, f32x4::ONE)
             }
             LightKind::Omni | LightKind::Oriented | LightKind::Spot => {
+                // (A point's extent is 0: h + 0 is h, bit for bit.)
+                let h = &add3(h, &self.extent);
                 let to_box = sub3(c, &self.p);
                 let (cos_theta, weighted) = self.material(&to_box, h, intensity);
                 let mut geometric = self.geometric(c, h, estimate);
@@ -393,16 +492,28 @@ impl PointBounds {
     fn emission(&self, c: &V3, h: &V3, cone: &ConeLanes) -> f32x4 {
         let ConeLanes { frame, cos_beta, sin_beta, cutoff } = *cone;
         let from_box = sub3(&self.p, c);
-        let cos_theta = frame.cos_bound(&from_box, h);
-        let sin_theta = (f32x4::ONE - cos_theta * cos_theta).fast_max(f32x4::ZERO).sqrt();
-        let widened = cos_theta * cos_beta + sin_theta * sin_beta;
-        let widened = (widened * f32x4::splat(1.0 + COS_SLACK) + f32x4::splat(COS_SLACK)).fast_min(f32x4::ONE);
-        let widened = cos_theta.cmp_ge(cos_beta).blend(f32x4::ONE, widened);
+        let widened = widen(frame.cos_bound(&from_box, h), cos_beta, sin_beta);
         match cutoff {
             Some(cutoff) => widened.cmp_gt(cutoff).blend(f32x4::ONE, f32x4::ZERO),
             None => widened.fast_max(f32x4::ZERO),
         }
     }
+}
+
+/// cos(max(theta - beta, 0)) from theta's cosine bound and beta's cosine
+/// and sine: 1 when theta <= beta, else cos theta cos beta + sin theta sin
+/// beta, with the cosine slack.
+#[inline(always)]
+fn widen(cos_theta: f32x4, cos_beta: f32x4, sin_beta: f32x4) -> f32x4 {
+    let sin_theta = (f32x4::ONE - cos_theta * cos_theta).fast_max(f32x4::ZERO).sqrt();
+    let widened = cos_theta * cos_beta + sin_theta * sin_beta;
+    let widened = (widened * f32x4::splat(1.0 + COS_SLACK) + f32x4::splat(COS_SLACK)).fast_min(f32x4::ONE);
+    cos_theta.cmp_ge(cos_beta).blend(f32x4::ONE, widened)
+}
+
+#[inline(always)]
+fn add3(a: &V3, b: &V3) -> V3 {
+    [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
 }
 
 /// Upper bound of cos(angle between unit `axis` and v) over v in the box

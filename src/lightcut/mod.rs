@@ -10,6 +10,7 @@
 
 pub mod bounds;
 pub mod cut;
+pub mod multidimensional;
 pub mod stochastic;
 
 use glam::DVec3;

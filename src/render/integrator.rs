@@ -11,6 +11,7 @@ use glam::{DVec3, Vec3};
 
 use crate::light::Lights;
 use crate::light_tree::LightTrees;
+use crate::lightcut::multidimensional::{GatherPoint, GatherScratch};
 use crate::lightcut::{self, CutScratch, CutSettings, StochasticScratch};
 use crate::shading::{BatchBuffers, Geometry, LightBatch, SurfacePoint};
 use crate::util::sampling::Rng;
@@ -24,6 +25,10 @@ pub enum DirectLighting<'a> {
     Lightcuts { trees: &'a LightTrees, settings: CutSettings },
     /// A stochastic lightcut ([SLC19]): lights drawn per sample.
     StochasticLightcuts { trees: &'a LightTrees, settings: CutSettings },
+    /// A multidimensional lightcut ([MDLC06]) per pixel: camera paths only
+    /// gather their shading points ([`Integrator::trace`]'s `gather`), and
+    /// [`Integrator::gathered_light`] lights them all at once.
+    Multidimensional { trees: &'a LightTrees, settings: CutSettings },
 }
 
 /// The random stream of a camera sample's shading points: (seed, pixel x,
@@ -44,6 +49,7 @@ pub struct Scratch {
     batch: BatchBuffers,
     cut: CutScratch,
     stochastic: StochasticScratch,
+    gather: GatherScratch,
     /// One shading point's direct light by light group.
     point_groups: Vec<DVec3>,
 }
@@ -62,6 +68,10 @@ pub struct ShadingStats {
     pub max_cut: u64,
     /// Shading points by cut size (see [`CUT_HISTOGRAM_BUCKETS`]).
     pub cut_histogram: [u64; CUT_HISTOGRAM_BUCKETS],
+    /// Gather points and gather-tree nodes (the multidimensional mode:
+    /// its "shading points" are pixels, its cut nodes (gather, light) pairs).
+    pub gather_points: u64,
+    pub gather_nodes: u64,
     /// Thread-time spent choosing cuts (in `lightcut::evaluate`, outside
     /// Embree's queries), nanoseconds; counted only while Embree's queries
     /// are timed (`render --stats`).
@@ -75,6 +85,8 @@ impl ShadingStats {
         self.cut_nodes += other.cut_nodes;
         self.max_cut = self.max_cut.max(other.max_cut);
         self.cut_nanos += other.cut_nanos;
+        self.gather_points += other.gather_points;
+        self.gather_nodes += other.gather_nodes;
         for (a, b) in self.cut_histogram.iter_mut().zip(&other.cut_histogram) {
             *a += b;
         }
@@ -124,7 +136,7 @@ pub struct Integrator<'a> {
     pub emission_group: &'a [usize],
 }
 
-impl Integrator<'_> {
+impl<'a> Integrator<'a> {
     /// Number of light groups the radiance is split into (0: no split).
     #[must_use]
     pub fn group_slots(&self) -> usize {
@@ -142,6 +154,8 @@ impl Integrator<'_> {
     /// seen directly count in their own groups. With `transparent`, the
     /// environment is not seen where the camera ray itself hits nothing
     /// (the film's background is RGB 0, alpha 0); mirrors still show it.
+    /// In the multidimensional mode, direct light is not computed here:
+    /// each shading point joins `gather` with its path's throughput.
     pub fn trace(
         &self,
         mut ray: crate::embree::Ray,
@@ -149,6 +163,7 @@ impl Integrator<'_> {
         transparent: bool,
         scratch: &mut Scratch,
         groups: &mut [DVec3],
+        gather: &mut Vec<GatherPoint<'a>>,
     ) -> SampleResult {
         let mut result = SampleResult {
             radiance: DVec3::ZERO,
@@ -192,12 +207,16 @@ impl Integrator<'_> {
             if sp.material.unlit {
                 break;
             }
-            scratch.point_groups.clear();
-            scratch.point_groups.resize(groups.len(), DVec3::ZERO);
-            let direct = self.direct_light(&sp, sample, depth, scratch, &mut result.stats);
-            result.radiance += throughput * direct;
-            for (slot, value) in groups.iter_mut().zip(&scratch.point_groups) {
-                *slot += throughput * *value;
+            if let DirectLighting::Multidimensional { .. } = self.direct {
+                gather.push(GatherPoint { sp: sp.clone(), strength: throughput });
+            } else {
+                scratch.point_groups.clear();
+                scratch.point_groups.resize(groups.len(), DVec3::ZERO);
+                let direct = self.direct_light(&sp, sample, depth, scratch, &mut result.stats);
+                result.radiance += throughput * direct;
+                for (slot, value) in groups.iter_mut().zip(&scratch.point_groups) {
+                    *slot += throughput * *value;
+                }
             }
             if !sp.material.has_mirror() || depth == self.max_mirror_depth {
                 break;
@@ -221,6 +240,33 @@ impl Integrator<'_> {
             ray.t_near = f32::from_bits(hit.t.to_bits() + 1).max(hit.t * (1.0 + 1e-6));
         }
         None
+    }
+
+    /// The direct light of a pixel's gather points (from [`Integrator::trace`]
+    /// in the multidimensional mode), summed with their strengths, each
+    /// group's share added to `groups`; None in the other modes. `pixel` is
+    /// (seed, x, y).
+    pub fn gathered_light(
+        &self,
+        points: &[GatherPoint<'a>],
+        pixel: [u64; 3],
+        scratch: &mut Scratch,
+        groups: &mut [DVec3],
+        stats: &mut ShadingStats,
+    ) -> Option<DVec3> {
+        let DirectLighting::Multidimensional { trees, settings } = self.direct else { return None };
+        let timed = crate::embree::timing().then(|| (Instant::now(), crate::embree::thread_timed_nanos()));
+        let embree = &self.geometry.embree;
+        let found =
+            lightcut::multidimensional::evaluate(trees, points, embree, &settings, pixel, &mut scratch.gather, groups);
+        if let Some((start, embree_before)) = timed {
+            let embree = crate::embree::thread_timed_nanos() - embree_before;
+            stats.cut_nanos += (start.elapsed().as_nanos() as u64).saturating_sub(embree);
+        }
+        stats.record_point(found.cut.nodes, found.cut.shadow_rays);
+        stats.gather_points += points.len() as u64;
+        stats.gather_nodes += found.gather_nodes;
+        Some(found.cut.radiance)
     }
 
     fn direct_light(
@@ -261,6 +307,8 @@ impl Integrator<'_> {
                 stats.record_point(lights, shadow_rays);
                 radiance
             }
+            // Its points are gathered, never lit one by one.
+            DirectLighting::Multidimensional { .. } => DVec3::ZERO,
             DirectLighting::Lightcuts { trees, settings } | DirectLighting::StochasticLightcuts { trees, settings } => {
                 let timed = crate::embree::timing().then(|| (Instant::now(), crate::embree::thread_timed_nanos()));
                 let embree = &self.geometry.embree;

@@ -14,12 +14,12 @@ pub mod vpl;
 
 use std::time::{Duration, Instant};
 
-use glam::DVec3;
+use glam::{DVec3, Vec2};
 use rayon::prelude::*;
 
-use crate::embree::EmbreeError;
+use crate::embree::{EmbreeError, Ray};
 use crate::scene::{Camera, Scene};
-use crate::util::sampling::Rng;
+use crate::util::sampling::{self, Rng};
 use cryptomatte::{Coverage, CryptoType};
 pub use film::{Aovs, Film, FilmChannel, PixelBounds, BACKGROUND_DEPTH, BEAUTY};
 use integrator::{film_value, Integrator, Scratch};
@@ -216,6 +216,8 @@ fn render_tile(
     let inv_spp = 1.0 / f64::from(settings.spp);
     let mut groups = vec![DVec3::ZERO; layout.group_count];
     let (mut objects, mut materials) = (Coverage::default(), Coverage::default());
+    // The multidimensional mode's gather points of the pixel being shaded.
+    let mut gathered = Vec::new();
     for (i, pixel) in values.chunks_exact_mut(count).enumerate() {
         let (x, y) = (tile.x0 + i as u32 % tile.width(), tile.y0 + i as u32 / tile.width());
         let mut radiance = DVec3::ZERO;
@@ -228,11 +230,14 @@ fn render_tile(
         groups.fill(DVec3::ZERO);
         objects.clear();
         materials.clear();
+        let lens_shift = camera.has_lens().then(|| {
+            let mut rng = Rng::from_key(&[settings.seed, u64::from(x), u64::from(y), LENS_STREAM]);
+            [rng.next_f32(), rng.next_f32()]
+        });
         for s in 0..settings.spp {
-            let mut rng = Rng::from_key(&[settings.seed, u64::from(x), u64::from(y), u64::from(s)]);
-            let ray = camera.ray(x as f32 + rng.next_f32(), y as f32 + rng.next_f32());
+            let ray = camera_ray(camera, settings, x, y, s, lens_shift);
             let key = [settings.seed, u64::from(x), u64::from(y), u64::from(s)];
-            let sample = integrator.trace(ray, key, settings.transparent, scratch, &mut groups);
+            let sample = integrator.trace(ray, key, settings.transparent, scratch, &mut groups, &mut gathered);
             stats.camera_rays += 1;
             radiance += sample.radiance;
             opaque += u32::from(sample.opaque);
@@ -250,6 +255,11 @@ fn render_tile(
                 materials.add(material_ids[material], inv_spp);
             }
         }
+        let pixel_key = [settings.seed, u64::from(x), u64::from(y)];
+        if let Some(direct) = integrator.gathered_light(&gathered, pixel_key, scratch, &mut groups, &mut pixel_stats) {
+            radiance += direct;
+        }
+        gathered.clear();
         stats.shading.add(&pixel_stats);
         let value = |v: DVec3, scale: f64| (v * scale).to_array().map(film_value);
         let hit_scale = if hits > 0 { 1.0 / f64::from(hits) } else { 0.0 };
@@ -282,6 +292,26 @@ fn render_tile(
         }
     }
     (values, stats)
+}
+
+/// Keeps a pixel's lens rotation apart from its samples' streams.
+const LENS_STREAM: u64 = 0x1e45_0ff0_c5a3;
+
+/// Camera sample `s` of pixel (x, y): a point of the pixel drawn from the
+/// sample's own stream (the same in every mode), and on a thin lens the
+/// sample's point of the pixel's rotated Hammersley set mapped onto the
+/// disc (`lens_shift`, the pixel's rotation): the lens is stratified per
+/// pixel, and deterministic per seed (docs/design.md §13.1).
+fn camera_ray(camera: &Camera, settings: &PassSettings, x: u32, y: u32, s: u32, lens_shift: Option<[f32; 2]>) -> Ray {
+    let mut rng = Rng::from_key(&[settings.seed, u64::from(x), u64::from(y), u64::from(s)]);
+    let (fx, fy) = (x as f32 + rng.next_f32(), y as f32 + rng.next_f32());
+    match lens_shift {
+        None => camera.ray(fx, fy),
+        Some(shift) => {
+            let lens = sampling::concentric_disc(sampling::hammersley(s, settings.spp, shift));
+            camera.lens_ray(fx, fy, Vec2::from(lens))
+        }
+    }
 }
 
 /// A rayon pool of `threads` workers (0: one per CPU), each with Embree's

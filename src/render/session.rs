@@ -21,6 +21,9 @@ pub enum Mode {
     Bounded(CutSettings),
     /// Stochastic lightcuts: lights drawn per sample ([SLC19]).
     Stochastic(CutSettings),
+    /// Multidimensional lightcuts: one cut per pixel through (gather
+    /// cluster, light cluster) pairs ([MDLC06]).
+    Multidimensional(CutSettings),
 }
 
 impl Mode {
@@ -29,7 +32,7 @@ impl Mode {
     pub fn cut(&self) -> Option<CutSettings> {
         match self {
             Self::Exact => None,
-            Self::Bounded(c) | Self::Stochastic(c) => Some(*c),
+            Self::Bounded(c) | Self::Stochastic(c) | Self::Multidimensional(c) => Some(*c),
         }
     }
 
@@ -49,6 +52,7 @@ impl Mode {
             Self::Exact => "exact".into(),
             Self::Bounded(c) => format!("lightcuts {}", Self::settings(c)),
             Self::Stochastic(c) => format!("stochastic lightcuts {}", Self::settings(c)),
+            Self::Multidimensional(c) => format!("multidimensional lightcuts {}", Self::settings(c)),
         }
     }
 }
@@ -152,11 +156,18 @@ impl<'s> Session<'s> {
             lights = std::borrow::Cow::Owned(vec![all]);
         }
         let vpl_time = start.elapsed();
-        let trees =
-            mode.cut().map(|cut| self.pool.install(|| crate::lightcut::build_trees_with(&lights, settings.seed, &cut)));
+        let trees = mode.cut().map(|mut cut| {
+            // A pixel's cut pays a tree's bounds once for all its
+            // gather points: every tree is built as a tree.
+            if let Mode::Multidimensional(_) = mode {
+                cut.exhaustive_lights = 0;
+            }
+            self.pool.install(|| crate::lightcut::build_trees_with(&lights, settings.seed, &cut))
+        });
         let direct = match (&trees, mode) {
             (Some(trees), Mode::Bounded(settings)) => DirectLighting::Lightcuts { trees, settings },
             (Some(trees), Mode::Stochastic(settings)) => DirectLighting::StochasticLightcuts { trees, settings },
+            (Some(trees), Mode::Multidimensional(settings)) => DirectLighting::Multidimensional { trees, settings },
             _ => DirectLighting::Exact,
         };
         let emission_group = self.scene.emission_groups();

@@ -1,6 +1,6 @@
-//! A pinhole camera.
+//! The camera: a pinhole, or a thin lens (docs/design.md §13.1).
 
-use glam::{Mat4, Vec3, Vec4};
+use glam::{Mat4, Vec2, Vec3, Vec4};
 
 use crate::embree::Ray;
 
@@ -16,6 +16,10 @@ pub struct Camera {
     /// Full-frame size in pixels.
     pub width: u32,
     pub height: u32,
+    /// The thin lens: its radius (0: a pinhole) and the distance of the
+    /// plane in focus along the view direction, scene units.
+    lens_radius: f32,
+    focus_distance: f32,
 }
 
 impl Camera {
@@ -25,7 +29,24 @@ impl Camera {
         let forward = (look_at - eye).normalize();
         let right = forward.cross(up).normalize();
         let up = right.cross(forward);
-        Self { eye, right, up, forward, tan_half_fov_y: (fov_y_degrees.to_radians() * 0.5).tan(), width, height }
+        let tan_half_fov_y = (fov_y_degrees.to_radians() * 0.5).tan();
+        Self { eye, right, up, forward, tan_half_fov_y, width, height, lens_radius: 0.0, focus_distance: 1.0 }
+    }
+
+    /// The same camera with a thin lens of `lens_radius` (scene units; 0
+    /// keeps the pinhole) focused on the plane `focus_distance` along the
+    /// view direction (> 0; checked by the scene loader).
+    #[must_use]
+    pub fn with_lens(mut self, lens_radius: f32, focus_distance: f32) -> Self {
+        self.lens_radius = lens_radius;
+        self.focus_distance = focus_distance;
+        self
+    }
+
+    /// Whether camera rays sample a lens (a thin lens of radius > 0).
+    #[must_use]
+    pub fn has_lens(&self) -> bool {
+        self.lens_radius > 0.0
     }
 
     /// World to camera space as OpenEXR's `worldToCamera` defines it:
@@ -69,11 +90,35 @@ impl Camera {
     /// ray parameter t is the distance from the eye.
     #[must_use]
     pub fn ray(&self, x: f32, y: f32) -> Ray {
+        let direction = self.pinhole_direction(x, y).normalize();
+        Ray { origin: self.eye, direction, t_near: 0.0, t_far: f32::INFINITY }
+    }
+
+    /// The direction through film position (x, y) from the eye, with a
+    /// forward component of exactly 1 (not unit length).
+    fn pinhole_direction(&self, x: f32, y: f32) -> Vec3 {
         let aspect = self.width as f32 / self.height as f32;
         let sx = (2.0 * x / self.width as f32 - 1.0) * self.tan_half_fov_y * aspect;
         let sy = (1.0 - 2.0 * y / self.height as f32) * self.tan_half_fov_y;
-        let direction = (self.forward + sx * self.right + sy * self.up).normalize();
-        Ray { origin: self.eye, direction, t_near: 0.0, t_far: f32::INFINITY }
+        self.forward + sx * self.right + sy * self.up
+    }
+
+    /// The camera ray through film position (x, y) and the lens point
+    /// `lens` of the unit disc (ignored by a pinhole). A thin lens
+    /// (pbrt-v4's `PerspectiveCamera`, docs/design.md §13.1): the ray
+    /// leaves the lens at eye + lens_radius (u right + v up) towards the
+    /// point the pinhole ray meets on the plane in focus, so every lens
+    /// point sees that plane's points at the same film position (sharp),
+    /// and a point at depth z spreads over a circle of confusion whose
+    /// radius on that plane's scale is lens_radius |z - focus| / z.
+    #[must_use]
+    pub fn lens_ray(&self, x: f32, y: f32, lens: Vec2) -> Ray {
+        if !self.has_lens() {
+            return self.ray(x, y);
+        }
+        let focus = self.eye + self.focus_distance * self.pinhole_direction(x, y);
+        let origin = self.eye + self.lens_radius * (lens.x * self.right + lens.y * self.up);
+        Ray { origin, direction: (focus - origin).normalize(), t_near: 0.0, t_far: f32::INFINITY }
     }
 }
 
@@ -116,5 +161,60 @@ mod tests {
         let right = c.ray(200.0, 50.0).direction;
         assert!(right.x > 0.0, "x grows to the right");
         assert!((right.x / -right.z - 2.0).abs() < 1e-5, "aspect 2 widens the horizontal fov");
+    }
+}
+
+#[cfg(test)]
+mod lens_tests {
+    use super::*;
+    use crate::util::sampling::{concentric_disc, hammersley};
+
+    /// Where `ray` crosses the plane at depth `z` along -Z.
+    fn at_depth(ray: &Ray, z: f32) -> Vec3 {
+        ray.origin + ray.direction * ((-z - ray.origin.z) / ray.direction.z)
+    }
+
+    fn lens_points() -> impl Iterator<Item = Vec2> {
+        (0..256).map(|i| Vec2::from(concentric_disc(hammersley(i, 256, [0.3, 0.7]))))
+    }
+
+    #[test]
+    fn a_point_on_the_plane_in_focus_stays_sharp() {
+        let camera = Camera::new(Vec3::ZERO, Vec3::NEG_Z, Vec3::Y, 40.0, 320, 240).with_lens(0.25, 7.0);
+        for (x, y) in [(160.0, 120.0), (3.5, 200.25), (319.0, 0.0)] {
+            let pinhole = at_depth(&camera.ray(x, y), 7.0);
+            for lens in lens_points() {
+                let ray = camera.lens_ray(x, y, lens);
+                assert!((ray.direction.length() - 1.0).abs() < 1e-5);
+                let p = at_depth(&ray, 7.0);
+                assert!((p - pinhole).length() < 2e-5 * 7.0, "({x}, {y}) lens {lens}: {p} vs {pinhole}");
+            }
+        }
+    }
+
+    #[test]
+    fn the_circle_of_confusion_has_the_thin_lens_radius() {
+        // A point at depth z is seen, over the lens, from film positions
+        // whose points on the plane in focus span a disc of radius
+        // R |z - f| / z; equivalently the rays through one film position
+        // cross depth z over a disc of radius R |z - f| / f about the
+        // pinhole ray.
+        let (radius, focus) = (0.1, 4.0);
+        let camera = Camera::new(Vec3::ZERO, Vec3::NEG_Z, Vec3::Y, 30.0, 200, 200).with_lens(radius, focus);
+        for z in [1.0f32, 2.0, 8.0, 40.0] {
+            let centre = at_depth(&camera.ray(100.0, 100.0), z);
+            let spread = lens_points()
+                .map(|lens| (at_depth(&camera.lens_ray(100.0, 100.0, lens), z) - centre).length())
+                .fold(0.0f32, f32::max);
+            let expected = radius * (z - focus).abs() / focus;
+            // The 256 lens points reach within 3% of the disc's rim.
+            assert!(spread <= expected * 1.0001 && spread >= 0.97 * expected, "z {z}: {spread} vs {expected}");
+        }
+        // A pinhole ignores the lens point.
+        let pinhole = Camera::new(Vec3::ZERO, Vec3::NEG_Z, Vec3::Y, 30.0, 200, 200);
+        assert!(!pinhole.has_lens());
+        let a = pinhole.lens_ray(10.0, 20.0, Vec2::new(0.9, -0.3));
+        assert_eq!(a.origin, Vec3::ZERO);
+        assert_eq!(a.direction, pinhole.ray(10.0, 20.0).direction);
     }
 }

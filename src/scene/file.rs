@@ -152,6 +152,22 @@ pub struct CameraSpec {
     pub up: [f32; 3],
     /// Vertical field of view in degrees.
     pub fov_y: f32,
+    /// The thin lens's radius, scene units (pbrt's `lensradius`); 0, the
+    /// default, is a pinhole: everything sharp.
+    #[serde(default)]
+    pub lens_radius: f32,
+    /// Distance of the plane in focus along the view direction, scene
+    /// units; by default the distance from the eye to `look_at`.
+    #[serde(default)]
+    pub focus_distance: Option<f32>,
+}
+
+impl CameraSpec {
+    /// A pinhole camera (no lens).
+    #[must_use]
+    pub fn pinhole(eye: [f32; 3], look_at: [f32; 3], up: [f32; 3], fov_y: f32) -> Self {
+        Self { eye, look_at, up, fov_y, lens_radius: 0.0, focus_distance: None }
+    }
 }
 
 fn up_y() -> [f32; 3] {

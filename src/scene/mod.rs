@@ -127,7 +127,9 @@ impl Scene {
     #[must_use]
     pub fn camera(&self, width: u32, height: u32) -> Camera {
         let c = &self.camera_spec;
-        Camera::new(Vec3::from(c.eye), Vec3::from(c.look_at), Vec3::from(c.up), c.fov_y, width, height)
+        let (eye, look_at) = (Vec3::from(c.eye), Vec3::from(c.look_at));
+        let focus = c.focus_distance.unwrap_or_else(|| (look_at - eye).length());
+        Camera::new(eye, look_at, Vec3::from(c.up), c.fov_y, width, height).with_lens(c.lens_radius, focus)
     }
 
     /// Bounds of all geometry: (min, max), infinite when there is none.

@@ -118,10 +118,18 @@ pub fn evaluate_and_trace<'b>(
     chosen: &Choices,
     buffers: &'b mut Evaluations,
 ) -> (&'b [DVec3], u64) {
-    let Evaluations { values, rays, ray_entry, occluded } = buffers;
-    values.clear();
-    rays.clear();
-    ray_entry.clear();
+    buffers.clear();
+    evaluate_into(evaluator, chosen, buffers);
+    trace_evaluations(embree, width, buffers)
+}
+
+/// The first half of [`evaluate_and_trace`]: appends the values of
+/// `chosen` at `evaluator`'s point to `buffers`, and their shadow rays,
+/// untraced. Several points' choices can be appended before one
+/// [`trace_evaluations`] (the multidimensional cut's pairs).
+#[inline(always)]
+pub fn evaluate_into(evaluator: &LightEvaluator<'_, '_>, chosen: &Choices, buffers: &mut Evaluations) {
+    let Evaluations { values, rays, ray_entry, .. } = buffers;
     for quad in &chosen.quads[..chosen.used] {
         evaluator.each_term(quad.kind, &quad.lanes, &quad.weights, &mut |_, value, ray| {
             if let Some(ray) = ray {
@@ -131,6 +139,27 @@ pub fn evaluate_and_trace<'b>(
             values.push(value);
         });
     }
+}
+
+impl Evaluations {
+    pub fn clear(&mut self) {
+        self.values.clear();
+        self.rays.clear();
+        self.ray_entry.clear();
+    }
+}
+
+/// The second half of [`evaluate_and_trace`]: traces the shadow rays
+/// appended to `buffers` as packets of `width` and zeroes the values of
+/// those occluded. Returns every value, in the order appended, and the
+/// shadow rays cast.
+#[inline(always)]
+pub fn trace_evaluations<'b>(
+    embree: &EmbreeScene,
+    width: PacketWidth,
+    buffers: &'b mut Evaluations,
+) -> (&'b [DVec3], u64) {
+    let Evaluations { values, rays, ray_entry, occluded } = buffers;
     embree.occluded_packets(rays, occluded, width);
     for (&entry, &blocked) in ray_entry.iter().zip(occluded.iter()) {
         if blocked {

@@ -11,7 +11,8 @@ pub mod surface;
 
 pub use direct::{light_sample, light_term, Lanes, LightEvaluator, LightTerm};
 pub use evaluate::{
-    evaluate_and_trace, BatchBuffers, BatchResult, Choices, Evaluations, LightBatch, SHADOW_BATCH, SHADOW_PACKET,
+    evaluate_and_trace, evaluate_into, trace_evaluations, BatchBuffers, BatchResult, Choices, Evaluations, LightBatch,
+    SHADOW_BATCH, SHADOW_PACKET,
 };
 pub use geometry::{Geometry, GeometryError};
 pub use surface::SurfacePoint;

@@ -62,9 +62,78 @@ impl Rng {
     }
 }
 
+/// Point `i` of `n` of a Hammersley set in the unit square ((i + 1/2) / n,
+/// the base-2 radical inverse of i), shifted by `shift` modulo 1 (a
+/// Cranley-Patterson rotation: a pixel's own shift keeps the set
+/// stratified in each pixel without a pattern repeating across pixels).
+/// Every power-of-two stratum of [0, 1)^2 of area 1/n holds one point when
+/// n is a power of two.
+#[must_use]
+pub fn hammersley(i: u32, n: u32, shift: [f32; 2]) -> [f32; 2] {
+    let u = (f64::from(i) + 0.5) / f64::from(n.max(1));
+    let v = f64::from(i.reverse_bits()) * (1.0 / 4_294_967_296.0);
+    let wrap = |x: f64, s: f32| {
+        let y = (x + f64::from(s)).fract() as f32;
+        // f64 -> f32 may round up to 1.0.
+        if y >= 1.0 {
+            0.0
+        } else {
+            y
+        }
+    };
+    [wrap(u, shift[0]), wrap(v, shift[1])]
+}
+
+/// Shirley and Chiu's concentric map of the unit square onto the unit disc
+/// (area-preserving, so uniform points stay uniform and strata stay compact).
+#[must_use]
+pub fn concentric_disc(u: [f32; 2]) -> [f32; 2] {
+    let (a, b) = (2.0 * u[0] - 1.0, 2.0 * u[1] - 1.0);
+    if a == 0.0 && b == 0.0 {
+        return [0.0, 0.0];
+    }
+    let quarter = std::f32::consts::FRAC_PI_4;
+    let (r, theta) = if a.abs() > b.abs() { (a, quarter * (b / a)) } else { (b, 2.0 * quarter - quarter * (a / b)) };
+    [r * theta.cos(), r * theta.sin()]
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn hammersley_points_fill_every_stratum_once_and_map_into_the_disc() {
+        for shift in [[0.0, 0.0], [0.37, 0.91]] {
+            // 64 points: one in each cell of an 8 x 8 grid (a (0, 6, 2)-net
+            // shifted keeps one point per elementary interval of 1/64 in
+            // each 1 x 1/64 column, and 8 x 8 holds as well for the base set).
+            let mut columns = [0u32; 64];
+            for i in 0..64 {
+                let [u, v] = hammersley(i, 64, shift);
+                assert!((0.0..1.0).contains(&u) && (0.0..1.0).contains(&v));
+                columns[(u * 64.0) as usize] += 1;
+                let [x, y] = concentric_disc([u, v]);
+                assert!(x * x + y * y <= 1.0 + 1e-6);
+            }
+            assert!(columns.iter().all(|&c| c == 1), "{columns:?}");
+        }
+        let mut cells = [0u32; 64];
+        for i in 0..64 {
+            let [u, v] = hammersley(i, 64, [0.0, 0.0]);
+            cells[(u * 8.0) as usize * 8 + (v * 8.0) as usize] += 1;
+        }
+        assert!(cells.iter().all(|&c| c == 1), "{cells:?}");
+        // The map preserves area: a quarter of uniform points fall within
+        // radius 1/2.
+        let mut rng = Rng::seeded(3);
+        let inside = (0..40_000)
+            .filter(|_| {
+                let [x, y] = concentric_disc([rng.next_f32(), rng.next_f32()]);
+                x * x + y * y < 0.25
+            })
+            .count();
+        assert!((9_600..10_400).contains(&inside), "{inside}");
+    }
 
     #[test]
     fn unit_floats_stay_in_range_and_look_uniform() {

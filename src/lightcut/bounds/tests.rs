@@ -394,3 +394,84 @@ fn a_point_inside_the_box_gets_a_finite_bound_above_every_light() {
     let luminance = 0.2126 * near.x + 0.7152 * near.y + 0.0722 * near.z;
     assert!(luminance <= f64::from(b) && near.is_finite());
 }
+
+/// [MDLC06]'s pairs: every node of a gather tree (the shipping tree
+/// builder's, over points spread in position and normal, of diffuse, Phong
+/// and metallic-roughness materials, with strengths) against a light
+/// cluster bounds S_sum * M * G * I for every (gather point, light) pair
+/// below both: the cluster's true sum and its representative pair's
+/// estimate are both at most that.
+#[test]
+fn gather_cluster_bounds_hold_for_every_pair_below() {
+    use crate::light_tree::layout::CutTree;
+    use crate::lightcut::multidimensional::{build_gather_tree, GatherPoint, GatherScratch};
+    let mut rng = Rng::seeded(2006);
+    // Six random materials, and a diffuse one that whole clusters share
+    // (where the normal cone, not a glossy peak, bounds M).
+    let mut materials: Vec<Material> = (0..6).map(|_| material(&mut rng)).collect();
+    materials.push(Material::diffuse("matte", Albedo::Constant(Vec3::new(0.8, 0.5, 0.3))));
+    let mut scratch = GatherScratch::default();
+    let (mut checked, mut reached) = (0, 0);
+    for _ in 0..600 {
+        let centre = Vec3::new(rng.range_f32(-3.0, 3.0), rng.range_f32(-3.0, 3.0), rng.range_f32(-3.0, 3.0));
+        let extent = [0.0, 0.003, 0.05, 0.5][rng.below(4) as usize];
+        let spread = [0.0, 0.05, 0.6, 3.0][rng.below(4) as usize];
+        let axis = unit(&mut rng);
+        let uniform = rng.next_f32() < 0.5;
+        let matte = rng.next_f32() < 0.4;
+        let points: Vec<GatherPoint<'_>> = (0..1 + rng.below(20))
+            .map(|_| {
+                let m = if matte { 6 } else { rng.below(6) as usize };
+                let mut sp = surface(&mut rng, &materials[m]);
+                let cube = Vec3::new(rng.range_f32(-1.0, 1.0), rng.range_f32(-1.0, 1.0), rng.range_f32(-1.0, 1.0));
+                sp.p = centre + extent * cube;
+                let n = (axis + spread * unit(&mut rng)).normalize_or(axis);
+                (sp.n, sp.ng) = (n, n);
+                if sp.wo.dot(n) <= 0.0 {
+                    sp.wo = -sp.wo;
+                }
+                sp.r = reflect(sp.wo, n);
+                let strength = if uniform {
+                    DVec3::splat(1.0 / 16.0)
+                } else {
+                    DVec3::new(rng.next_f64(), rng.next_f64(), rng.next_f64()) * 2.0
+                };
+                GatherPoint { sp, strength }
+            })
+            .collect();
+        build_gather_tree(&points, 1.0, &mut scratch);
+        let kind = LightKind::ALL[rng.below(4) as usize];
+        let cluster = RandomCluster::new(&mut rng, kind, &points[0].sp);
+        let c = rng.below(3) as usize;
+        let (mut block, mut cones, mut spots) = (Block::default(), ConeBlock::default(), SpotBlock::default());
+        block.child = [Child::EMPTY, Child::EMPTY];
+        cluster.write(0, c, &mut block, &mut cones, &mut spots);
+        let mut tree = CutTree::exhaustive(kind, Vec::new());
+        tree.blocks = vec![block];
+        if kind.has_cone() {
+            tree.cones = vec![cones];
+        }
+        if kind == LightKind::Spot {
+            tree.spots = vec![spots];
+        }
+        for g in 0..scratch.node_count() as u32 {
+            let bound = f64::from(scratch.pair_bounds(g, &tree, 0)[0]);
+            let (below, strength) = scratch.points_below(g);
+            let weight = [0.2126, 0.7152, 0.0722][c] * strength[c];
+            let largest = below
+                .iter()
+                .flat_map(|&i| cluster.lights.iter().map(move |l| (i, l)))
+                .map(|(i, (p, n, s))| weight * term(kind, &points[i as usize].sp, *p, *n, *s)[c])
+                .fold(0.0, f64::max);
+            assert!(
+                bound >= largest * (1.0 - 1e-5),
+                "{kind:?} node {g} of {} ({} points): bound {bound} < {largest}",
+                scratch.node_count(),
+                below.len()
+            );
+            checked += 1;
+            reached += usize::from(largest > 0.0);
+        }
+    }
+    assert!(reached > checked / 3, "{reached} of {checked} pairs reach their gather points");
+}

@@ -321,7 +321,7 @@ impl Importer<'_, '_> {
         }
         let aspect_ratio = p.aspect_ratio().filter(|a| a.is_finite() && *a > 0.0);
         Ok(Some(GltfCamera {
-            spec: CameraSpec { eye: eye.to_array(), look_at: (eye + forward).to_array(), up: up.to_array(), fov_y },
+            spec: CameraSpec::pinhole(eye.to_array(), (eye + forward).to_array(), up.to_array(), fov_y),
             aspect_ratio,
         }))
     }

@@ -49,7 +49,14 @@ fn check_camera(v: &Validator<'_>, cam: &file::CameraSpec, field: &str) -> Resul
     v.check(forward.length() > 0.0, &f("look_at"), || "must differ from the eye".into())?;
     v.check(forward.normalize().cross(up).length() > 1e-6, &f("up"), || {
         "must not be parallel to the viewing direction".into()
-    })
+    })?;
+    v.check(cam.lens_radius.is_finite() && cam.lens_radius >= 0.0, &f("lens_radius"), || {
+        format!("must be finite and at least 0 (0: a pinhole), got {}", cam.lens_radius)
+    })?;
+    if let Some(d) = cam.focus_distance {
+        v.check(d.is_finite() && d > 0.0, &f("focus_distance"), || format!("must be finite and above 0, got {d}"))?;
+    }
+    Ok(())
 }
 
 /// The vertical field of view of the camera made for a glTF file that has
@@ -115,12 +122,7 @@ fn framing_camera(meshes: &[Mesh]) -> Option<file::CameraSpec> {
     // with a 5% margin.
     let distance = 1.05 * radius / (0.5 * FRAMING_FOV_Y).to_radians().sin();
     let eye = centre + distance * Vec3::new(0.0, 0.25, 1.0).normalize();
-    Some(file::CameraSpec {
-        eye: eye.to_array(),
-        look_at: centre.to_array(),
-        up: [0.0, 1.0, 0.0],
-        fov_y: FRAMING_FOV_Y,
-    })
+    Some(file::CameraSpec::pinhole(eye.to_array(), centre.to_array(), [0.0, 1.0, 0.0], FRAMING_FOV_Y))
 }
 
 /// The `[environment]`: a constant radiance or a lat-long EXR.

@@ -1,0 +1,39 @@
+#!/bin/bash
+# The multidimensional mode against the bounded and stochastic modes at the
+# same samples per pixel (16, 64, 256 gather points per pixel from camera
+# samples), each against the exact render of the same gather points, on
+# windows of the depth-of-field scene and the Cornell box (where the exact
+# render of the whole frame would take hours). Prints a Markdown table.
+# Usage: ci/multidimensional-table.sh [BINARY] [OUT_DIR]
+set -euo pipefail
+bin=${1:-target/release/lightcuts}
+out=${2:-$(mktemp -d)}
+mkdir -p "$out"
+row() { # scene window spp mode-args label
+    local scene=$1 window=$2 spp=$3 label=$5
+    local exr="$out/$(basename "$scene" .toml)-$spp-$label.exr"
+    local start end
+    start=$(date +%s.%N)
+    "$bin" render "$scene" $4 --spp "$spp" --resolution 160x120 --pixel-bounds "$window" -o "$exr" --quiet > /dev/null
+    end=$(date +%s.%N)
+    echo "$exr $(echo "$end - $start" | bc)"
+}
+echo "| scene (window) | spp | mode | seconds | mean error | p99 error |"
+echo "|---|---|---|---|---|---|"
+for entry in "scenes/dof.toml 64,96,44,68" "scenes/cornell.toml 60,92,60,84"; do
+    set -- $entry
+    scene=$1 window=$2
+    read -r _ one < <(row "$scene" "$window" 1 "--bounded" bounded1)
+    echo "| $(basename "$scene") ($window) | 1 | bounded | $one | | |"
+    for spp in 16 64 256; do
+        read -r reference exact_seconds < <(row "$scene" "$window" "$spp" "--exact" exact)
+        echo "| $(basename "$scene") ($window) | $spp | exact | $exact_seconds | 0 | 0 |"
+        for mode in multidimensional bounded stochastic; do
+            read -r exr seconds < <(row "$scene" "$window" "$spp" "--$mode" "$mode")
+            json=$("$bin" compare "$exr" "$reference" --json)
+            mean=$(echo "$json" | python3 -c 'import json,sys; print("%.2f%%" % (100*json.load(sys.stdin)["mean_relative_error"]))')
+            p99=$(echo "$json" | python3 -c 'import json,sys; print("%.2f%%" % (100*json.load(sys.stdin)["p99_relative_error"]))')
+            echo "| $(basename "$scene") ($window) | $spp | $mode | $seconds | $mean | $p99 |"
+        done
+    done
+done
