@@ -193,11 +193,7 @@ impl PointBounds {
     pub fn new(sp: &SurfacePoint<'_>, scale: f32) -> Self {
         let m = sp.material;
         let lobe = if m.has_specular() { m.specular * phong_normalisation(m.exponent) } else { Vec3::ZERO };
-        let clamp = sp.min_distance_squared();
-        let mut clamp32 = clamp as f32;
-        if f64::from(clamp32) > clamp {
-            clamp32 = f32::from_bits(clamp32.to_bits() - 1);
-        }
+        let clamp32 = min_distance_squared_f32(sp);
         Self {
             p: splat3(sp.p),
             extent: splat3(Vec3::ZERO),
@@ -497,6 +493,19 @@ impl PointBounds {
             Some(cutoff) => widened.cmp_gt(cutoff).blend(f32x4::ONE, f32x4::ZERO),
             None => widened.fast_max(f32x4::ZERO),
         }
+    }
+}
+
+/// The point's distance clamp squared in f32, rounded down (0 if it
+/// underflows, which makes G's bound infinite, still an upper bound).
+#[must_use]
+pub fn min_distance_squared_f32(sp: &SurfacePoint<'_>) -> f32 {
+    let clamp = sp.min_distance_squared();
+    let clamp32 = clamp as f32;
+    if f64::from(clamp32) > clamp {
+        f32::from_bits(clamp32.to_bits() - 1)
+    } else {
+        clamp32
     }
 }
 

@@ -17,14 +17,12 @@ use std::collections::BinaryHeap;
 
 use glam::{DVec3, Vec3};
 
-use super::bounds::{GatherBounds, PointBounds};
+use super::bounds::{min_distance_squared_f32, GatherBounds, PointBounds};
 use super::{by_group, CutResult, CutSettings};
 use crate::embree::Scene as EmbreeScene;
 use crate::light_tree::layout::{Child, CutTree};
 use crate::light_tree::LightTrees;
-use crate::shading::{
-    evaluate_into, trace_evaluations, Choices, Evaluations, LightBatch, LightEvaluator, SurfacePoint,
-};
+use crate::shading::{evaluate_into, trace_evaluations, Choices, Evaluations, LightEvaluator, SurfacePoint};
 use crate::util::color::luminance64;
 use crate::util::sampling::{mix64, Rng};
 
@@ -221,11 +219,6 @@ fn leaf(points: &[GatherPoint<'_>], i: u32, scale: f32) -> (GatherNode, PointBou
     let g = &points[i as usize];
     let bounds = PointBounds::new(&g.sp, scale);
     let (diffuse, glossy) = bounds.gather_terms(g.sp.kd);
-    let clamp = g.sp.min_distance_squared();
-    let mut clamp32 = clamp as f32;
-    if f64::from(clamp32) > clamp {
-        clamp32 = f32::from_bits(clamp32.to_bits() - 1);
-    }
     let node = GatherNode {
         bounds: GatherBounds {
             lo: g.sp.p,
@@ -235,7 +228,7 @@ fn leaf(points: &[GatherPoint<'_>], i: u32, scale: f32) -> (GatherNode, PointBou
             strength: g.strength.as_vec3(),
             diffuse,
             glossy,
-            min_distance_squared: clamp32,
+            min_distance_squared: min_distance_squared_f32(&g.sp),
         },
         strength: g.strength,
         below: Below::Point(i),
@@ -595,11 +588,7 @@ fn exhaustive_trees(
     for t in range.clone().filter(|&t| !all.trees[t].lights.is_empty()) {
         let tree = &all.trees[t];
         for g in points {
-            let mut batch = LightBatch::new(embree, &g.sp, &mut scratch.batch);
-            for light in &tree.lights {
-                batch.add_tree_light(tree.kind, light);
-            }
-            let found = batch.finish();
+            let found = super::exhaustive(std::slice::from_ref(tree), &g.sp, embree, &mut scratch.batch);
             let value = found.radiance * g.strength;
             result.radiance += value;
             result.nodes += found.lights;
