@@ -244,7 +244,16 @@ impl Lights {
                         .iter()
                         .map(|t| emitters::EmitterTriangle { p: t.map(|i| mesh.positions[i as usize]) })
                         .collect();
-                    let front = emitters::sample_area_light(&triangles, radiance, samples as usize, 0.0, seed);
+                    let front = match &scene.materials[mesh.material].emissive_texture {
+                        None => emitters::sample_area_light(&triangles, radiance, samples as usize, 0.0, seed),
+                        Some(texture) => emitters::sample_textured_area_light(
+                            &triangles,
+                            |k, ab| radiance * texture.lookup(&mesh.tex_coords(k, ab.x, ab.y), &scene.textures),
+                            samples as usize,
+                            0.0,
+                            seed,
+                        ),
+                    };
                     // The back: the same points, facing the other way.
                     let back: Vec<_> = if both_sides {
                         front.iter().map(|l| OrientedLight { normal: -l.normal, ..*l }).collect()

@@ -12,20 +12,31 @@ use super::texture::Texture;
 #[derive(Debug, Clone)]
 pub enum Albedo {
     Constant(Vec3),
-    /// Index into `Scene::textures`, and the map from the mesh's uv to the
-    /// texture's (repeats, and for glTF its v axis and KHR_texture_transform).
-    Texture {
-        texture: usize,
-        transform: Affine2,
-        /// Which texture coordinates the lookup reads (glTF's `texCoord`:
-        /// 0 or 1).
-        set: usize,
-    },
+    Texture(TextureRef),
 }
 
 /// A shading point's texture coordinates: sets 0 and 1 (glTF's
 /// `TEXCOORD_0` and `TEXCOORD_1`; set 1 is set 0 where a mesh has one set).
 pub type TexCoords = [Vec2; 2];
+
+/// A texture a material reads: an index into `Scene::textures`, the map
+/// from the mesh's uv to the texture's (repeats, glTF's v axis and
+/// KHR_texture_transform) and which texture coordinates it reads (glTF's
+/// `texCoord`: 0 or 1).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TextureRef {
+    pub texture: usize,
+    pub transform: Affine2,
+    pub set: usize,
+}
+
+impl TextureRef {
+    /// The texture's value at a point of texture coordinates `uvs`.
+    #[must_use]
+    pub fn lookup(&self, uvs: &TexCoords, textures: &[Texture]) -> Vec3 {
+        textures[self.texture].lookup(self.transform.transform_point2(uvs[self.set.min(1)]))
+    }
+}
 
 #[derive(Debug, Clone)]
 pub struct Material {
@@ -37,8 +48,13 @@ pub struct Material {
     pub exponent: f32,
     /// Perfect mirror reflectance.
     pub mirror: Vec3,
-    /// Emitted radiance from the front side, W/(m^2 sr) (area-light emitters).
+    /// Emitted radiance from the front side, W/(m^2 sr) (area-light
+    /// emitters); times `emissive_texture` where there is one.
     pub emission: Vec3,
+    /// glTF's `emissiveTexture` (sRGB decoded to linear): the emitted
+    /// radiance at a point is `emission` times its texel (docs/design.md
+    /// §6.1, textured emitters).
+    pub emissive_texture: Option<TextureRef>,
     /// Whether `emission` leaves the back side too (glTF's double-sided
     /// emissive materials, as Cycles renders them).
     pub emits_both_sides: bool,
@@ -67,9 +83,15 @@ pub struct PbrMaterial {
     pub specular: f32,
     pub specular_colour: Vec3,
     /// glTF's `metallicRoughnessTexture` (linear; G roughness, B metallic,
-    /// multiplying the factors): an index into `Scene::textures` and the
-    /// map from the mesh's uv to the texture's.
-    pub metallic_roughness: Option<(usize, Affine2, usize)>,
+    /// multiplying the factors).
+    pub metallic_roughness: Option<TextureRef>,
+    /// KHR_materials_specular's `specularTexture`: its alpha channel
+    /// (linear) multiplies `specular`; the texture holds that alpha in all
+    /// three channels.
+    pub specular_texture: Option<TextureRef>,
+    /// KHR_materials_specular's `specularColorTexture` (sRGB decoded to
+    /// linear), multiplying `specular_colour`.
+    pub specular_colour_texture: Option<TextureRef>,
     /// glTF's `normalTexture`: tangent-space normals perturbing the
     /// shading normal, where the mesh has tangents.
     pub normal_map: Option<NormalMap>,
@@ -114,6 +136,7 @@ impl Material {
             exponent: 0.0,
             mirror: Vec3::ZERO,
             emission: Vec3::ZERO,
+            emissive_texture: None,
             emits_both_sides: false,
             cutout: None,
             pbr: None,
@@ -127,9 +150,17 @@ impl Material {
     pub fn albedo_at(&self, uvs: &TexCoords, textures: &[Texture]) -> Vec3 {
         match &self.albedo {
             Albedo::Constant(c) => *c,
-            Albedo::Texture { texture, transform, set } => {
-                textures[*texture].lookup(transform.transform_point2(uvs[(*set).min(1)]))
-            }
+            Albedo::Texture(t) => t.lookup(uvs, textures),
+        }
+    }
+
+    /// Emitted radiance from the front side at a point of texture
+    /// coordinates `uvs`, W/(m^2 sr).
+    #[must_use]
+    pub fn emission_at(&self, uvs: &TexCoords, textures: &[Texture]) -> Vec3 {
+        match &self.emissive_texture {
+            None => self.emission,
+            Some(t) => self.emission * t.lookup(uvs, textures),
         }
     }
 

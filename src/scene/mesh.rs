@@ -5,6 +5,7 @@ use std::path::Path;
 use glam::{Vec2, Vec3, Vec4};
 
 use super::error::SceneError;
+use super::material::TexCoords;
 
 /// A triangle mesh in world space with one material.
 #[derive(Debug, Clone, Default)]
@@ -32,6 +33,24 @@ pub struct Mesh {
 }
 
 impl Mesh {
+    /// Texture coordinates (sets 0 and 1) at barycentric coordinates (u,
+    /// v) of triangle `triangle` (u weighs its second vertex, v its third,
+    /// as Embree's hits do); (u, v) itself where the mesh has no texture
+    /// coordinates, and set 0 where it has no set 1.
+    #[must_use]
+    pub fn tex_coords(&self, triangle: usize, u: f32, v: f32) -> TexCoords {
+        let tri = self.triangles[triangle];
+        let w = 1.0 - u - v;
+        let interpolate = |uvs: &Option<Vec<Vec2>>| {
+            uvs.as_ref().map(|uvs| {
+                let [t0, t1, t2] = tri.map(|i| uvs[i as usize]);
+                w * t0 + u * t1 + v * t2
+            })
+        };
+        let uv = interpolate(&self.uvs).unwrap_or(Vec2::new(u, v));
+        [uv, interpolate(&self.uvs1).unwrap_or(uv)]
+    }
+
     /// A parallelogram with corners c, c+u, c+u+v, c+v; uv spans [0,1]^2.
     #[must_use]
     pub fn quad(corner: Vec3, u: Vec3, v: Vec3, material: usize) -> Self {

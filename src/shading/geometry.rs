@@ -106,15 +106,7 @@ impl<'s> Geometry<'s> {
         if ng.dot(wo) < 0.0 {
             ng = -ng;
         }
-        let interpolate = |uvs: &Option<Vec<Vec2>>| {
-            uvs.as_ref().map(|uvs| {
-                let [t0, t1, t2] = tri.map(|i| uvs[i as usize]);
-                w * t0 + u * t1 + v * t2
-            })
-        };
-        let uv = interpolate(&mesh.uvs).unwrap_or(Vec2::new(u, v));
-        let uv1 = interpolate(&mesh.uvs1).unwrap_or(uv);
-        let uvs = [uv, uv1];
+        let uvs = mesh.tex_coords(hit.primitive as usize, u, v);
         let material = &self.scene.materials[mesh.material];
         let mut n = match &mesh.normals {
             Some(normals) => {
@@ -161,7 +153,7 @@ impl<'s> Geometry<'s> {
             emitted: if material.unlit {
                 base
             } else if front || material.emits_both_sides {
-                material.emission
+                material.emission_at(&uvs, &self.scene.textures)
             } else {
                 Vec3::ZERO
             },

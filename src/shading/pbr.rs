@@ -66,13 +66,21 @@ impl Pbr {
     #[must_use]
     pub fn of(material: &PbrMaterial, base: Vec3, uvs: &TexCoords, textures: &[Texture]) -> Self {
         let (mut metallic, mut roughness) = (material.metallic, material.roughness);
-        if let Some((texture, transform, set)) = &material.metallic_roughness {
-            let texel = textures[*texture].lookup(transform.transform_point2(uvs[(*set).min(1)]));
+        if let Some(t) = &material.metallic_roughness {
+            let texel = t.lookup(uvs, textures);
             roughness *= texel.y;
             metallic *= texel.z;
         }
         let (metallic, roughness) = (metallic.clamp(0.0, 1.0), roughness.clamp(0.0, 1.0));
-        Self::new(base, metallic, roughness, material.specular, material.specular_colour)
+        let mut specular = material.specular;
+        if let Some(t) = &material.specular_texture {
+            specular *= t.lookup(uvs, textures).x;
+        }
+        let mut specular_colour = material.specular_colour;
+        if let Some(t) = &material.specular_colour_texture {
+            specular_colour *= t.lookup(uvs, textures);
+        }
+        Self::new(base, metallic, roughness, specular, specular_colour)
     }
 
     /// The diffuse reflectance: what a bounce of indirect light and the

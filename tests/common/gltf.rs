@@ -180,10 +180,17 @@ impl GltfBuilder {
 
     /// An image (PNG bytes) in a buffer view, with a texture; returns the texture index.
     pub fn png_texture(&mut self, width: u32, height: u32, rgb: &[u8]) -> usize {
+        self.png_texture_of(width, height, png::ColorType::Rgb, rgb)
+    }
+
+    /// An image of `color` texels (PNG bytes) in a buffer view, with a
+    /// texture; returns the texture index.
+    pub fn png_texture_of(&mut self, width: u32, height: u32, color: png::ColorType, bytes: &[u8]) -> usize {
+        let rgb = bytes;
         let mut png = Vec::new();
         {
             let mut encoder = png::Encoder::new(&mut png, width, height);
-            encoder.set_color(png::ColorType::Rgb);
+            encoder.set_color(color);
             encoder.set_depth(png::BitDepth::Eight);
             encoder.write_header().unwrap().write_image_data(rgb).unwrap();
         }

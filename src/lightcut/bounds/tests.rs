@@ -98,6 +98,8 @@ fn pbr_material(rng: &mut Rng) -> Material {
             specular,
             specular_colour,
             metallic_roughness: None,
+            specular_texture: None,
+            specular_colour_texture: None,
             normal_map: None,
         }),
         ..Material::diffuse("pbr", albedo)
@@ -116,7 +118,7 @@ fn surface<'m>(rng: &mut Rng, material: &'m Material) -> SurfacePoint<'m> {
     let n = if n.dot(ng) < 0.0 { -n } else { n };
     let base = match material.albedo {
         Albedo::Constant(c) => c,
-        Albedo::Texture { .. } => unreachable!(),
+        Albedo::Texture(_) => unreachable!(),
     };
     let pbr = material.pbr.as_ref().map(|m| crate::shading::pbr::Pbr::of(m, base, &[glam::Vec2::ZERO; 2], &[]));
     SurfacePoint {

@@ -20,7 +20,7 @@ use gltf::texture::{MagFilter, WrappingMode};
 use super::file::{CameraSpec, GltfSpec, DEFAULT_LUMENS_PER_WATT};
 use super::groups::GltfLightNames;
 use super::image::{Encoding, RgbImage};
-use super::material::{Albedo, Cutout, Material, NormalMap, PbrMaterial};
+use super::material::{Albedo, Cutout, Material, NormalMap, PbrMaterial, TextureRef};
 use super::mesh::Mesh;
 use super::texture::{Filter, Texture, Wrap};
 use super::{within_limits, LightSource, SceneError, MAX_COORDINATE, MAX_EMITTER_SAMPLES};
@@ -566,42 +566,24 @@ impl Importer<'_, '_> {
             }
         }
         let base_rgb = base.truncate();
-        // KHR_materials_specular: the dielectric's reflectance at normal
-        // incidence is 0.04 (IOR 1.5) times its colour, times its factor.
-        let (specular, specular_colour) = m
-            .specular()
-            .map_or((1.0, Vec3::ONE), |s| (s.specular_factor(), Vec3::from_array(s.specular_color_factor())));
-        if !(specular.is_finite()
-            && specular_colour.is_finite()
-            && specular >= 0.0
-            && specular_colour.min_element() >= 0.0)
-        {
-            return Err(self.error(format!("{location}.extensions.KHR_materials_specular"), "must be finite and >= 0"));
-        }
-        if m.specular().is_some_and(|s| s.specular_texture().is_some() || s.specular_color_texture().is_some()) {
-            self.warn(&location, "KHR_materials_specular's textures ignored: its factors are used");
-        }
+        let (specular, specular_colour, specular_texture, specular_colour_texture) = self.specular(&m, &location)?;
         let mut coverage = None;
         let albedo = match pbr.base_color_texture() {
             None => Albedo::Constant(base_rgb),
             Some(info) => {
                 let at = format!("{location}.pbrMetallicRoughness.baseColorTexture");
-                let transform = uv_transform(info.texture_transform());
-                let (texture, image, set) =
-                    self.texture(&info.texture(), info.tex_coord(), &at, Encoding::Srgb, |t| t * base_rgb)?;
+                let (texture, image) = self.texture(Slot::of(&info), &at, Encoding::Srgb, |t, _| t * base_rgb)?;
                 coverage = image.alpha.as_ref().map(|a| {
-                    (a.iter().map(|x| x * base.w).collect::<Vec<f32>>(), image.width, image.height, transform)
+                    (a.iter().map(|x| x * base.w).collect::<Vec<f32>>(), image.width, image.height, texture.transform)
                 });
-                Albedo::Texture { texture, transform, set }
+                Albedo::Texture(texture)
             }
         };
         let metallic_roughness = match pbr.metallic_roughness_texture() {
             None => None,
             Some(info) => {
                 let at = format!("{location}.pbrMetallicRoughness.metallicRoughnessTexture");
-                let (texture, _, set) =
-                    self.texture(&info.texture(), info.tex_coord(), &at, Encoding::Linear, |t| t)?;
-                Some((texture, uv_transform(info.texture_transform()), set))
+                Some(self.texture(Slot::of(&info), &at, Encoding::Linear, |t, _| t)?.0)
             }
         };
         let normal_map = match m.normal_texture() {
@@ -611,9 +593,10 @@ impl Importer<'_, '_> {
                 if !info.scale().is_finite() {
                     return Err(self.error(format!("{at}.scale"), "must be finite"));
                 }
-                let (texture, _, set) =
-                    self.texture(&info.texture(), info.tex_coord(), &at, Encoding::Linear, |t| t)?;
-                Some(NormalMap { texture, transform: uv_transform(None), scale: info.scale(), set })
+                let slot =
+                    Slot::of_normal(&info).map_err(|e| self.error(format!("{at}.extensions.{e}"), "is malformed"))?;
+                let (t, _) = self.texture(slot, &at, Encoding::Linear, |t, _| t)?;
+                Some(NormalMap { texture: t.texture, transform: t.transform, scale: info.scale(), set: t.set })
             }
         };
         let cutoff = match m.alpha_mode() {
@@ -638,34 +621,92 @@ impl Importer<'_, '_> {
                 cutoff,
             })
         });
-        let strength = m.emissive_strength().unwrap_or(1.0);
-        let mut emission = Vec3::from_array(m.emissive_factor()) * strength;
-        if !emission.is_finite() || emission.min_element() < 0.0 {
-            return Err(self.error(
-                format!("{location}.emissiveFactor"),
-                format!("emission must be finite and >= 0, got {emission}"),
-            ));
-        }
-        if let Some(info) = m.emissive_texture() {
-            let at = format!("{location}.emissiveTexture");
-            let image = self.data.image(&info.texture().source(), &at, Encoding::Srgb)?;
-            let mean = image.texels.iter().fold(Vec3::ZERO, |a, t| a + *t) / image.texels.len() as f32;
-            self.warn(&at, "emission is uniform over a surface here: the texture's mean colour is used");
-            emission *= mean;
-        }
+        let (emission, emissive_texture) = self.emission(&m, &location)?;
         let index = self.parts.materials.len();
         let name = m.name().map_or_else(|| location.clone(), str::to_string);
         self.parts.materials.push(Material {
             emission,
+            emissive_texture,
             emits_both_sides: m.double_sided(),
             cutout,
-            pbr: Some(PbrMaterial { metallic, roughness, specular, specular_colour, metallic_roughness, normal_map }),
+            pbr: Some(PbrMaterial {
+                metallic,
+                roughness,
+                specular,
+                specular_colour,
+                metallic_roughness,
+                specular_texture,
+                specular_colour_texture,
+                normal_map,
+            }),
             unlit: m.unlit(),
             culls_back_faces: !m.double_sided(),
             ..Material::diffuse(name, albedo)
         });
         self.materials.insert(m.index(), index);
         Ok(index)
+    }
+
+    /// KHR_materials_specular's factor, colour and their textures (1,
+    /// white and none without the extension): the dielectric's reflectance
+    /// at normal incidence is 0.04 (IOR 1.5) times the colour, times the
+    /// factor.
+    #[allow(clippy::type_complexity)]
+    fn specular(
+        &mut self,
+        m: &gltf::Material<'_>,
+        location: &str,
+    ) -> Result<(f32, Vec3, Option<TextureRef>, Option<TextureRef>), SceneError> {
+        let (specular, specular_colour) = m
+            .specular()
+            .map_or((1.0, Vec3::ONE), |s| (s.specular_factor(), Vec3::from_array(s.specular_color_factor())));
+        if !(specular.is_finite()
+            && specular_colour.is_finite()
+            && specular >= 0.0
+            && specular_colour.min_element() >= 0.0)
+        {
+            return Err(self.error(format!("{location}.extensions.KHR_materials_specular"), "must be finite and >= 0"));
+        }
+        let at = format!("{location}.extensions.KHR_materials_specular");
+        let specular_texture = match m.specular().and_then(|s| s.specular_texture()) {
+            None => None,
+            // The factor is the texture's alpha channel (linear).
+            Some(info) => Some(
+                self.texture(Slot::of(&info), &format!("{at}.specularTexture"), Encoding::Linear, |_, a| {
+                    Vec3::splat(a)
+                })?
+                .0,
+            ),
+        };
+        let specular_colour_texture = match m.specular().and_then(|s| s.specular_color_texture()) {
+            None => None,
+            Some(info) => {
+                Some(self.texture(Slot::of(&info), &format!("{at}.specularColorTexture"), Encoding::Srgb, |t, _| t)?.0)
+            }
+        };
+        Ok((specular, specular_colour, specular_texture, specular_colour_texture))
+    }
+
+    /// The emitted radiance (emissiveFactor x KHR_materials_emissive_strength,
+    /// W/(m^2 sr)) and the emissive texture multiplying it.
+    fn emission(&mut self, m: &gltf::Material<'_>, location: &str) -> Result<(Vec3, Option<TextureRef>), SceneError> {
+        let strength = m.emissive_strength().unwrap_or(1.0);
+        let emission = Vec3::from_array(m.emissive_factor()) * strength;
+        if !emission.is_finite() || emission.min_element() < 0.0 {
+            return Err(self.error(
+                format!("{location}.emissiveFactor"),
+                format!("emission must be finite and >= 0, got {emission}"),
+            ));
+        }
+        let emissive_texture = match m.emissive_texture() {
+            Some(info) if emission != Vec3::ZERO => {
+                let at = format!("{location}.emissiveTexture");
+                Some(self.texture(Slot::of(&info), &at, Encoding::Srgb, |t, _| t)?.0)
+            }
+            // A texture times a zero factor emits nothing: not read.
+            _ => None,
+        };
+        Ok((emission, emissive_texture))
     }
 }
 
@@ -1031,24 +1072,31 @@ impl Importer<'_, '_> {
     }
 
     /// A texture of the file as the renderer's: its image decoded as
-    /// `encoding` says and mapped texel by texel through `map`, read with its
-    /// sampler's wrap modes and magnification filter. Returns the texture's
-    /// index, the decoded image and the texture coordinates it reads (0 or
-    /// 1).
+    /// `encoding` says and mapped texel by texel through `map` (colour and
+    /// alpha, 1 where the image has none), read with its sampler's wrap
+    /// modes and magnification filter, through the slot's texture
+    /// coordinates and KHR_texture_transform. Returns the reference and the
+    /// decoded image.
     fn texture(
         &mut self,
-        texture: &gltf::Texture<'_>,
-        tex_coord: u32,
+        slot: Slot<'_>,
         at: &str,
         encoding: Encoding,
-        map: impl Fn(Vec3) -> Vec3,
-    ) -> Result<(usize, RgbImage, usize), SceneError> {
+        map: impl Fn(Vec3, f32) -> Vec3,
+    ) -> Result<(TextureRef, RgbImage), SceneError> {
+        // KHR_texture_transform's texCoord overrides the texture info's.
+        let tex_coord = slot.transform.and_then(|t| t.tex_coord).unwrap_or(slot.tex_coord);
         let set = if tex_coord <= 1 {
             tex_coord as usize
         } else {
             self.warn(at, &format!("uses TEXCOORD_{tex_coord}: read with TEXCOORD_0 (sets 0 and 1 are read)"));
             0
         };
+        let transform = uv_transform(slot.transform);
+        if !(transform.matrix2.is_finite() && transform.translation.is_finite()) {
+            return Err(self.error(format!("{at}.extensions.KHR_texture_transform"), "must be finite"));
+        }
+        let texture = slot.texture;
         let image = self.data.image(&texture.source(), at, encoding)?;
         let sampler = texture.sampler();
         let wrap = |mode: WrappingMode| match mode {
@@ -1060,11 +1108,14 @@ impl Importer<'_, '_> {
             Some(MagFilter::Nearest) => Filter::Nearest,
             Some(MagFilter::Linear) | None => Filter::Linear,
         };
-        let texels = image.texels.iter().map(|t| map(*t)).collect();
+        let texels = match &image.alpha {
+            Some(alpha) => image.texels.iter().zip(alpha).map(|(t, a)| map(*t, *a)).collect(),
+            None => image.texels.iter().map(|t| map(*t, 1.0)).collect(),
+        };
         let texture = Texture::from_texels(image.width, image.height, texels)
             .with_sampler([wrap(sampler.wrap_s()), wrap(sampler.wrap_t())], filter);
         self.parts.textures.push(texture);
-        Ok((self.parts.textures.len() - 1, image, set))
+        Ok((TextureRef { texture: self.parts.textures.len() - 1, transform, set }, image))
     }
 }
 
@@ -1133,16 +1184,67 @@ fn triangulate(mode: Mode, indices: &[u32]) -> Vec<[u32; 3]> {
 /// The map from a mesh's glTF uv to `Texture::lookup`'s: KHR_texture_transform
 /// (translation x rotation x scale, as the extension defines it), then v
 /// flipped (glTF's v = 0 is the image's top row, the lookup's its bottom).
-fn uv_transform(transform: Option<gltf::texture::TextureTransform<'_>>) -> Affine2 {
+fn uv_transform(transform: Option<KhrTextureTransform>) -> Affine2 {
     let flip = Affine2::from_mat2_translation(Mat2::from_diagonal(Vec2::new(1.0, -1.0)), Vec2::new(0.0, 1.0));
     let Some(t) = transform else { return flip };
-    let (sin, cos) = t.rotation().sin_cos();
+    let (sin, cos) = t.rotation.sin_cos();
     let rotation = Mat2::from_cols(Vec2::new(cos, -sin), Vec2::new(sin, cos));
     let khr = Affine2::from_mat2_translation(
-        rotation * Mat2::from_diagonal(Vec2::from_array(t.scale())),
-        Vec2::from_array(t.offset()),
+        rotation * Mat2::from_diagonal(Vec2::from_array(t.scale)),
+        Vec2::from_array(t.offset),
     );
     flip * khr
+}
+
+/// KHR_texture_transform's fields (the extension's defaults where absent).
+#[derive(Debug, Clone, Copy)]
+struct KhrTextureTransform {
+    offset: [f32; 2],
+    rotation: f32,
+    scale: [f32; 2],
+    tex_coord: Option<u32>,
+}
+
+impl From<&gltf::json::extensions::texture::TextureTransform> for KhrTextureTransform {
+    fn from(t: &gltf::json::extensions::texture::TextureTransform) -> Self {
+        Self { offset: t.offset.0, rotation: t.rotation.0, scale: t.scale.0, tex_coord: t.tex_coord }
+    }
+}
+
+/// Where a material reads a texture: the texture, its `texCoord`, and its
+/// KHR_texture_transform.
+struct Slot<'a> {
+    texture: gltf::Texture<'a>,
+    tex_coord: u32,
+    transform: Option<KhrTextureTransform>,
+}
+
+impl<'a> Slot<'a> {
+    fn of(info: &gltf::texture::Info<'a>) -> Self {
+        let transform = info.texture_transform().map(|t| KhrTextureTransform {
+            offset: t.offset(),
+            rotation: t.rotation(),
+            scale: t.scale(),
+            tex_coord: t.tex_coord(),
+        });
+        Self { texture: info.texture(), tex_coord: info.tex_coord(), transform }
+    }
+
+    /// A normal texture's slot: the `gltf` crate models no transform on
+    /// it, so the extension's JSON is read here. Err names the extension
+    /// when its JSON is malformed.
+    fn of_normal(info: &gltf::material::NormalTexture<'a>) -> Result<Self, &'static str> {
+        const KHR: &str = "KHR_texture_transform";
+        let transform = match info.extension_value(KHR) {
+            None => None,
+            Some(value) => {
+                let t: gltf::json::extensions::texture::TextureTransform =
+                    serde_json::from_value(value.clone()).map_err(|_| KHR)?;
+                Some(KhrTextureTransform::from(&t))
+            }
+        };
+        Ok(Self { texture: info.texture(), tex_coord: info.tex_coord(), transform })
+    }
 }
 
 fn list_or_none(names: &[&str]) -> String {

@@ -10,7 +10,7 @@ use glam::{Affine2, Vec2, Vec3};
 use super::Validator;
 use crate::scene::file::{MaterialKind, MaterialSpec, SceneFile};
 use crate::scene::image::{self, Encoding};
-use crate::scene::material::PbrMaterial;
+use crate::scene::material::{PbrMaterial, TextureRef};
 use crate::scene::texture::Texture;
 use crate::scene::{Albedo, Material, SceneError};
 
@@ -42,7 +42,11 @@ pub(super) fn materials(
                 let image = image::read_srgb_png(&texture_path)
                     .map_err(|e| SceneError::new(&texture_path, field("texture"), e.to_string()))?;
                 textures.push(Texture::from_image(image));
-                Albedo::Texture { texture: textures.len() - 1, transform: Affine2::from_scale(scale), set: 0 }
+                Albedo::Texture(TextureRef {
+                    texture: textures.len() - 1,
+                    transform: Affine2::from_scale(scale),
+                    set: 0,
+                })
             }
         };
         if m.kind == MaterialKind::Pbr {
@@ -101,7 +105,11 @@ fn pbr(
             let image = image::read_png(&path, Encoding::Linear)
                 .map_err(|e| SceneError::new(&path, field("metallic_roughness_texture"), e.to_string()))?;
             textures.push(Texture::from_image(image));
-            Some((textures.len() - 1, Affine2::from_scale(Vec2::from_array(m.texture_scale)), 0))
+            Some(TextureRef {
+                texture: textures.len() - 1,
+                transform: Affine2::from_scale(Vec2::from_array(m.texture_scale)),
+                set: 0,
+            })
         }
     };
     Ok(PbrMaterial {
@@ -110,6 +118,8 @@ fn pbr(
         specular: 1.0,
         specular_colour: Vec3::ONE,
         metallic_roughness,
+        specular_texture: None,
+        specular_colour_texture: None,
         normal_map: None,
     })
 }
