@@ -10,6 +10,7 @@ import base64
 import json
 import math
 import struct
+import os
 import sys
 
 
@@ -72,6 +73,7 @@ def scene(v, f, n, instanced):
 
 def main():
     out = sys.argv[1]
+    os.makedirs(out, exist_ok=True)
     v, f = icosphere(3)
     for name, instanced in [("instanced", True), ("nodes", False)]:
         with open(f"{out}/{name}.gltf", "w") as file:

@@ -352,10 +352,11 @@ fn fuzz(iterations: u64, seed: u64, deadline: Option<std::time::Instant>) -> (Co
 }
 
 /// The glTF the fuzzer mutates: a floor, a point light, a spot, a sun, an
-/// emissive double-sided panel, a camera, and the paths the importer
-/// grew for exporters' files: a skinned, morphed triangle with a sparse
-/// accessor and quantised (SHORT) positions, and GPU instances of it (JSON
-/// text, and as GLB).
+/// emissive double-sided panel with an emissive texture, specular and
+/// normal textures on the floor, a camera, and the paths the importer grew
+/// for exporters' files: a skinned, morphed triangle with a sparse accessor
+/// and quantised (SHORT) positions, GPU instances of the panel, and the
+/// floor placed twice (an Embree instance) (JSON text, and as GLB).
 fn small_gltf() -> (Vec<u8>, Vec<u8>) {
     use serde_json::json;
     let mut g = common::gltf::floor_and_point_light();
@@ -367,7 +368,17 @@ fn small_gltf() -> (Vec<u8>, Vec<u8>) {
         json!({ "rotation": [-0.5, 0.0, 0.0, 0.866], "extensions": { "KHR_lights_punctual": { "light": sun } } }),
         true,
     );
-    let panel = g.material(json!({ "emissiveFactor": [1.0, 1.0, 1.0], "doubleSided": true }));
+    // Textures: the panel's emission texel by texel, the floor's
+    // KHR_materials_specular textures and a transformed normal texture.
+    let texture = g.png_texture(2, 1, &[0, 0, 0, 255, 128, 0]);
+    g.use_extension("KHR_texture_transform");
+    g.json["materials"][0]["extensions"]["KHR_materials_specular"] = json!({
+        "specularTexture": { "index": texture }, "specularColorTexture": { "index": texture } });
+    g.json["materials"][0]["normalTexture"] =
+        json!({ "index": texture, "extensions": { "KHR_texture_transform": { "offset": [0.5, 0.0] } } });
+    let panel = g.material(
+        json!({ "emissiveFactor": [1.0, 1.0, 1.0], "emissiveTexture": { "index": texture }, "doubleSided": true }),
+    );
     let quad = g.quad([-0.5, 1.5, -0.5], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0], Some(panel));
     g.node(json!({ "mesh": quad, "scale": [1.0, 1.0, 1.0] }), true);
     g.json["scenes"][0]["nodes"] = json!([0, 1, 2, 3, 4, 5]);
@@ -397,6 +408,8 @@ fn small_gltf() -> (Vec<u8>, Vec<u8>) {
         json!({ "mesh": 1, "extensions": { "EXT_mesh_gpu_instancing": { "attributes": { "TRANSLATION": translations } } } }),
         true,
     );
+    // The floor placed again, turned: an Embree instance of one mesh.
+    g.node(json!({ "mesh": 0, "translation": [0.0, -1.0, 0.0], "rotation": [0.0, 0.38, 0.0, 0.92] }), true);
     // A small film for the in-process renders.
     g.json["cameras"][0]["perspective"]["aspectRatio"] = json!(1.33);
     (g.embedded().into_bytes(), g.glb())

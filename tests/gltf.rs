@@ -812,8 +812,10 @@ fn a_file_without_camera_or_lights_renders_with_added_light() {
 }
 
 /// The world positions of the scene's meshes, mesh by mesh.
+/// Each object's vertices in the world (an instance's mesh placed).
 fn positions(scene: &Scene) -> Vec<Vec<Vec3>> {
-    scene.meshes.iter().map(|m| m.positions.clone()).collect()
+    let place = |o: &lightcuts::scene::Object, p: Vec3| o.transform.map_or(p, |t| t.transform_point3(p));
+    scene.objects.iter().map(|o| scene.meshes[o.mesh].positions.iter().map(|&p| place(o, p)).collect()).collect()
 }
 
 fn close_to(a: &[Vec3], b: &[Vec3]) -> bool {
@@ -987,9 +989,10 @@ fn skins_and_morph_targets_take_the_pose_the_file_gives() {
     assert!(e.contains("JOINTS_0") && e.contains("names joint 1, but the skin has 1"), "{e}");
 }
 
-/// EXT_mesh_gpu_instancing: one copy of the mesh per instance, placed by
-/// node x translation x rotation x scale, named by the node and the
-/// instance's index (the Cryptomatte object name).
+/// EXT_mesh_gpu_instancing: one mesh, instanced once per instance (an
+/// Embree instance), placed by node x translation x rotation x scale,
+/// named by the node and the instance's index (the Cryptomatte object
+/// name).
 #[test]
 fn gpu_instances_are_placed_and_named_by_node_and_index() {
     let dir = TempDir::new("gltf-instancing");
@@ -1009,8 +1012,10 @@ fn gpu_instances_are_placed_and_named_by_node_and_index() {
         true,
     );
     let scene = load(&dir, "i.gltf", &g.embedded());
-    let names: Vec<&str> = scene.meshes.iter().map(|m| m.name.as_str()).collect();
+    let names: Vec<&str> = scene.objects.iter().map(|o| o.name.as_str()).collect();
     assert_eq!(names, ["tree[0]", "tree[1]", "tree[2]"]);
+    assert_eq!(scene.meshes.len(), 1, "one mesh, instanced");
+    assert!(scene.objects.iter().all(|o| o.mesh == 0 && o.transform.is_some()));
     let z = Vec3::new(0.0, 0.0, -1.0);
     let found = positions(&scene);
     assert!(close_to(&found[0], &[z, Vec3::X + z, Vec3::Y + z]), "{:?}", found[0]);
@@ -1019,6 +1024,85 @@ fn gpu_instances_are_placed_and_named_by_node_and_index() {
     let x20 = Vec3::new(20.0, 0.0, -1.0);
     assert!(close_to(&found[2], &[x20, 2.0 * Vec3::X + x20, 2.0 * Vec3::Y + x20]), "{:?}", found[2]);
     assert!(scene.warnings.iter().all(|w| !w.contains("EXT_mesh_gpu_instancing")), "{:?}", scene.warnings);
+}
+
+/// A mesh that several nodes place is kept once and drawn through Embree
+/// instances: a pyramid with smooth normals, placed by two nodes (turned,
+/// scaled, moved) and mirrored by a third (a copy: its winding turns),
+/// renders as the same file with a copy of the mesh for each node does (to
+/// f32 rounding: the instance is placed by Embree's transform, the copy's
+/// vertices by the importer's), and Cryptomatte names each object by its
+/// node.
+#[test]
+fn instanced_meshes_render_as_their_copies_and_are_named_by_node() {
+    let dir = TempDir::new("gltf-instances");
+    let write = |shared: bool, name: &str| {
+        let mut g = floor_and_point_light();
+        let positions = [[0.0, 0.6, 0.0], [-0.4, 0.0, -0.4], [0.4, 0.0, -0.4], [0.4, 0.0, 0.4], [-0.4, 0.0, 0.4]];
+        let normals: Vec<[f32; 3]> = positions
+            .iter()
+            .map(|p| {
+                let n = Vec3::new(p[0], 0.7, p[2]).normalize();
+                [n.x, n.y, n.z]
+            })
+            .collect();
+        let indices = [0, 2, 1, 0, 3, 2, 0, 4, 3, 0, 1, 4];
+        let red = g.material(diffuse([0.8, 0.2, 0.1]));
+        let mut mesh = || g.mesh(&positions, Some(&indices), Some(&normals), None, Some(red), None);
+        let meshes: Vec<usize> = if shared { vec![mesh(); 3] } else { (0..3).map(|_| mesh()).collect() };
+        let (s, c) = (0.2588190451, 0.9659258263); // sin, cos of 15 degrees (quaternion of 30)
+        let nodes = [
+            json!({ "name": "left", "translation": [-1.2, 0.0, 0.3], "rotation": [0.0, s, 0.0, c], "scale": [0.8, 0.8, 0.8] }),
+            json!({ "name": "right", "translation": [1.0, 0.2, -0.2], "rotation": [s, 0.0, 0.0, c], "scale": [1.2, 1.2, 1.2] }),
+            json!({ "name": "mirrored", "translation": [0.0, 0.0, 1.2], "scale": [-1.0, 1.0, 1.0] }),
+        ];
+        for (k, mut node) in nodes.into_iter().enumerate() {
+            node["mesh"] = json!(meshes[k]);
+            g.node(node, true);
+        }
+        dir.write(name, &g.embedded())
+    };
+    let (shared, copies) = (write(true, "shared.gltf"), write(false, "copies.gltf"));
+    let scene = Scene::load(&shared).unwrap();
+    let instanced: Vec<&str> =
+        scene.objects.iter().filter(|o| o.transform.is_some()).map(|o| o.name.as_str()).collect();
+    assert_eq!(instanced, ["left", "right"], "the mirrored placement is a copy");
+    assert_eq!(scene.meshes.len(), 3, "floor, the pyramid once, the mirrored copy");
+    assert_eq!(Scene::load(&copies).unwrap().objects.iter().filter(|o| o.transform.is_some()).count(), 0);
+    let render = |model: &std::path::Path, out: &str| {
+        let out = dir.path(out);
+        let args = ["render", s(model), "--exact", "--resolution", "96x64", "--spp", "4", "--cryptomatte", "--quiet"];
+        lightcuts_ok(&[&args[..], &["-o", s(&out)]].concat());
+        read_exr(&out).unwrap()
+    };
+    let (a, b) = (render(&shared, "shared.exr"), render(&copies, "copies.exr"));
+    for channel in ["R", "G", "B"] {
+        let (x, y) = (&a.channels[channel], &b.channels[channel]);
+        let differ = x.iter().zip(y).filter(|(p, q)| (*p - *q).abs() > 1e-3 * q.abs().max(1e-3)).count();
+        // A pixel whose samples straddle a silhouette may take either side.
+        assert!(differ <= 6, "{channel}: {differ} pixels differ beyond 0.1%");
+        let (sa, sb) = (x.iter().sum::<f32>(), y.iter().sum::<f32>());
+        assert!((sa - sb).abs() <= 1e-3 * sb, "{channel}: {sa} vs {sb}");
+    }
+    // Each node's name has its matte, the instances' as the copy's.
+    let covered = |image: &lightcuts::output::read::ExrImage, name: &str| {
+        let id = lightcuts::render::cryptomatte::id_of(name);
+        let channels = lightcuts::render::cryptomatte::CryptoType::Object.channels();
+        let pairs: Vec<&[String]> = channels.chunks(2).collect();
+        (0..96 * 64)
+            .map(|i| {
+                pairs
+                    .iter()
+                    .filter(|p| image.channels[&p[0]][i].to_bits() == id.to_bits())
+                    .map(|p| image.channels[&p[1]][i])
+                    .sum::<f32>()
+            })
+            .sum::<f32>()
+    };
+    for name in ["left", "right", "mirrored"] {
+        let (ca, cb) = (covered(&a, name), covered(&b, name));
+        assert!(ca > 20.0 && (ca - cb).abs() <= 0.02 * cb, "{name}: {ca} pixels instanced, {cb} as copies");
+    }
 }
 
 /// Extensions a file uses without requiring them, and that the renderer
@@ -1105,7 +1189,10 @@ fn khronos_feature_models_render_from_the_command_line() {
         assert!(object > 64 * 48 / 20, "{name}: the model covers {object} pixels");
         let scene = Scene::load(&model).unwrap();
         match name {
-            "SimpleInstancing" => assert_eq!(scene.meshes.len(), 125, "{name}: one mesh an instance"),
+            "SimpleInstancing" => {
+                assert_eq!(scene.objects.len(), 125, "{name}: 125 instances");
+                assert_eq!(scene.meshes.len(), 1, "{name}: of one mesh");
+            }
             "TextureSettingsTest" | "NegativeScaleTest" => {
                 assert!(scene.materials.iter().any(|m| m.culls_back_faces), "{name}: single-sided materials")
             }

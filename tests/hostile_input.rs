@@ -480,6 +480,16 @@ fn hostile_gltf_files() {
         },
         &["EXT_mesh_gpu_instancing", "instance 0's transform is not finite"],
     );
+    // An Embree instance placed outside the coordinates Embree accepts.
+    case(
+        "instance_far.gltf",
+        &|g| {
+            let t = g.floats(&[0.0, 0.0, 0.0, 1e20, 0.0, 0.0], "VEC3", 3);
+            g.json["nodes"][0]["extensions"] =
+                json!({ "EXT_mesh_gpu_instancing": { "attributes": { "TRANSLATION": t } } });
+        },
+        &["nodes[0]", "places meshes[0]", "in the world"],
+    );
     let bad_base64 = floor_and_point_light().embedded().replace(";base64,", ";base64,!!");
     rejects(&dir, "base64.gltf", bad_base64.as_bytes(), &["base64.gltf", "buffers[0].uri", "base64"]);
     case(

@@ -90,7 +90,13 @@ fn print_summary(scene: &Scene, settings: &PassSettings, mode: Mode, result: &Pa
     if *vpls > 0 {
         println!("  indirect         {vpls} virtual point lights traced in {:.3} s", vpl_time.as_secs_f64());
     }
-    println!("  triangles        {}", scene.triangle_count());
+    let (drawn, stored) = (scene.triangle_count(), scene.stored_triangle_count());
+    if drawn == stored {
+        println!("  triangles        {drawn}");
+    } else {
+        let instances = scene.objects.iter().filter(|o| o.transform.is_some()).count();
+        println!("  triangles        {drawn} drawn, {stored} stored ({instances} instances)");
+    }
     println!(
         "  image            {}x{}, window {}x{} at ({}, {}), {} spp",
         settings.width,

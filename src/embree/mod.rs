@@ -16,7 +16,7 @@ use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::Arc;
 use std::time::Instant;
 
-use glam::{Vec2, Vec3};
+use glam::{Affine3A, Vec2, Vec3};
 
 /// An error reported by Embree (through the device's error callback or
 /// `rtcGetDeviceError`), or by the shim when Embree returned no object.
@@ -202,7 +202,7 @@ impl Device {
             context: "creating a scene",
             message: "rtcNewScene returned NULL".into(),
         })?;
-        Ok(SceneBuilder { raw: SceneHandle { ptr, device: self.clone() }, meshes: Vec::new() })
+        Ok(SceneBuilder { raw: SceneHandle { ptr, device: self.clone() }, meshes: Vec::new(), instanced: Vec::new() })
     }
 }
 
@@ -278,10 +278,14 @@ impl Drop for SceneHandle {
     }
 }
 
-/// A scene being assembled: attach meshes, then [`commit`](Self::commit).
+/// A scene being assembled: attach meshes and instances, then
+/// [`commit`](Self::commit).
 pub struct SceneBuilder {
     raw: SceneHandle,
     meshes: Vec<SharedMesh>,
+    /// The scenes instanced here: Embree reads them while this one is
+    /// traced, so this one keeps them alive.
+    instanced: Vec<Arc<Scene>>,
 }
 
 /// Geometry id of an attached mesh (Embree's geomID).
@@ -299,6 +303,10 @@ pub enum MeshError {
     /// A vertex coordinate is NaN or infinite.
     #[error("vertex {vertex} is not finite")]
     NonFiniteVertex { vertex: usize },
+    /// An instance's transform is not finite or not invertible (the
+    /// caller's data), or its scene belongs to another device.
+    #[error("the instance's transform is not finite and invertible, or its scene is another device's")]
+    BadInstance,
     /// Embree rejected the buffers.
     #[error(transparent)]
     Embree(#[from] EmbreeError),
@@ -397,13 +405,47 @@ impl SceneBuilder {
         Ok(id)
     }
 
+    /// Attaches an instance of `child` (a committed scene of one mesh, made
+    /// on the same device) placed by `transform`, from the child's space to
+    /// this scene's: hits on it report the instance's geometry id and the
+    /// child mesh's primitive and barycentrics.
+    pub fn attach_instance(&mut self, child: &Arc<Scene>, transform: Affine3A) -> Result<GeometryId, MeshError> {
+        let m = transform.matrix3;
+        let same_device = Arc::ptr_eq(&child.raw.device.handle, &self.raw.device.handle);
+        if !same_device || !transform.is_finite() || m.determinant() == 0.0 {
+            return Err(MeshError::BadInstance);
+        }
+        let t = transform.translation;
+        let columns: [f32; 12] = [
+            m.x_axis.x, m.x_axis.y, m.x_axis.z, m.y_axis.x, m.y_axis.y, m.y_axis.z, m.z_axis.x, m.z_axis.y, m.z_axis.z,
+            t.x, t.y, t.z,
+        ];
+        // SAFETY: both scenes are live and of the same device (checked);
+        // the child is committed (a `Scene` only exists committed) and kept
+        // alive by self.instanced for as long as this scene; Embree copies
+        // the 12 floats during the call.
+        let id =
+            unsafe { sys::lc_scene_attach_instance(self.raw.ptr.as_ptr(), child.raw.ptr.as_ptr(), columns.as_ptr()) };
+        self.raw.device.check("attaching an instance")?;
+        if id == sys::LC_INVALID_ID {
+            return Err(MeshError::Embree(EmbreeError {
+                code: 1,
+                kind: error_kind(1),
+                context: "attaching an instance",
+                message: "rtcNewGeometry failed".into(),
+            }));
+        }
+        self.instanced.push(Arc::clone(child));
+        Ok(id)
+    }
+
     /// Builds Embree's acceleration structure; the result is read-only and
     /// may be traced from many threads.
     pub fn commit(self) -> Result<Scene, EmbreeError> {
         // SAFETY: the scene pointer is live; commit is called once, from one thread.
         unsafe { sys::lc_scene_commit(self.raw.ptr.as_ptr()) };
         self.raw.device.check("committing the scene")?;
-        Ok(Scene { raw: self.raw, _meshes: self.meshes })
+        Ok(Scene { raw: self.raw, _meshes: self.meshes, _instanced: self.instanced })
     }
 }
 
@@ -492,6 +534,7 @@ pub struct Hit {
 pub struct Scene {
     raw: SceneHandle,
     _meshes: Vec<SharedMesh>,
+    _instanced: Vec<Arc<Scene>>,
 }
 
 impl Scene {

@@ -126,6 +126,19 @@ uint32_t lc_scene_attach_triangles(LcScene* scene, const float* vertices, size_t
     return (uint32_t)id;
 }
 
+uint32_t lc_scene_attach_instance(LcScene* scene, const LcScene* child, const float* transform) {
+    RTCGeometry geometry = rtcNewGeometry(scene->owner->device, RTC_GEOMETRY_TYPE_INSTANCE);
+    if (geometry == NULL) return LC_INVALID_ID;
+    rtcSetGeometryInstancedScene(geometry, child->scene);
+    rtcSetGeometryTimeStepCount(geometry, 1);
+    rtcSetGeometryTransform(geometry, 0, RTC_FORMAT_FLOAT3X4_COLUMN_MAJOR, transform);
+    rtcSetGeometryMask(geometry, LC_MASK_ALL);
+    rtcCommitGeometry(geometry);
+    unsigned int id = rtcAttachGeometry(scene->scene, geometry);
+    rtcReleaseGeometry(geometry); /* the scene holds its own reference */
+    return (uint32_t)id;
+}
+
 static float mask_texel(const LcAlphaMask* m, long x, long y) {
     long w = (long)m->width, h = (long)m->height;
     x %= w;
@@ -228,7 +241,9 @@ static int32_t intersect_one(RTCScene scene, const LcRay* ray, LcHit* hit) {
     hit->ng[0] = rayhit.hit.Ng_x;
     hit->ng[1] = rayhit.hit.Ng_y;
     hit->ng[2] = rayhit.hit.Ng_z;
-    hit->geom_id = rayhit.hit.geomID;
+    /* A hit inside an instance names the instance (its child scenes hold
+     * one geometry each); Ng stays in the instanced mesh's space. */
+    hit->geom_id = rayhit.hit.instID[0] != RTC_INVALID_GEOMETRY_ID ? rayhit.hit.instID[0] : rayhit.hit.geomID;
     hit->prim_id = rayhit.hit.primID;
     return 1;
 }

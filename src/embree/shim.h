@@ -28,7 +28,9 @@ typedef struct LcRay {
     float tfar;
 } LcRay;
 
-/* The closest hit of a ray. geom_id is LC_INVALID_ID on a miss. */
+/* The closest hit of a ray. geom_id is LC_INVALID_ID on a miss; on an
+ * instance (lc_scene_attach_instance) it is the instance's geometry id, and
+ * prim_id, u and v are the instanced mesh's. */
 typedef struct LcHit {
     float t;
     float u;
@@ -65,6 +67,12 @@ void lc_scene_release(LcScene* scene);
 uint32_t lc_scene_attach_triangles(LcScene* scene,
                                    const float* vertices, size_t vertex_count,
                                    const uint32_t* indices, size_t triangle_count);
+/* Attaches an instance of `child`, a committed scene of the same device
+ * holding one geometry, placed by the affine map `transform` from its space
+ * to this scene's: 12 floats, column-major 3 x 4 (the images of the x, y
+ * and z axes, then the translation). `child` must outlive the scene.
+ * Returns the geometry id, or LC_INVALID_ID. */
+uint32_t lc_scene_attach_instance(LcScene* scene, const LcScene* child, const float* transform);
 /* A cut-out (glTF's alphaMode MASK): a hit on the mesh whose alpha, looked up
  * bilinearly (repeating) at the hit's texture coordinate, is below `cutoff`
  * is ignored by every query (closest hit, occlusion, packets), through

@@ -117,7 +117,7 @@ pub struct SampleResult {
     /// or saw the environment through an opaque film.
     pub opaque: bool,
     /// The object and material names of the first hit, by index into the
-    /// scene's meshes and materials (Cryptomatte).
+    /// scene's objects and materials (Cryptomatte).
     pub first_ids: Option<(usize, usize)>,
     pub first_hit: Option<FirstHit>,
     pub stats: ShadingStats,
@@ -194,7 +194,7 @@ impl<'a> Integrator<'a> {
             if depth == 0 {
                 result.opaque = true;
                 result.first_hit = Some(FirstHit { albedo: sp.kd, normal: sp.n, distance: sp.distance });
-                result.first_ids = Some((mesh, material));
+                result.first_ids = Some((self.geometry.object_of(&hit), material));
             }
             // Emitters are seen with their radiance (they reflect nothing).
             if sp.emitted != Vec3::ZERO {

@@ -121,7 +121,7 @@ impl Layout {
         let cryptomatte = names.len();
         let ids = aovs.cryptomatte.then(|| {
             names.extend(CryptoType::ALL.iter().flat_map(|t| t.channels()));
-            let objects = scene.meshes.iter().map(|m| cryptomatte::id_of(&m.name)).collect();
+            let objects = scene.objects.iter().map(|o| cryptomatte::id_of(&o.name)).collect();
             let materials = scene.materials.iter().map(|m| cryptomatte::id_of(&m.name)).collect();
             (objects, materials)
         });
@@ -134,8 +134,8 @@ impl Layout {
         if self.ids.is_none() {
             return Vec::new();
         }
-        // The manifests are maps: each name once, however many meshes share it.
-        let objects: Vec<String> = scene.meshes.iter().map(|m| m.name.clone()).collect();
+        // The manifests are maps: each name once, however many objects share it.
+        let objects: Vec<String> = scene.objects.iter().map(|o| o.name.clone()).collect();
         let materials: Vec<String> = scene.materials.iter().map(|m| m.name.clone()).collect();
         let mut out = CryptoType::Object.header(&objects);
         out.extend(CryptoType::Material.header(&materials));
@@ -250,8 +250,8 @@ fn render_tile(
             }
             // Every camera sample weighs 1 / spp (the box filter the
             // beauty uses), so coverages sum to the pixel's alpha.
-            if let (Some((object_ids, material_ids)), Some((mesh, material))) = (&layout.ids, sample.first_ids) {
-                objects.add(object_ids[mesh], inv_spp);
+            if let (Some((object_ids, material_ids)), Some((object, material))) = (&layout.ids, sample.first_ids) {
+                objects.add(object_ids[object], inv_spp);
                 materials.add(material_ids[material], inv_spp);
             }
         }

@@ -15,6 +15,7 @@ pub mod image;
 pub(crate) mod load;
 pub mod material;
 pub mod mesh;
+pub mod object;
 pub mod texture;
 
 use std::path::{Path, PathBuf};
@@ -29,6 +30,7 @@ pub use load::additions::{ADDED_ENVIRONMENT_SAMPLES, ADDED_SUN_IRRADIANCE};
 pub use load::LoadOptions;
 pub use material::{Albedo, Material};
 pub use mesh::Mesh;
+pub use object::Object;
 use texture::Texture;
 
 /// Largest film accepted: 2^27 pixels (about 11600 x 11600). The renderer
@@ -79,6 +81,9 @@ pub struct Scene {
     pub materials: Vec<Material>,
     pub textures: Vec<Texture>,
     pub meshes: Vec<Mesh>,
+    /// What is drawn: the meshes placed in the world (each mesh once as
+    /// itself, or, when instanced, once per instance).
+    pub objects: Vec<Object>,
     /// The lights of `[[lights]]`, in file order, then the glTF file's.
     pub lights: Vec<LightSource>,
     /// The light group of each light and of the environment.
@@ -132,17 +137,11 @@ impl Scene {
         Camera::new(eye, look_at, Vec3::from(c.up), c.fov_y, width, height).with_lens(c.lens_radius, focus)
     }
 
-    /// Bounds of all geometry: (min, max), infinite when there is none.
+    /// Bounds of all geometry in the world: (min, max), infinite when there
+    /// is none.
     #[must_use]
     pub fn mesh_bounds(&self) -> (Vec3, Vec3) {
-        let mut lo = Vec3::splat(f32::INFINITY);
-        let mut hi = Vec3::splat(f32::NEG_INFINITY);
-        for m in &self.meshes {
-            let (a, b) = m.bounds();
-            lo = lo.min(a);
-            hi = hi.max(b);
-        }
-        (lo, hi)
+        object::world_bounds(&self.meshes, &self.objects)
     }
 
     /// At most how many point lights the light sources and the environment
@@ -191,8 +190,15 @@ impl Scene {
         Ok(crate::util::hash::combined_hex(hashes.into_iter().chain(additions)))
     }
 
+    /// Triangles drawn: each object's mesh's, instances counted once each.
     #[must_use]
     pub fn triangle_count(&self) -> usize {
+        self.objects.iter().map(|o| self.meshes[o.mesh].triangles.len()).sum()
+    }
+
+    /// Triangles stored: each mesh's once, however many objects place it.
+    #[must_use]
+    pub fn stored_triangle_count(&self) -> usize {
         self.meshes.iter().map(|m| m.triangles.len()).sum()
     }
 }

@@ -1,6 +1,9 @@
 //! The scene's triangles in Embree, and the surface point a hit describes.
 
-use glam::{Vec2, Vec3};
+use std::collections::HashMap;
+use std::sync::Arc;
+
+use glam::{Affine3A, Mat3A, Vec2, Vec3};
 
 use super::pbr::Pbr;
 use super::surface::SurfacePoint;
@@ -14,8 +17,11 @@ use crate::scene::Scene;
 pub struct Geometry<'s> {
     pub scene: &'s Scene,
     pub embree: embree::Scene,
-    /// Mesh index of each Embree geometry id.
-    mesh_of_geometry: Vec<usize>,
+    /// Object index (into `Scene::objects`) of each Embree geometry id.
+    object_of_geometry: Vec<usize>,
+    /// Each object's placement, for shading its hits: None for a mesh in
+    /// world space.
+    placements: Vec<Option<Placement>>,
     /// Offset that lifts ray origins off the surface they leave, in metres.
     /// It scales with the scene: 2^-16 of the largest coordinate magnitude,
     /// i.e. about 500 f32 ulps of the coordinates, far above the few ulps of
@@ -33,22 +39,31 @@ impl<'s> Geometry<'s> {
     /// with the geometry they set the scale of the ray offset.
     pub fn try_new(device: &Device, scene: &'s Scene, lights: &[Lights]) -> Result<Self, GeometryError> {
         let mut builder = device.try_new_scene()?;
-        let mut mesh_of_geometry = Vec::new();
-        for (i, mesh) in scene.meshes.iter().enumerate() {
-            let mask = scene.materials[mesh.material].cutout.as_ref().map(|c| AlphaMask {
-                uvs: mesh.uvs.clone().unwrap_or_else(|| vec![Vec2::ZERO; mesh.positions.len()]),
-                alpha: c.alpha.clone(),
-                width: c.width,
-                height: c.height,
-                transform: c.transform,
-                cutoff: c.cutoff,
-            });
-            let id = builder
-                .attach_masked_triangles(&mesh.positions, &mesh.triangles, mask)
-                .map_err(|source| GeometryError::Mesh { shape: i, source })?;
-            debug_assert_eq!(id as usize, mesh_of_geometry.len(), "Embree assigns ids in order");
-            mesh_of_geometry.push(i);
+        let mut object_of_geometry = Vec::with_capacity(scene.objects.len());
+        // One committed scene per instanced mesh, shared by its instances.
+        let mut instanced: HashMap<usize, Arc<embree::Scene>> = HashMap::new();
+        for (i, object) in scene.objects.iter().enumerate() {
+            let shape = |source| GeometryError::Mesh { shape: object.mesh, source };
+            let id = match object.transform {
+                None => attach_mesh(&mut builder, scene, object.mesh).map_err(shape)?,
+                Some(transform) => {
+                    let child = match instanced.get(&object.mesh) {
+                        Some(child) => Arc::clone(child),
+                        None => {
+                            let mut child = device.try_new_scene()?;
+                            attach_mesh(&mut child, scene, object.mesh).map_err(shape)?;
+                            let child = Arc::new(child.commit()?);
+                            instanced.insert(object.mesh, Arc::clone(&child));
+                            child
+                        }
+                    };
+                    builder.attach_instance(&child, transform).map_err(shape)?
+                }
+            };
+            debug_assert_eq!(id as usize, object_of_geometry.len(), "Embree assigns ids in order");
+            object_of_geometry.push(i);
         }
+        let placements = scene.objects.iter().map(|o| o.transform.map(Placement::of)).collect();
         let embree = builder.commit()?;
         let (lo, hi) = lights
             .iter()
@@ -60,18 +75,34 @@ impl<'s> Geometry<'s> {
         Ok(Self {
             scene,
             embree,
-            mesh_of_geometry,
+            object_of_geometry,
+            placements,
             ray_epsilon,
             distance_clamp: scene.distance_clamp,
             bounds: (lo, hi),
         })
     }
 
-    /// The surface point of a hit along `ray`, with normals facing the ray's origin.
+    /// The index into the scene's objects of the object `hit` is on.
+    #[must_use]
+    pub fn object_of(&self, hit: &Hit) -> usize {
+        self.object_of_geometry[hit.geometry as usize]
+    }
+
     /// The index into the scene's meshes of the mesh `hit` is on.
     #[must_use]
     pub fn mesh_of(&self, hit: &Hit) -> usize {
-        self.mesh_of_geometry[hit.geometry as usize]
+        self.scene.objects[self.object_of(hit)].mesh
+    }
+
+    /// The world-space corners of triangle `primitive` of the object `hit`
+    /// is on, and that object's placement.
+    fn triangle(&self, hit: &Hit) -> ([Vec3; 3], Option<&Placement>) {
+        let object = self.object_of(hit);
+        let mesh = &self.scene.meshes[self.scene.objects[object].mesh];
+        let corners = mesh.triangles[hit.primitive as usize].map(|i| mesh.positions[i as usize]);
+        let placement = self.placements[object].as_ref();
+        (placement.map_or(corners, |p| corners.map(|c| p.to_world.transform_point3(c))), placement)
     }
 
     /// Whether a camera (or mirror) ray passes through `hit`: the back of
@@ -79,20 +110,20 @@ impl<'s> Geometry<'s> {
     /// false`).
     #[must_use]
     pub fn culls(&self, ray: &Ray, hit: &Hit) -> bool {
-        let mesh = &self.scene.meshes[self.mesh_of_geometry[hit.geometry as usize]];
+        let mesh = &self.scene.meshes[self.mesh_of(hit)];
         if !self.scene.materials[mesh.material].culls_back_faces {
             return false;
         }
-        let [p0, p1, p2] = mesh.triangles[hit.primitive as usize].map(|i| mesh.positions[i as usize]);
+        let ([p0, p1, p2], _) = self.triangle(hit);
         (p1 - p0).cross(p2 - p0).dot(ray.direction) > 0.0
     }
 
     pub fn surface(&self, ray: &Ray, hit: &Hit) -> SurfacePoint<'s> {
-        let mesh = &self.scene.meshes[self.mesh_of_geometry[hit.geometry as usize]];
+        let mesh = &self.scene.meshes[self.mesh_of(hit)];
         let tri = mesh.triangles[hit.primitive as usize];
         let (u, v) = (hit.u, hit.v);
         let w = 1.0 - u - v;
-        let [p0, p1, p2] = tri.map(|i| mesh.positions[i as usize]);
+        let ([p0, p1, p2], placement) = self.triangle(hit);
         // Barycentric interpolation is more accurate than origin + t * direction.
         let p = w * p0 + u * p1 + v * p2;
         let wo = (-ray.direction).normalize();
@@ -111,7 +142,8 @@ impl<'s> Geometry<'s> {
         let mut n = match &mesh.normals {
             Some(normals) => {
                 let [n0, n1, n2] = tri.map(|i| normals[i as usize]);
-                let n = (w * n0 + u * n1 + v * n2).normalize_or_zero();
+                let n = w * n0 + u * n1 + v * n2;
+                let n = placement.map_or(n, |p| p.normal * n).normalize_or_zero();
                 // Seen from behind, the whole frame turns to the viewer's
                 // side (decided on the interpolated normal, so that a
                 // perturbed normal dipping below the surface is not turned).
@@ -121,6 +153,7 @@ impl<'s> Geometry<'s> {
                     (Some(map), Some(tangents)) if n != Vec3::ZERO => {
                         let [t0, t1, t2] = tri.map(|i| tangents[i as usize]);
                         let tangent = (w * t0 + u * t1 + v * t2).truncate();
+                        let tangent = placement.map_or(tangent, |p| p.to_world.matrix3 * tangent);
                         perturbed(n, tangent, t0.w, map, uvs[map.set.min(1)], &self.scene.textures)
                     }
                     _ => n,
@@ -161,6 +194,37 @@ impl<'s> Geometry<'s> {
             min_distance: self.ray_epsilon.max(self.distance_clamp),
         }
     }
+}
+
+/// An instance's map from its mesh's space to the world's, and the
+/// inverse transpose that carries normals (docs/design.md §4.1).
+struct Placement {
+    to_world: Affine3A,
+    normal: Mat3A,
+}
+
+impl Placement {
+    fn of(to_world: Affine3A) -> Self {
+        Self { to_world, normal: to_world.matrix3.inverse().transpose() }
+    }
+}
+
+/// Attaches mesh `mesh` of `scene` to `builder` as it is, with its cut-out.
+fn attach_mesh(
+    builder: &mut embree::SceneBuilder,
+    scene: &Scene,
+    mesh: usize,
+) -> Result<embree::GeometryId, MeshError> {
+    let mesh = &scene.meshes[mesh];
+    let mask = scene.materials[mesh.material].cutout.as_ref().map(|c| AlphaMask {
+        uvs: mesh.uvs.clone().unwrap_or_else(|| vec![Vec2::ZERO; mesh.positions.len()]),
+        alpha: c.alpha.clone(),
+        width: c.width,
+        height: c.height,
+        transform: c.transform,
+        cutoff: c.cutoff,
+    });
+    builder.attach_masked_triangles(&mesh.positions, &mesh.triangles, mask)
 }
 
 /// The shading normal `n` perturbed by a tangent-space normal map (glTF

@@ -11,7 +11,7 @@ use std::collections::HashMap;
 use std::f32::consts::FRAC_PI_4;
 use std::path::{Path, PathBuf};
 
-use glam::{Affine2, Mat2, Mat3, Mat4, Vec2, Vec3, Vec4};
+use glam::{Affine2, Affine3A, Mat2, Mat3, Mat4, Vec2, Vec3, Vec4};
 use gltf::json::extensions::scene::khr_lights_punctual::{Light as LightJson, Type as LightType};
 use gltf::json::validation::Checked;
 use gltf::mesh::Mode;
@@ -22,6 +22,7 @@ use super::groups::GltfLightNames;
 use super::image::{Encoding, RgbImage};
 use super::material::{Albedo, Cutout, Material, NormalMap, PbrMaterial, TextureRef};
 use super::mesh::Mesh;
+use super::object::Object;
 use super::texture::{Filter, Texture, Wrap};
 use super::{within_limits, LightSource, SceneError, MAX_COORDINATE, MAX_EMITTER_SAMPLES};
 
@@ -64,14 +65,21 @@ const MAX_DEPTH: usize = 1024;
 /// Most joints a skin may have.
 const MAX_JOINTS: usize = 1 << 16;
 
-/// Most triangles an import may make, instances and repeated meshes
-/// counted once per copy (2^28).
+/// Most triangles an import may store (2^28): each copy counted, an
+/// instanced mesh once.
 const MAX_TRIANGLES: usize = 1 << 28;
+
+/// Most instances an import may make (2^24; about 100 bytes each, with
+/// Embree's).
+const MAX_INSTANCES: usize = 1 << 24;
 
 /// Where the imported parts go: the scene's own lists, which the TOML's
 /// parts may already fill (indices are into these lists).
 pub struct Parts<'a> {
     pub meshes: &'a mut Vec<Mesh>,
+    /// The objects that place the meshes it keeps in their own space
+    /// (every other mesh it adds is in world space, drawn as itself).
+    pub instances: &'a mut Vec<Object>,
     pub materials: &'a mut Vec<Material>,
     pub textures: &'a mut Vec<Texture>,
     pub lights: &'a mut Vec<LightSource>,
@@ -132,6 +140,8 @@ pub fn import(
         skipped_primitives: 0,
         emitters: 0,
         triangles: 0,
+        placements: Vec::new(),
+        prototypes: HashMap::new(),
         punctual: 0,
     };
     let camera = importer.import_scene(want_camera)?;
@@ -150,8 +160,16 @@ struct Importer<'a, 'p> {
     parts: Parts<'p>,
     skipped_primitives: usize,
     emitters: u64,
-    /// Triangles imported so far (every copy counted).
+    /// Triangles imported so far (every copy counted, an instanced mesh once).
     triangles: usize,
+    /// How many rigid, orientation-preserving placements each glTF mesh
+    /// has (EXT_mesh_gpu_instancing's nodes count as many): a mesh placed
+    /// twice or more is imported once and instanced.
+    placements: Vec<usize>,
+    /// The scene mesh of each instanced glTF primitive (mesh, primitive),
+    /// in the mesh's own space; None for one imported as copies (emissive,
+    /// or not triangles).
+    prototypes: HashMap<(usize, usize), Option<usize>>,
     /// KHR_lights_punctual lights imported.
     punctual: usize,
 }
@@ -220,21 +238,23 @@ impl Importer<'_, '_> {
         }
         let mut cameras = Vec::new();
         let mut skinned = 0;
+        self.placements = self.count_placements(&visits);
         for (node, world, location) in visits {
             let node_name = node.name().map_or_else(|| location.clone(), str::to_string);
             if let Some(mesh) = node.mesh() {
                 let weights = node.weights().or_else(|| mesh.weights()).unwrap_or(&[]);
+                let shared = node.skin().is_none() && node.weights().is_none() && self.placements[mesh.index()] > 1;
                 if let Some(skin) = node.skin() {
                     skinned += 1;
                     let joints = self.joint_matrices(&skin, &worlds)?;
                     self.import_mesh(&mesh, &Placement::Skinned(joints), weights, &node_name)?;
                 } else if let Some(value) = node.extension_value("EXT_mesh_gpu_instancing") {
                     for (i, instance) in self.instances(value, &location)?.into_iter().enumerate() {
-                        let placement = Placement::Rigid(world * instance);
-                        self.import_mesh(&mesh, &placement, weights, &format!("{node_name}[{i}]"))?;
+                        let name = format!("{node_name}[{i}]");
+                        self.place_mesh(&mesh, world * instance, weights, &name, shared, &location)?;
                     }
                 } else {
-                    self.import_mesh(&mesh, &Placement::Rigid(world), weights, &node_name)?;
+                    self.place_mesh(&mesh, world, weights, &node_name, shared, &location)?;
                 }
             }
             if let Some(camera) = node.camera() {
@@ -244,23 +264,7 @@ impl Importer<'_, '_> {
                 self.import_light(light.index(), &world, &node_name)?;
             }
         }
-        if self.punctual > 0 {
-            let lpw = self.spec.lumens_per_watt;
-            let convention = if lpw == DEFAULT_LUMENS_PER_WATT {
-                format!(
-                    "{lpw} lm/W, Blender's convention; a file made for glTF viewers (1 cd taken as 1 W/sr) needs \
-                     --lumens-per-watt 1 or [gltf] lumens_per_watt = 1, {:.1} stops brighter",
-                    lpw.log2()
-                )
-            } else {
-                format!("{lpw} lm/W as asked ({DEFAULT_LUMENS_PER_WATT}, Blender's convention, is the default)")
-            };
-            let n = self.punctual;
-            self.warn(
-                "extensions.KHR_lights_punctual",
-                &format!("{n} light(s) in candela and lux converted to W/sr and W/m^2 at {convention}"),
-            );
-        }
+        self.state_light_units();
         if skinned > 0 {
             self.warn(
                 "skins",
@@ -326,6 +330,113 @@ impl Importer<'_, '_> {
         }))
     }
 
+    /// One line on stderr: how many punctual lights were converted, at
+    /// which efficacy, and the viewers' convention's flag.
+    fn state_light_units(&mut self) {
+        if self.punctual > 0 {
+            let lpw = self.spec.lumens_per_watt;
+            let convention = if lpw == DEFAULT_LUMENS_PER_WATT {
+                format!(
+                    "{lpw} lm/W, Blender's convention; a file made for glTF viewers (1 cd taken as 1 W/sr) needs \
+                 --lumens-per-watt 1 or [gltf] lumens_per_watt = 1, {:.1} stops brighter",
+                    lpw.log2()
+                )
+            } else {
+                format!("{lpw} lm/W as asked ({DEFAULT_LUMENS_PER_WATT}, Blender's convention, is the default)")
+            };
+            let n = self.punctual;
+            self.warn(
+                "extensions.KHR_lights_punctual",
+                &format!("{n} light(s) in candela and lux converted to W/sr and W/m^2 at {convention}"),
+            );
+        }
+    }
+
+    /// How many rigid, orientation-preserving placements each glTF mesh
+    /// has among the visited nodes (a node with EXT_mesh_gpu_instancing
+    /// counts as two: its mesh is instanced whatever its count).
+    fn count_placements(&self, visits: &[(gltf::Node<'_>, Mat4, String)]) -> Vec<usize> {
+        let mut placements = vec![0; self.doc.meshes().len()];
+        for (node, world, _) in visits {
+            match node.mesh() {
+                // Morph weights of the node's own are a pose of its own.
+                Some(mesh) if node.skin().is_none() && node.weights().is_none() => {
+                    let gpu = node.extension_value("EXT_mesh_gpu_instancing").is_some();
+                    if gpu || world.determinant() > 0.0 {
+                        placements[mesh.index()] += if gpu { 2 } else { 1 };
+                    }
+                }
+                _ => {}
+            }
+        }
+        placements
+    }
+
+    /// A mesh placed rigidly by `world`: as instances of the mesh kept once
+    /// in its own space when it is `shared` (placed twice or more) and the
+    /// placement keeps orientation; else (and for its emissive primitives,
+    /// whose area lights are in world space) as copies.
+    fn place_mesh(
+        &mut self,
+        mesh: &gltf::Mesh<'_>,
+        world: Mat4,
+        weights: &[f32],
+        node_name: &str,
+        shared: bool,
+        location: &str,
+    ) -> Result<(), SceneError> {
+        if !(shared && world.determinant() > 0.0) {
+            return self.import_mesh(mesh, &Placement::Rigid(world), weights, node_name);
+        }
+        for primitive in mesh.primitives() {
+            let key = (mesh.index(), primitive.index());
+            let prototype = match self.prototypes.get(&key) {
+                Some(&p) => p,
+                None => {
+                    let material = self.material(primitive.material())?;
+                    let p = if self.parts.materials[material].emission == Vec3::ZERO {
+                        let name = mesh.name().map_or_else(|| format!("meshes[{}]", mesh.index()), str::to_string);
+                        self.import_primitive(
+                            &primitive,
+                            mesh.index(),
+                            &Placement::Rigid(Mat4::IDENTITY),
+                            weights,
+                            &name,
+                        )?
+                    } else {
+                        None
+                    };
+                    self.prototypes.insert(key, p);
+                    p
+                }
+            };
+            let Some(prototype) = prototype else {
+                self.import_primitive(&primitive, mesh.index(), &Placement::Rigid(world), weights, node_name)?;
+                continue;
+            };
+            let transform = Affine3A::from_mat4(world);
+            let (lo, hi) = crate::scene::object::world_bounds(
+                self.parts.meshes,
+                &[Object { mesh: prototype, transform: Some(transform), name: String::new() }],
+            );
+            if !(within_limits(lo) && within_limits(hi)) {
+                return Err(self.error(
+                    location,
+                    format!("places meshes[{}] at {lo} to {hi} in the world: coordinates must be finite and within +/-{MAX_COORDINATE:e} m", mesh.index()),
+                ));
+            }
+            if self.parts.instances.len() >= MAX_INSTANCES {
+                return Err(self.error(location, format!("the scene has more than {MAX_INSTANCES} instances")));
+            }
+            self.parts.instances.push(Object {
+                mesh: prototype,
+                transform: Some(transform),
+                name: node_name.to_string(),
+            });
+        }
+        Ok(())
+    }
+
     fn import_mesh(
         &mut self,
         mesh: &gltf::Mesh<'_>,
@@ -334,100 +445,115 @@ impl Importer<'_, '_> {
         node_name: &str,
     ) -> Result<(), SceneError> {
         for primitive in mesh.primitives() {
-            let location = format!("meshes[{}].primitives[{}]", mesh.index(), primitive.index());
-            let mode = primitive.mode();
-            if matches!(mode, Mode::Points | Mode::Lines | Mode::LineLoop | Mode::LineStrip) {
-                self.skipped_primitives += 1;
-                continue;
-            }
-            let (mut positions, mut triangles) = self.read_triangles(&primitive, &location)?;
-            let count = positions.len();
-            let mut normals = self.attribute::<3>(&primitive, &location, gltf::Semantic::Normals, "normals", count)?;
-            self.morph(&primitive, &location, weights, &mut positions, normals.as_mut())?;
-            let transforms = self.vertex_transforms(&primitive, &location, placement, count)?;
-            if transforms.mirrored() {
-                // A mirroring transform turns the winding around; keep the
-                // front (emitting) side where the file's author saw it.
-                for t in &mut triangles {
-                    t.swap(1, 2);
-                }
-            }
-            let world_positions: Vec<Vec3> =
-                positions.iter().enumerate().map(|(i, p)| transforms.point(i, Vec3::from_array(*p))).collect();
-            if let Some(bad) = world_positions.iter().position(|p| !within_limits(*p)) {
-                return Err(self.error(
-                    format!("{location}.attributes.POSITION"),
-                    format!("vertex {bad} is at {} in the world: coordinates must be finite and within +/-{MAX_COORDINATE:e} m", world_positions[bad]),
-                ));
-            }
-            let normals = match normals {
-                None => None,
-                Some(normals) => {
-                    let normals: Vec<Vec3> = normals
-                        .iter()
-                        .enumerate()
-                        .map(|(i, n)| transforms.normal(i, Vec3::from_array(*n)).normalize_or_zero())
-                        .collect();
-                    if normals.iter().any(|n| *n == Vec3::ZERO || !n.is_finite()) {
-                        self.warn(
-                            &format!("{location}.attributes.NORMAL"),
-                            "has zero or non-finite normals: shaded flat",
-                        );
-                        None
-                    } else {
-                        Some(normals)
-                    }
-                }
-            };
-            let uvs = self.texture_coordinates(&primitive, &location, count, 0)?;
-            let uvs1 = self.texture_coordinates(&primitive, &location, count, 1)?;
-            let colors = self.vertex_colors(&primitive, &location, count)?;
-            let material = self.material(primitive.material())?;
-            let normal_set =
-                self.parts.materials[material].pbr.as_ref().and_then(|p| p.normal_map.as_ref()).map(|m| m.set);
-            let tangents = if let Some(set) = normal_set {
-                // MikkTSpace works in the normal map's own texture coordinates.
-                let uvs = if set == 1 { uvs1.as_deref() } else { uvs.as_deref() };
-                let frame = Frame { transforms: &transforms, normals: normals.as_deref(), uvs };
-                self.tangents(&primitive, &location, count, &frame, &world_positions, &triangles)?
-            } else {
-                None
-            };
-            let emission = self.parts.materials[material].emission;
-            let both_sides = self.parts.materials[material].emits_both_sides;
-            let mesh = Mesh {
-                positions: world_positions,
-                normals,
-                uvs,
-                uvs1,
-                colors,
-                tangents,
-                triangles,
-                material,
-                name: node_name.to_string(),
-            };
-            let has_area = mesh.triangles.iter().any(|t| {
-                let [a, b, c] = t.map(|i| mesh.positions[i as usize]);
-                (b - a).cross(c - a).length() > 0.0
-            });
-            self.parts.meshes.push(mesh);
-            if emission != Vec3::ZERO && has_area {
-                self.emitters += 1;
-                self.parts.lights.push(LightSource::Area {
-                    mesh: self.parts.meshes.len() - 1,
-                    radiance: emission,
-                    samples: self.spec.emitter_samples,
-                    seed: 0x617f_0000 + self.emitters,
-                    both_sides,
-                });
-                self.parts.light_names.push(GltfLightNames {
-                    light: None,
-                    node: Some(node_name.to_string()),
-                    material: Some(self.parts.materials[material].name.clone()),
-                });
-            }
+            self.import_primitive(&primitive, mesh.index(), placement, weights, node_name)?;
         }
         Ok(())
+    }
+
+    /// One primitive as a mesh placed by `placement` (world space; its own
+    /// space for the identity) and named `node_name`, an area light when
+    /// it emits. Returns the mesh's index, None for a primitive that is
+    /// not triangles (skipped).
+    fn import_primitive(
+        &mut self,
+        primitive: &gltf::Primitive<'_>,
+        mesh_index: usize,
+        placement: &Placement,
+        weights: &[f32],
+        node_name: &str,
+    ) -> Result<Option<usize>, SceneError> {
+        let location = format!("meshes[{mesh_index}].primitives[{}]", primitive.index());
+        let mode = primitive.mode();
+        if matches!(mode, Mode::Points | Mode::Lines | Mode::LineLoop | Mode::LineStrip) {
+            self.skipped_primitives += 1;
+            return Ok(None);
+        }
+        let (mut positions, mut triangles) = self.read_triangles(primitive, &location)?;
+        let count = positions.len();
+        let mut normals = self.attribute::<3>(primitive, &location, gltf::Semantic::Normals, "normals", count)?;
+        self.morph(primitive, &location, weights, &mut positions, normals.as_mut())?;
+        let transforms = self.vertex_transforms(primitive, &location, placement, count)?;
+        if transforms.mirrored() {
+            // A mirroring transform turns the winding around; keep the
+            // front (emitting) side where the file's author saw it.
+            for t in &mut triangles {
+                t.swap(1, 2);
+            }
+        }
+        let world_positions: Vec<Vec3> =
+            positions.iter().enumerate().map(|(i, p)| transforms.point(i, Vec3::from_array(*p))).collect();
+        if let Some(bad) = world_positions.iter().position(|p| !within_limits(*p)) {
+            return Err(self.error(
+                format!("{location}.attributes.POSITION"),
+                format!(
+                    "vertex {bad} is at {} in the world: coordinates must be finite and within +/-{MAX_COORDINATE:e} m",
+                    world_positions[bad]
+                ),
+            ));
+        }
+        let normals = match normals {
+            None => None,
+            Some(normals) => {
+                let normals: Vec<Vec3> = normals
+                    .iter()
+                    .enumerate()
+                    .map(|(i, n)| transforms.normal(i, Vec3::from_array(*n)).normalize_or_zero())
+                    .collect();
+                if normals.iter().any(|n| *n == Vec3::ZERO || !n.is_finite()) {
+                    self.warn(&format!("{location}.attributes.NORMAL"), "has zero or non-finite normals: shaded flat");
+                    None
+                } else {
+                    Some(normals)
+                }
+            }
+        };
+        let uvs = self.texture_coordinates(primitive, &location, count, 0)?;
+        let uvs1 = self.texture_coordinates(primitive, &location, count, 1)?;
+        let colors = self.vertex_colors(primitive, &location, count)?;
+        let material = self.material(primitive.material())?;
+        let normal_set = self.parts.materials[material].pbr.as_ref().and_then(|p| p.normal_map.as_ref()).map(|m| m.set);
+        let tangents = if let Some(set) = normal_set {
+            // MikkTSpace works in the normal map's own texture coordinates.
+            let uvs = if set == 1 { uvs1.as_deref() } else { uvs.as_deref() };
+            let frame = Frame { transforms: &transforms, normals: normals.as_deref(), uvs };
+            self.tangents(primitive, &location, count, &frame, &world_positions, &triangles)?
+        } else {
+            None
+        };
+        let emission = self.parts.materials[material].emission;
+        let both_sides = self.parts.materials[material].emits_both_sides;
+        let mesh = Mesh {
+            positions: world_positions,
+            normals,
+            uvs,
+            uvs1,
+            colors,
+            tangents,
+            triangles,
+            material,
+            name: node_name.to_string(),
+        };
+        let has_area = mesh.triangles.iter().any(|t| {
+            let [a, b, c] = t.map(|i| mesh.positions[i as usize]);
+            (b - a).cross(c - a).length() > 0.0
+        });
+        self.parts.meshes.push(mesh);
+        if emission != Vec3::ZERO && has_area {
+            self.emitters += 1;
+            self.parts.lights.push(LightSource::Area {
+                mesh: self.parts.meshes.len() - 1,
+                radiance: emission,
+                samples: self.spec.emitter_samples,
+                seed: 0x617f_0000 + self.emitters,
+                both_sides,
+            });
+            self.parts.light_names.push(GltfLightNames {
+                light: None,
+                node: Some(node_name.to_string()),
+                material: Some(self.parts.materials[material].name.clone()),
+            });
+        }
+        Ok(Some(self.parts.meshes.len() - 1))
     }
 
     /// A primitive's POSITIONs (in its mesh's space) and its triangles,
@@ -460,7 +586,9 @@ impl Importer<'_, '_> {
         if self.triangles > MAX_TRIANGLES {
             return Err(self.error(
                 location,
-                format!("the scene expands to more than {MAX_TRIANGLES} triangles (every instance is a copy)"),
+                format!(
+                    "the scene expands to more than {MAX_TRIANGLES} triangles (copies counted, an instanced mesh once)"
+                ),
             ));
         }
         Ok((positions, triangles))

@@ -16,7 +16,7 @@ use std::path::Path;
 use glam::Vec3;
 
 use super::file::{self, SceneFile};
-use super::{gltf, groups, within_limits, LightGroups, Scene, SceneError, MAX_COORDINATE, MAX_EMITTER_SAMPLES};
+use super::{gltf, groups, object, within_limits, LightGroups, Scene, SceneError, MAX_COORDINATE, MAX_EMITTER_SAMPLES};
 
 /// What the command line overrides in a scene file.
 #[derive(Debug, Clone, Copy, Default)]
@@ -117,12 +117,14 @@ impl Scene {
         let (mut lights, mut requested_groups) =
             lights::lights(&v, base, &spec, &mut meshes, &mut materials, &mut inputs)?;
         let mut warnings = Vec::new();
+        let mut instances = Vec::new();
         let gltf_camera = match &spec.gltf {
             None => None,
             Some(g) => {
                 let mut light_names = Vec::new();
                 let parts = gltf::Parts {
                     meshes: &mut meshes,
+                    instances: &mut instances,
                     materials: &mut materials,
                     textures: &mut textures,
                     lights: &mut lights,
@@ -138,7 +140,9 @@ impl Scene {
                 camera
             }
         };
-        let (camera_spec, film) = settings::camera_and_film(&v, &spec, gltf_camera, &meshes, &mut warnings)?;
+        let objects = object::place(&meshes, instances);
+        let (camera_spec, film) =
+            settings::camera_and_film(&v, &spec, gltf_camera, object::world_bounds(&meshes, &objects), &mut warnings)?;
         let environment = settings::environment(&v, base, &spec, &mut inputs)?;
         let indirect = settings::indirect(&v, &spec)?;
         let groups = LightGroups::assign(
@@ -158,6 +162,7 @@ impl Scene {
             materials,
             textures,
             meshes,
+            objects,
             lights,
             groups,
             max_mirror_depth: spec.render.max_mirror_depth.min(64),

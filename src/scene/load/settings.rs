@@ -8,7 +8,6 @@ use glam::Vec3;
 use super::Validator;
 use crate::scene::file::{self, SceneFile};
 use crate::scene::gltf::GltfCamera;
-use crate::scene::mesh::Mesh;
 use crate::scene::{
     check_resolution, Environment, EnvironmentMap, Film, IndirectSettings, SceneError, DEFAULT_GLTF_WIDTH,
     MAX_VPL_PATHS,
@@ -64,14 +63,14 @@ fn check_camera(v: &Validator<'_>, cam: &file::CameraSpec, field: &str) -> Resul
 pub const FRAMING_FOV_Y: f32 = 45.0;
 
 /// The camera (the TOML's, else the glTF file's, else one framing the
-/// meshes, with a note in `warnings`) and the film (the TOML's, else 640
+/// objects' `bounds`, with a note in `warnings`) and the film (the TOML's, else 640
 /// pixels wide at the glTF camera's aspect ratio, 640 x 480 for a framing
 /// camera).
 pub(super) fn camera_and_film(
     v: &Validator<'_>,
     spec: &SceneFile,
     gltf_camera: Option<GltfCamera>,
-    meshes: &[Mesh],
+    bounds: (Vec3, Vec3),
     warnings: &mut Vec<String>,
 ) -> Result<(file::CameraSpec, Film), SceneError> {
     let (camera_spec, aspect_ratio) = match (&spec.camera, gltf_camera) {
@@ -82,7 +81,7 @@ pub(super) fn camera_and_film(
             (c.spec, c.aspect_ratio)
         }
         (None, None) => {
-            let Some(camera) = framing_camera(meshes) else {
+            let Some(camera) = framing_camera(bounds) else {
                 return Err(v.error(
                     "camera",
                     "missing: the glTF file has no camera and no geometry to frame, and no [camera] is given",
@@ -107,12 +106,10 @@ pub(super) fn camera_and_film(
     Ok((camera_spec, film))
 }
 
-/// A camera that sees the whole of the meshes' bounding sphere, from the
+/// A camera that sees the whole of the bounds' (the objects') bounding sphere, from the
 /// front (+Z) and a little above (the direction (0, 0.25, 1)), as glTF
 /// viewers show a file without a camera; None without geometry.
-fn framing_camera(meshes: &[Mesh]) -> Option<file::CameraSpec> {
-    let points = meshes.iter().flat_map(|m| m.positions.iter());
-    let (lo, hi) = points.fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), p| (lo.min(*p), hi.max(*p)));
+fn framing_camera((lo, hi): (Vec3, Vec3)) -> Option<file::CameraSpec> {
     if !(lo.is_finite() && hi.is_finite()) {
         return None;
     }
