@@ -989,6 +989,38 @@ fn skins_and_morph_targets_take_the_pose_the_file_gives() {
     assert!(e.contains("JOINTS_0") && e.contains("names joint 1, but the skin has 1"), "{e}");
 }
 
+/// Morph targets displace the file's TANGENTs too (§3.7.2.2; w stays): a
+/// triangle whose tangents are +x and whose target moves them by (-1, 1,
+/// 0) has +y tangents at weight 1, and tangents halfway at 0.5.
+#[test]
+fn morph_targets_displace_the_tangents() {
+    let dir = TempDir::new("gltf-morph-tangent");
+    let tangent_at = |weight: f32| {
+        let mut g = GltfBuilder::new();
+        let flat: Vec<f32> = TRIANGLE.iter().flatten().copied().collect();
+        let position = g.floats(&flat, "VEC3", 3);
+        let normal = g.floats(&[0.0, 0.0, 1.0].repeat(3), "VEC3", 3);
+        let uv = g.floats(&[0.0, 0.0, 1.0, 0.0, 0.0, 1.0], "VEC2", 2);
+        let tangent = g.floats(&[1.0, 0.0, 0.0, -1.0].repeat(3), "VEC4", 4);
+        let delta = g.floats(&[-1.0, 1.0, 0.0].repeat(3), "VEC3", 3);
+        let position_delta = g.floats(&[0.0; 9], "VEC3", 3);
+        let normals = g.png_texture(1, 1, &[128, 128, 255]);
+        let material = g.material(json!({ "normalTexture": { "index": normals } }));
+        let mesh = g.push_mesh(json!({ "primitives": [{
+            "attributes": { "POSITION": position, "NORMAL": normal, "TEXCOORD_0": uv, "TANGENT": tangent },
+            "targets": [{ "POSITION": position_delta, "TANGENT": delta }], "material": material,
+        }], "weights": [weight] }));
+        g.node(json!({ "mesh": mesh }), true);
+        let scene = load(&dir, &format!("m{weight}.gltf"), &g.embedded());
+        scene.meshes[0].tangents.as_ref().expect("the file's tangents")[0]
+    };
+    let close = |a: glam::Vec4, b: glam::Vec4| (a - b).abs().max_element() < 1e-6;
+    assert!(close(tangent_at(0.0), glam::Vec4::new(1.0, 0.0, 0.0, -1.0)), "{}", tangent_at(0.0));
+    assert!(close(tangent_at(1.0), glam::Vec4::new(0.0, 1.0, 0.0, -1.0)), "{}", tangent_at(1.0));
+    let half = std::f32::consts::FRAC_1_SQRT_2;
+    assert!(close(tangent_at(0.5), glam::Vec4::new(half, half, 0.0, -1.0)), "{}", tangent_at(0.5));
+}
+
 /// EXT_mesh_gpu_instancing: one mesh, instanced once per instance (an
 /// Embree instance), placed by node x translation x rotation x scale,
 /// named by the node and the instance's index (the Cryptomatte object

@@ -363,15 +363,7 @@ impl SceneBuilder {
                 triangles.len(),
             )
         };
-        self.raw.device.check("attaching a triangle mesh")?;
-        if id == sys::LC_INVALID_ID {
-            return Err(MeshError::Embree(EmbreeError {
-                code: 1,
-                kind: error_kind(1),
-                context: "attaching a triangle mesh",
-                message: "rtcNewGeometry failed".into(),
-            }));
-        }
+        self.attached(id, "attaching a triangle mesh")?;
         let mask = mask.map(|m| {
             let uvs: Vec<f32> = m.uvs.iter().flat_map(|uv| uv.to_array()).collect();
             let (a, alpha) = (m.transform, m.alpha);
@@ -426,17 +418,24 @@ impl SceneBuilder {
         // the 12 floats during the call.
         let id =
             unsafe { sys::lc_scene_attach_instance(self.raw.ptr.as_ptr(), child.raw.ptr.as_ptr(), columns.as_ptr()) };
-        self.raw.device.check("attaching an instance")?;
+        self.attached(id, "attaching an instance")?;
+        self.instanced.push(Arc::clone(child));
+        Ok(id)
+    }
+
+    /// The device's error after an attach returned `id`, else an error
+    /// when the shim could not make the geometry (LC_INVALID_ID).
+    fn attached(&self, id: GeometryId, context: &'static str) -> Result<(), MeshError> {
+        self.raw.device.check(context)?;
         if id == sys::LC_INVALID_ID {
             return Err(MeshError::Embree(EmbreeError {
                 code: 1,
                 kind: error_kind(1),
-                context: "attaching an instance",
+                context,
                 message: "rtcNewGeometry failed".into(),
             }));
         }
-        self.instanced.push(Arc::clone(child));
-        Ok(id)
+        Ok(())
     }
 
     /// Builds Embree's acceleration structure; the result is read-only and

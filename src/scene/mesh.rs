@@ -51,6 +51,53 @@ impl Mesh {
         [uv, interpolate(&self.uvs1).unwrap_or(uv)]
     }
 
+    /// Sets per-vertex tangents from per-corner ones (MikkTSpace's: one per
+    /// triangle corner). A vertex whose corners carry different tangents
+    /// (a mirrored-uv seam, a hard tangent edge) is split into one vertex
+    /// per tangent, every per-vertex attribute copied, as MikkTSpace's own
+    /// welding would leave it; corners that agree keep sharing their vertex.
+    pub fn set_corner_tangents(&mut self, corners: &[[Vec4; 3]]) {
+        debug_assert_eq!(corners.len(), self.triangles.len());
+        let mut tangents: Vec<Option<Vec4>> = vec![None; self.positions.len()];
+        // The vertex each new vertex copies, and the new vertex of each
+        // (vertex, tangent) pair already split off.
+        let mut copies_of: Vec<usize> = Vec::new();
+        let mut split: std::collections::HashMap<(u32, [u32; 4]), u32> = std::collections::HashMap::new();
+        for (tri, corner) in self.triangles.iter_mut().zip(corners) {
+            for (index, &tangent) in tri.iter_mut().zip(corner) {
+                let v = *index as usize;
+                match tangents[v] {
+                    None => tangents[v] = Some(tangent),
+                    Some(t) if t.to_array().map(f32::to_bits) == tangent.to_array().map(f32::to_bits) => {}
+                    Some(_) => {
+                        let key = (*index, tangent.to_array().map(f32::to_bits));
+                        *index = *split.entry(key).or_insert_with(|| {
+                            copies_of.push(v);
+                            tangents.push(Some(tangent));
+                            (tangents.len() - 1) as u32
+                        });
+                    }
+                }
+            }
+        }
+        fn copy<T: Copy>(values: &mut Option<Vec<T>>, copies_of: &[usize]) {
+            if let Some(values) = values {
+                for &v in copies_of {
+                    values.push(values[v]);
+                }
+            }
+        }
+        for &v in &copies_of {
+            self.positions.push(self.positions[v]);
+        }
+        copy(&mut self.normals, &copies_of);
+        copy(&mut self.uvs, &copies_of);
+        copy(&mut self.uvs1, &copies_of);
+        copy(&mut self.colors, &copies_of);
+        // A vertex no triangle uses keeps the default frame's tangent.
+        self.tangents = Some(tangents.into_iter().map(|t| t.unwrap_or(Vec4::new(1.0, 0.0, 0.0, 1.0))).collect());
+    }
+
     /// A parallelogram with corners c, c+u, c+u+v, c+v; uv spans [0,1]^2.
     #[must_use]
     pub fn quad(corner: Vec3, u: Vec3, v: Vec3, material: usize) -> Self {
@@ -274,6 +321,34 @@ fn locate_obj_error(path: &Path) -> Option<(usize, String)> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Two triangles sharing an edge (vertices 0 and 2) whose corners there
+    /// disagree on the tangent's handedness (a mirrored-uv seam): the
+    /// shared vertices split in two, attributes copied; corners that agree
+    /// keep one vertex.
+    #[test]
+    fn corners_with_different_tangents_split_their_vertex() {
+        let mut mesh = Mesh {
+            positions: vec![Vec3::ZERO, Vec3::X, Vec3::new(1.0, 1.0, 0.0), Vec3::Y],
+            uvs: Some(vec![Vec2::ZERO, Vec2::X, Vec2::ONE, Vec2::Y]),
+            colors: Some(vec![Vec3::X, Vec3::Y, Vec3::Z, Vec3::ONE]),
+            triangles: vec![[0, 1, 2], [0, 2, 3]],
+            ..Mesh::default()
+        };
+        let (right, left) = (Vec4::new(1.0, 0.0, 0.0, 1.0), Vec4::new(1.0, 0.0, 0.0, -1.0));
+        mesh.set_corner_tangents(&[[right; 3], [left, left, left]]);
+        assert_eq!(mesh.triangles, [[0, 1, 2], [4, 5, 3]]);
+        assert_eq!(mesh.positions.len(), 6);
+        assert_eq!((mesh.positions[4], mesh.positions[5]), (Vec3::ZERO, Vec3::new(1.0, 1.0, 0.0)));
+        assert_eq!(mesh.uvs.as_ref().unwrap()[5], Vec2::ONE);
+        assert_eq!(mesh.colors.as_ref().unwrap()[4], Vec3::X);
+        assert_eq!(mesh.tangents.as_ref().unwrap(), &[right, right, right, left, left, left]);
+        // Corners that agree share their vertex.
+        let mut same =
+            Mesh { triangles: vec![[0, 1, 2], [0, 2, 3]], positions: vec![Vec3::ZERO; 4], ..Mesh::default() };
+        same.set_corner_tangents(&[[right; 3], [right; 3]]);
+        assert_eq!((same.positions.len(), same.triangles[1]), (4, [0, 2, 3]));
+    }
 
     #[test]
     fn obj_errors_name_their_line() {

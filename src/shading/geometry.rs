@@ -118,6 +118,8 @@ impl<'s> Geometry<'s> {
         (p1 - p0).cross(p2 - p0).dot(ray.direction) > 0.0
     }
 
+    /// The surface point of a hit along `ray`, in the world, with normals
+    /// facing the ray's origin.
     pub fn surface(&self, ray: &Ray, hit: &Hit) -> SurfacePoint<'s> {
         let mesh = &self.scene.meshes[self.mesh_of(hit)];
         let tri = mesh.triangles[hit.primitive as usize];

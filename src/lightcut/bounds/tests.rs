@@ -408,10 +408,12 @@ fn gather_cluster_bounds_hold_for_every_pair_below() {
     use crate::light_tree::layout::CutTree;
     use crate::lightcut::multidimensional::{build_gather_tree, GatherPoint, GatherScratch};
     let mut rng = Rng::seeded(2006);
-    // Six random materials, and a diffuse one that whole clusters share
-    // (where the normal cone, not a glossy peak, bounds M).
+    // Six random materials, and two diffuse ones that whole clusters share
+    // (where the normal cone, not a glossy peak, bounds M); of different
+    // albedos, so that a cluster's diffuse term must be its largest.
     let mut materials: Vec<Material> = (0..6).map(|_| material(&mut rng)).collect();
     materials.push(Material::diffuse("matte", Albedo::Constant(Vec3::new(0.8, 0.5, 0.3))));
+    materials.push(Material::diffuse("dark matte", Albedo::Constant(Vec3::new(0.2, 0.1, 0.05))));
     let mut scratch = GatherScratch::default();
     let (mut checked, mut reached) = (0, 0);
     for _ in 0..600 {
@@ -423,7 +425,7 @@ fn gather_cluster_bounds_hold_for_every_pair_below() {
         let matte = rng.next_f32() < 0.4;
         let points: Vec<GatherPoint<'_>> = (0..1 + rng.below(20))
             .map(|_| {
-                let m = if matte { 6 } else { rng.below(6) as usize };
+                let m = if matte { 6 + rng.below(2) as usize } else { rng.below(6) as usize };
                 let mut sp = surface(&mut rng, &materials[m]);
                 let cube = Vec3::new(rng.range_f32(-1.0, 1.0), rng.range_f32(-1.0, 1.0), rng.range_f32(-1.0, 1.0));
                 sp.p = centre + extent * cube;

@@ -515,24 +515,29 @@ impl Importer<'_, '_> {
         let tangents = if let Some(set) = normal_set {
             // MikkTSpace works in the normal map's own texture coordinates.
             let uvs = if set == 1 { uvs1.as_deref() } else { uvs.as_deref() };
-            let frame = Frame { transforms: &transforms, normals: normals.as_deref(), uvs };
+            let frame = Frame { transforms: &transforms, weights, normals: normals.as_deref(), uvs };
             self.tangents(primitive, &location, count, &frame, &world_positions, &triangles)?
         } else {
             None
         };
         let emission = self.parts.materials[material].emission;
         let both_sides = self.parts.materials[material].emits_both_sides;
-        let mesh = Mesh {
+        let mut mesh = Mesh {
             positions: world_positions,
             normals,
             uvs,
             uvs1,
             colors,
-            tangents,
+            tangents: None,
             triangles,
             material,
             name: node_name.to_string(),
         };
+        match tangents {
+            None => {}
+            Some(Tangents::PerVertex(tangents)) => mesh.tangents = Some(tangents),
+            Some(Tangents::PerCorner(corners)) => mesh.set_corner_tangents(&corners),
+        }
         let has_area = mesh.triangles.iter().any(|t| {
             let [a, b, c] = t.map(|i| mesh.positions[i as usize]);
             (b - a).cross(c - a).length() > 0.0
@@ -934,23 +939,31 @@ impl Importer<'_, '_> {
             if weight == 0.0 {
                 continue;
             }
-            let add = |accessor: Option<gltf::Accessor<'_>>, field: &str, into: &mut [[f32; 3]]| {
-                let Some(a) = accessor else { return Ok(()) };
-                let at = format!("{location}.targets[{k}].{field}");
-                let deltas = self.data.read_floats::<3>(&a, &at)?;
-                if deltas.len() != into.len() {
-                    return Err(self.error(at, format!("has {} elements for {} vertices", deltas.len(), into.len())));
-                }
-                for (v, d) in into.iter_mut().zip(&deltas) {
-                    for c in 0..3 {
-                        v[c] += weight * d[c];
-                    }
-                }
-                Ok(())
-            };
-            add(target.positions(), "POSITION", positions)?;
+            self.add_deltas(target.positions(), &format!("{location}.targets[{k}].POSITION"), weight, positions)?;
             if let Some(normals) = normals.as_deref_mut() {
-                add(target.normals(), "NORMAL", normals)?;
+                self.add_deltas(target.normals(), &format!("{location}.targets[{k}].NORMAL"), weight, normals)?;
+            }
+        }
+        Ok(())
+    }
+
+    /// Adds `weight` times a morph target's displacements (`accessor`, at
+    /// JSON location `at`; nothing when absent) to `into`, one per vertex.
+    fn add_deltas(
+        &self,
+        accessor: Option<gltf::Accessor<'_>>,
+        at: &str,
+        weight: f32,
+        into: &mut [[f32; 3]],
+    ) -> Result<(), SceneError> {
+        let Some(a) = accessor else { return Ok(()) };
+        let deltas = self.data.read_floats::<3>(&a, at)?;
+        if deltas.len() != into.len() {
+            return Err(self.error(at, format!("has {} elements for {} vertices", deltas.len(), into.len())));
+        }
+        for (v, d) in into.iter_mut().zip(&deltas) {
+            for c in 0..3 {
+                v[c] += weight * d[c];
             }
         }
         Ok(())
@@ -1086,17 +1099,20 @@ impl Importer<'_, '_> {
     }
 }
 
-/// What a primitive's tangents are made from: its node's transform and its
-/// world-space normals and (glTF) texture coordinates.
+/// What a primitive's tangents are made from: its node's transform, its
+/// morph weights, and its world-space normals and (glTF) texture
+/// coordinates.
 struct Frame<'a> {
     transforms: &'a VertexTransforms,
+    weights: &'a [f32],
     normals: Option<&'a [Vec3]>,
     uvs: Option<&'a [Vec2]>,
 }
 
 impl Importer<'_, '_> {
     /// A normal-mapped primitive's tangents in world space: its `TANGENT`s
-    /// (transformed by the node's matrix; w flipped by a mirroring one),
+    /// (displaced by its morph targets' at the weights, transformed by the
+    /// node's matrix; w flipped by a mirroring one),
     /// or MikkTSpace's from its normals and texture coordinates, as the
     /// specification asks. None, with a warning, without normals or
     /// texture coordinates (the normal map is then not used).
@@ -1108,15 +1124,27 @@ impl Importer<'_, '_> {
         frame: &Frame<'_>,
         positions: &[Vec3],
         triangles: &[[u32; 3]],
-    ) -> Result<Option<Vec<Vec4>>, SceneError> {
+    ) -> Result<Option<Tangents>, SceneError> {
         let (Some(normals), Some(uvs)) = (frame.normals, frame.uvs) else {
             self.warn(location, "normalTexture unused: the primitive has no NORMAL or not the TEXCOORD it reads");
             return Ok(None);
         };
-        let Some(tangents) = self.attribute::<4>(primitive, location, gltf::Semantic::Tangents, "tangents", count)?
+        let Some(mut tangents) =
+            self.attribute::<4>(primitive, location, gltf::Semantic::Tangents, "tangents", count)?
         else {
             return Ok(mikktspace_tangents(positions, normals, uvs, triangles));
         };
+        // Morph targets displace the tangent's xyz (§3.7.2.2); w stays.
+        let mut xyz: Vec<[f32; 3]> = tangents.iter().map(|t| [t[0], t[1], t[2]]).collect();
+        for (k, target) in primitive.morph_targets().enumerate() {
+            let weight = frame.weights.get(k).copied().unwrap_or(0.0);
+            if weight != 0.0 {
+                self.add_deltas(target.tangents(), &format!("{location}.targets[{k}].TANGENT"), weight, &mut xyz)?;
+            }
+        }
+        for (t, v) in tangents.iter_mut().zip(&xyz) {
+            t[..3].copy_from_slice(v);
+        }
         let sign = if frame.transforms.mirrored() { -1.0 } else { 1.0 };
         let tangents: Vec<Vec4> = tangents
             .iter()
@@ -1132,7 +1160,7 @@ impl Importer<'_, '_> {
             );
             return Ok(mikktspace_tangents(positions, normals, uvs, triangles));
         }
-        Ok(Some(tangents))
+        Ok(Some(Tangents::PerVertex(tangents)))
     }
 
     /// A primitive's float attribute `semantic` of N components, one per
@@ -1247,22 +1275,25 @@ impl Importer<'_, '_> {
     }
 }
 
-/// MikkTSpace tangents of a triangle mesh, one per vertex (a vertex shared
-/// by faces that MikkTSpace would split keeps one face's), from glTF's
-/// texture coordinates with v turned up, so that the bitangent points up
-/// the image as glTF's normal maps expect. None if MikkTSpace fails.
-fn mikktspace_tangents(
-    positions: &[Vec3],
-    normals: &[Vec3],
-    uvs: &[Vec2],
-    triangles: &[[u32; 3]],
-) -> Option<Vec<Vec4>> {
+/// A primitive's tangents: the file's, one per vertex, or MikkTSpace's,
+/// one per triangle corner (`Mesh::set_corner_tangents` splits the
+/// vertices whose corners disagree).
+enum Tangents {
+    PerVertex(Vec<Vec4>),
+    PerCorner(Vec<[Vec4; 3]>),
+}
+
+/// MikkTSpace tangents of a triangle mesh, one per triangle corner, from
+/// glTF's texture coordinates with v turned up, so that the bitangent
+/// points up the image as glTF's normal maps expect. None if MikkTSpace
+/// fails.
+fn mikktspace_tangents(positions: &[Vec3], normals: &[Vec3], uvs: &[Vec2], triangles: &[[u32; 3]]) -> Option<Tangents> {
     struct Faces<'a> {
         positions: &'a [Vec3],
         normals: &'a [Vec3],
         uvs: &'a [Vec2],
         triangles: &'a [[u32; 3]],
-        tangents: Vec<Vec4>,
+        tangents: Vec<[Vec4; 3]>,
     }
     impl bevy_mikktspace::Geometry for Faces<'_> {
         fn num_faces(&self) -> usize {
@@ -1282,12 +1313,17 @@ fn mikktspace_tangents(
             [uv.x, 1.0 - uv.y]
         }
         fn set_tangent_encoded(&mut self, tangent: [f32; 4], face: usize, vert: usize) {
-            self.tangents[self.triangles[face][vert] as usize] = Vec4::from_array(tangent);
+            self.tangents[face][vert] = Vec4::from_array(tangent);
         }
     }
-    let mut faces =
-        Faces { positions, normals, uvs, triangles, tangents: vec![Vec4::new(1.0, 0.0, 0.0, 1.0); positions.len()] };
-    bevy_mikktspace::generate_tangents(&mut faces).then_some(faces.tangents)
+    let mut faces = Faces {
+        positions,
+        normals,
+        uvs,
+        triangles,
+        tangents: vec![[Vec4::new(1.0, 0.0, 0.0, 1.0); 3]; triangles.len()],
+    };
+    bevy_mikktspace::generate_tangents(&mut faces).then_some(Tangents::PerCorner(faces.tangents))
 }
 
 /// Triangles of a primitive: lists as they are, strips and fans converted
