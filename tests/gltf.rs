@@ -22,7 +22,7 @@ fn radiance_seen(scene: &Scene, from: Vec3, to: Vec3) -> (DVec3, Vec3) {
     let lights = Lights::from_scene(scene);
     let device = Device::try_new().unwrap();
     let geometry = Geometry::try_new(&device, scene, std::slice::from_ref(&lights)).unwrap();
-    let ray = Ray { origin: from, direction: (to - from).normalize(), t_near: 0.0, t_far: f32::INFINITY };
+    let ray = Ray { origin: from, direction: (to - from).normalize(), t_near: 0.0, t_far: f32::INFINITY, time: 0.0 };
     let hit = geometry.embree.intersect(&ray).expect("the ray hits the scene");
     let sp = geometry.surface(&ray, &hit);
     let mut buffers = BatchBuffers::default();
@@ -658,7 +658,7 @@ fn hit_point(scene: &Scene, from: Vec3, to: Vec3) -> Vec3 {
     let lights = Lights::from_scene(scene);
     let device = Device::try_new().unwrap();
     let geometry = Geometry::try_new(&device, scene, std::slice::from_ref(&lights)).unwrap();
-    let ray = Ray { origin: from, direction: (to - from).normalize(), t_near: 0.0, t_far: f32::INFINITY };
+    let ray = Ray { origin: from, direction: (to - from).normalize(), t_near: 0.0, t_far: f32::INFINITY, time: 0.0 };
     let hit = geometry.embree.intersect(&ray).expect("the ray hits the scene");
     geometry.surface(&ray, &hit).p
 }

@@ -288,6 +288,9 @@ pub struct SceneBuilder {
     instanced: Vec<Arc<Scene>>,
 }
 
+/// Most time steps a moving instance may have (Embree's limit, 129).
+pub const MAX_TIME_STEPS: usize = 129;
+
 /// Geometry id of an attached mesh (Embree's geomID).
 pub type GeometryId = u32;
 
@@ -304,8 +307,11 @@ pub enum MeshError {
     #[error("vertex {vertex} is not finite")]
     NonFiniteVertex { vertex: usize },
     /// An instance's transform is not finite or not invertible (the
-    /// caller's data), or its scene belongs to another device.
-    #[error("the instance's transform is not finite and invertible, or its scene is another device's")]
+    /// caller's data), it has no time step or more than Embree allows, or
+    /// its scene belongs to another device.
+    #[error(
+        "the instance's transforms are not finite and invertible, not 1 to 129 time steps, or its scene is another device's"
+    )]
     BadInstance,
     /// Embree rejected the buffers.
     #[error(transparent)]
@@ -402,22 +408,43 @@ impl SceneBuilder {
     /// this scene's: hits on it report the instance's geometry id and the
     /// child mesh's primitive and barycentrics.
     pub fn attach_instance(&mut self, child: &Arc<Scene>, transform: Affine3A) -> Result<GeometryId, MeshError> {
-        let m = transform.matrix3;
+        self.attach_moving_instance(child, &[transform])
+    }
+
+    /// [`Self::attach_instance`] through Embree's motion blur: `steps`
+    /// (1 to [`MAX_TIME_STEPS`]) are the placements at evenly spaced times
+    /// of the shutter, the first at its open (time 0) and the last at its
+    /// close (time 1); Embree interpolates the matrices linearly between
+    /// them, and a ray meets the instance where it is at the ray's time.
+    pub fn attach_moving_instance(&mut self, child: &Arc<Scene>, steps: &[Affine3A]) -> Result<GeometryId, MeshError> {
         let same_device = Arc::ptr_eq(&child.raw.device.handle, &self.raw.device.handle);
-        if !same_device || !transform.is_finite() || m.determinant() == 0.0 {
+        let invertible = |t: &Affine3A| t.is_finite() && t.matrix3.determinant() != 0.0;
+        if !same_device || !(1..=MAX_TIME_STEPS).contains(&steps.len()) || !steps.iter().all(invertible) {
             return Err(MeshError::BadInstance);
         }
-        let t = transform.translation;
-        let columns: [f32; 12] = [
-            m.x_axis.x, m.x_axis.y, m.x_axis.z, m.y_axis.x, m.y_axis.y, m.y_axis.z, m.z_axis.x, m.z_axis.y, m.z_axis.z,
-            t.x, t.y, t.z,
-        ];
+        let columns: Vec<f32> = steps
+            .iter()
+            .flat_map(|s| {
+                let (m, t) = (s.matrix3, s.translation);
+                [
+                    m.x_axis.x, m.x_axis.y, m.x_axis.z, m.y_axis.x, m.y_axis.y, m.y_axis.z, m.z_axis.x, m.z_axis.y,
+                    m.z_axis.z, t.x, t.y, t.z,
+                ]
+            })
+            .collect();
         // SAFETY: both scenes are live and of the same device (checked);
         // the child is committed (a `Scene` only exists committed) and kept
-        // alive by self.instanced for as long as this scene; Embree copies
-        // the 12 floats during the call.
-        let id =
-            unsafe { sys::lc_scene_attach_instance(self.raw.ptr.as_ptr(), child.raw.ptr.as_ptr(), columns.as_ptr()) };
+        // alive by self.instanced for as long as this scene; `columns`
+        // holds 12 floats per step for the step count passed (1 to 129,
+        // checked), which Embree copies during the call.
+        let id = unsafe {
+            sys::lc_scene_attach_instance(
+                self.raw.ptr.as_ptr(),
+                child.raw.ptr.as_ptr(),
+                columns.as_ptr(),
+                steps.len() as u32,
+            )
+        };
         self.attached(id, "attaching an instance")?;
         self.instanced.push(Arc::clone(child));
         Ok(id)
@@ -468,14 +495,17 @@ pub fn refused_rays() -> u64 {
     REFUSED_RAYS.load(Ordering::Relaxed)
 }
 
-/// A ray: origin, direction and the parametric interval `[t_near, t_far]`
-/// measured in lengths of `direction`.
+/// A ray: origin, direction, the parametric interval `[t_near, t_far]`
+/// measured in lengths of `direction`, and the time it is traced at, in
+/// the shutter interval: 0 at its open, 1 at its close (moving geometry is
+/// where it is at that time; 0 in a scene without motion).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Ray {
     pub origin: Vec3,
     pub direction: Vec3,
     pub t_near: f32,
     pub t_far: f32,
+    pub time: f32,
 }
 
 /// Embree's `FLT_LARGE`: a ray component beyond it is invalid, and an
@@ -494,6 +524,7 @@ impl Ray {
             && self.t_near >= 0.0
             && !self.t_far.is_nan()
             && self.t_near <= self.t_far
+            && (0.0..=1.0).contains(&self.time)
     }
 
     /// The ray in the shim's layout, or None (counted in [`refused_rays`])
@@ -511,6 +542,7 @@ impl Ray {
             tnear: self.t_near,
             dir: self.direction.to_array(),
             tfar: self.t_far,
+            time: self.time,
         })
     }
 }
@@ -653,7 +685,7 @@ impl ShadowRay {
     /// and whose t_far reads back as Embree's mark of an occluded ray: what
     /// a refused ray becomes, so that it blocks its light instead of
     /// letting it leak.
-    const BLOCKED: Self = Self(sys::LcRay { org: [0.0; 3], tnear: 0.0, dir: [0.0, 0.0, 1.0], tfar: f32::NEG_INFINITY });
+    const BLOCKED: Self = Self(sys::LcRay { org: [0.0; 3], tnear: 0.0, dir: [0.0, 0.0, 1.0], tfar: f32::NEG_INFINITY, time: 0.0 });
 
     /// The shadow ray, or [`ShadowRay::BLOCKED`] when Embree must not see
     /// it (see [`refused_rays`]).
@@ -670,6 +702,7 @@ impl ShadowRay {
             direction: Vec3::from_array(self.0.dir),
             t_near: self.0.tnear,
             t_far: self.0.tfar,
+            time: self.0.time,
         }
     }
 }
@@ -681,6 +714,7 @@ impl std::fmt::Debug for ShadowRay {
             .field("direction", &self.0.dir)
             .field("t_near", &self.0.tnear)
             .field("t_far", &self.0.tfar)
+            .field("time", &self.0.time)
             .finish()
     }
 }

@@ -126,12 +126,15 @@ uint32_t lc_scene_attach_triangles(LcScene* scene, const float* vertices, size_t
     return (uint32_t)id;
 }
 
-uint32_t lc_scene_attach_instance(LcScene* scene, const LcScene* child, const float* transform) {
+uint32_t lc_scene_attach_instance(LcScene* scene, const LcScene* child, const float* transforms,
+                                  uint32_t step_count) {
     RTCGeometry geometry = rtcNewGeometry(scene->owner->device, RTC_GEOMETRY_TYPE_INSTANCE);
     if (geometry == NULL) return LC_INVALID_ID;
     rtcSetGeometryInstancedScene(geometry, child->scene);
-    rtcSetGeometryTimeStepCount(geometry, 1);
-    rtcSetGeometryTransform(geometry, 0, RTC_FORMAT_FLOAT3X4_COLUMN_MAJOR, transform);
+    /* Embree's default time range is [0, 1]: step k sits at k / (steps - 1). */
+    rtcSetGeometryTimeStepCount(geometry, step_count);
+    for (uint32_t k = 0; k < step_count; ++k)
+        rtcSetGeometryTransform(geometry, k, RTC_FORMAT_FLOAT3X4_COLUMN_MAJOR, transforms + 12 * (size_t)k);
     rtcSetGeometryMask(geometry, LC_MASK_ALL);
     rtcCommitGeometry(geometry);
     unsigned int id = rtcAttachGeometry(scene->scene, geometry);
@@ -209,7 +212,7 @@ static void to_rtc_ray(const LcRay* in, struct RTCRay* out) {
     out->dir_x = in->dir[0];
     out->dir_y = in->dir[1];
     out->dir_z = in->dir[2];
-    out->time = 0.0f;
+    out->time = in->time;
     out->tfar = in->tfar;
     out->mask = LC_MASK_ALL;
     out->id = 0;
@@ -309,7 +312,7 @@ LC_VALID_MASK(16)
             packet.dir_x[i] = r->dir[0];                                               \
             packet.dir_y[i] = r->dir[1];                                               \
             packet.dir_z[i] = r->dir[2];                                               \
-            packet.time[i] = 0.0f;                                                     \
+            packet.time[i] = r->time;                                                  \
             packet.tfar[i] = r->tfar;                                                  \
             packet.mask[i] = LC_MASK_ALL;                                              \
             packet.id[i] = (unsigned)i;                                                \

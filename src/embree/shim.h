@@ -19,13 +19,16 @@ extern "C" {
 typedef struct LcDevice LcDevice;
 typedef struct LcScene LcScene;
 
-/* A ray: origin, direction (need not be normalised), and the parametric
- * interval [tnear, tfar] in units of the direction's length. */
+/* A ray: origin, direction (need not be normalised), the parametric
+ * interval [tnear, tfar] in units of the direction's length, and its time
+ * in the shutter interval, 0 at its open and 1 at its close (Embree's ray
+ * time, which moving geometry is placed at). */
 typedef struct LcRay {
     float org[3];
     float tnear;
     float dir[3];
     float tfar;
+    float time;
 } LcRay;
 
 /* The closest hit of a ray. geom_id is LC_INVALID_ID on a miss; on an
@@ -68,11 +71,15 @@ uint32_t lc_scene_attach_triangles(LcScene* scene,
                                    const float* vertices, size_t vertex_count,
                                    const uint32_t* indices, size_t triangle_count);
 /* Attaches an instance of `child`, a committed scene of the same device
- * holding one geometry, placed by the affine map `transform` from its space
- * to this scene's: 12 floats, column-major 3 x 4 (the images of the x, y
- * and z axes, then the translation). `child` must outlive the scene.
- * Returns the geometry id, or LC_INVALID_ID. */
-uint32_t lc_scene_attach_instance(LcScene* scene, const LcScene* child, const float* transform);
+ * holding one geometry, placed by affine maps from its space to this
+ * scene's: `step_count` (1 to 129) transforms of 12 floats each,
+ * column-major 3 x 4 (the images of the x, y and z axes, then the
+ * translation). One step is a still placement; several are Embree's motion
+ * blur: step k is the placement at time k / (step_count - 1), and Embree
+ * interpolates the matrices linearly between steps. `child` must outlive
+ * the scene. Returns the geometry id, or LC_INVALID_ID. */
+uint32_t lc_scene_attach_instance(LcScene* scene, const LcScene* child, const float* transforms,
+                                  uint32_t step_count);
 /* A cut-out (glTF's alphaMode MASK): a hit on the mesh whose alpha, looked up
  * bilinearly (repeating) at the hit's texture coordinate, is below `cutoff`
  * is ignored by every query (closest hit, occlusion, packets), through

@@ -50,7 +50,7 @@ fn random_mesh(rng: &mut Rng, triangles: usize) -> (Vec<Vec3>, Vec<[u32; 3]>) {
 fn random_ray(rng: &mut Rng) -> Ray {
     let origin = Vec3::new(rng.range_f32(-2.0, 2.0), rng.range_f32(-2.0, 2.0), rng.range_f32(-2.0, 2.0));
     let target = Vec3::new(rng.range_f32(-1.0, 1.0), rng.range_f32(-1.0, 1.0), rng.range_f32(-1.0, 1.0));
-    Ray { origin, direction: target - origin, t_near: 0.0, t_far: rng.range_f32(0.2, 3.0) }
+    Ray { origin, direction: target - origin, t_near: 0.0, t_far: rng.range_f32(0.2, 3.0), time: 0.0 }
 }
 
 /// Whether a ray passes within `tolerance` (in t) of an edge-case decision
@@ -151,7 +151,7 @@ fn rays_respect_their_interval() {
     let v = [Vec3::new(-10.0, -10.0, 1.0), Vec3::new(10.0, -10.0, 1.0), Vec3::new(0.0, 10.0, 1.0)];
     builder.attach_triangles(&v, &[[0, 1, 2]]).unwrap();
     let scene = builder.commit().unwrap();
-    let ray = |t_near, t_far| Ray { origin: Vec3::ZERO, direction: Vec3::Z, t_near, t_far };
+    let ray = |t_near, t_far| Ray { origin: Vec3::ZERO, direction: Vec3::Z, t_near, t_far, time: 0.0 };
     assert!(scene.occluded(&ray(0.0, 2.0)));
     assert!(!scene.occluded(&ray(0.0, 0.99)));
     assert!(!scene.occluded(&ray(1.01, 2.0)));
@@ -163,7 +163,7 @@ fn rays_respect_their_interval() {
 fn several_meshes_report_their_own_ids_and_an_empty_scene_hits_nothing() {
     let device = Device::try_new().unwrap();
     let empty = device.try_new_scene().unwrap().commit().unwrap();
-    let ray = Ray { origin: Vec3::ZERO, direction: Vec3::Z, t_near: 0.0, t_far: f32::INFINITY };
+    let ray = Ray { origin: Vec3::ZERO, direction: Vec3::Z, t_near: 0.0, t_far: f32::INFINITY, time: 0.0 };
     assert!(empty.intersect(&ray).is_none());
     assert!(!empty.occluded(&ray));
     let mut builder = device.try_new_scene().unwrap();
@@ -225,7 +225,7 @@ fn wall() -> (Scene, Ray) {
     let mut builder = device.try_new_scene().unwrap();
     let v = [Vec3::new(-10.0, -10.0, 1.0), Vec3::new(10.0, -10.0, 1.0), Vec3::new(0.0, 10.0, 1.0)];
     builder.attach_triangles(&v, &[[0, 1, 2]]).unwrap();
-    (builder.commit().unwrap(), Ray { origin: Vec3::ZERO, direction: Vec3::Z, t_near: 0.0, t_far: 0.5 })
+    (builder.commit().unwrap(), Ray { origin: Vec3::ZERO, direction: Vec3::Z, t_near: 0.0, t_far: 0.5, time: 0.0 })
 }
 
 #[test]
@@ -238,6 +238,8 @@ fn rays_embree_must_not_see_are_refused_in_every_build_and_block_their_light() {
         Ray { origin: Vec3::splat(1e19), ..clear },
         Ray { t_far: f32::NAN, ..clear },
         Ray { t_near: -1.0, ..clear },
+        Ray { time: 1.5, ..clear },
+        Ray { time: f32::NAN, ..clear },
     ];
     let before = refused_rays();
     for ray in &bad {
@@ -252,10 +254,11 @@ fn rays_embree_must_not_see_are_refused_in_every_build_and_block_their_light() {
     rays.insert(2, ShadowRay::new(clear));
     let mut occluded = Vec::new();
     scene.occluded_batch(&rays, &mut occluded);
-    assert_eq!(occluded, [true, true, false, true, true, true]);
+    let expected = [true, true, false, true, true, true, true, true];
+    assert_eq!(occluded, expected);
     for width in [PacketWidth::Four, PacketWidth::Eight, PacketWidth::Sixteen] {
         scene.occluded_packets(&rays, &mut occluded, width);
-        assert_eq!(occluded, [true, true, false, true, true, true], "{width:?}");
+        assert_eq!(occluded, expected, "{width:?}");
     }
     let mut hits = Vec::new();
     scene.intersect_batch(&[bad[0], Ray { t_far: 2.0, ..clear }], &mut hits);
@@ -271,4 +274,55 @@ fn an_error_embree_reports_is_taken_once_and_names_what_was_being_done() {
     assert!(error.to_string().contains("while tracing a tile's rays"), "{error}");
     assert_ne!(error.code, 0);
     assert_eq!(scene.take_error("tracing"), Ok(()), "the error is taken, not reported again");
+}
+
+#[test]
+fn a_moving_instance_is_where_it_is_at_each_ray_time_on_every_query() {
+    let device = Device::try_new().unwrap();
+    let mut child = device.try_new_scene().unwrap();
+    // A unit square in the plane z = 1, around x = 0.
+    let square = [Vec3::new(-0.5, -0.5, 1.0), Vec3::new(0.5, -0.5, 1.0), Vec3::new(0.5, 0.5, 1.0), Vec3::new(-0.5, 0.5, 1.0)];
+    child.attach_triangles(&square, &[[0, 1, 2], [0, 2, 3]]).unwrap();
+    let child = Arc::new(child.commit().unwrap());
+    let mut builder = device.try_new_scene().unwrap();
+    // Over the shutter it slides 4 units along x (two steps), and a second
+    // copy turns a quarter about z in three steps.
+    let slide = [Affine3A::IDENTITY, Affine3A::from_translation(Vec3::new(4.0, 0.0, 0.0))];
+    let sliding = builder.attach_moving_instance(&child, &slide).unwrap();
+    let far = Affine3A::from_translation(Vec3::new(0.0, 10.0, 0.0));
+    let turn: Vec<Affine3A> =
+        (0..3).map(|k| far * Affine3A::from_rotation_z(std::f32::consts::FRAC_PI_4 * k as f32)).collect();
+    let turning = builder.attach_moving_instance(&child, &turn).unwrap();
+    let scene = builder.commit().unwrap();
+    // A ray along +z at x: it meets the square while |x - 4 time| < 0.5.
+    let ray = |x: f32, y: f32, time: f32| Ray {
+        origin: Vec3::new(x, y, 0.0),
+        direction: Vec3::Z,
+        t_near: 0.0,
+        t_far: f32::INFINITY,
+        time,
+    };
+    for (x, time, hits) in [(0.0, 0.0, true), (0.0, 0.2, false), (2.0, 0.5, true), (2.0, 0.0, false), (3.8, 1.0, true)] {
+        let r = ray(x, 0.0, time);
+        assert_eq!(scene.intersect(&r).map(|h| h.geometry), hits.then_some(sliding), "x {x} at {time}");
+        assert_eq!(scene.occluded(&r), hits, "x {x} at {time}");
+        let mut packets = Vec::new();
+        scene.occluded_packets(&[ShadowRay::new(r); 5], &mut packets, PacketWidth::Eight);
+        assert_eq!(packets, vec![hits; 5], "packets at x {x}, time {time}");
+        let mut batch = Vec::new();
+        scene.occluded_batch(&[ShadowRay::new(r)], &mut batch);
+        assert_eq!(batch, vec![hits]);
+    }
+    // The turning square's corner (0.5, 0.5) reaches the y axis at 45
+    // degrees (time 0.5, 0.707 above its centre) and stays below 0.5
+    // elsewhere on that line at the open.
+    assert_eq!(scene.intersect(&ray(0.0, 10.68, 0.5)).map(|h| h.geometry), Some(turning));
+    assert!(!scene.occluded(&ray(0.0, 10.68, 0.0)));
+    // Steps Embree would refuse are refused first.
+    let mut builder = device.try_new_scene().unwrap();
+    assert!(matches!(builder.attach_moving_instance(&child, &[]), Err(MeshError::BadInstance)));
+    let too_many = vec![Affine3A::IDENTITY; MAX_TIME_STEPS + 1];
+    assert!(matches!(builder.attach_moving_instance(&child, &too_many), Err(MeshError::BadInstance)));
+    let singular = [Affine3A::IDENTITY, Affine3A::from_scale(Vec3::ZERO)];
+    assert!(matches!(builder.attach_moving_instance(&child, &singular), Err(MeshError::BadInstance)));
 }

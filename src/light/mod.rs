@@ -55,6 +55,27 @@ pub struct OmniLight {
     pub intensity: Vec3,
 }
 
+/// An omni light that moves over the shutter, in a straight line from
+/// `start` (at its open) to `end` (at its close). Moving lights are not
+/// clustered: every render mode evaluates each one at the shading point's
+/// time with a shadow ray of its own (docs/design.md §13.4).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct MovingOmniLight {
+    /// Metres, at the shutter's open and close.
+    pub start: Vec3,
+    pub end: Vec3,
+    /// W/sr.
+    pub intensity: Vec3,
+}
+
+impl MovingOmniLight {
+    /// The light where it is at `time` (0 at the shutter's open, 1 at its close).
+    #[must_use]
+    pub fn at(&self, time: f32) -> Light {
+        Light::Omni(OmniLight { position: self.start.lerp(self.end, time), intensity: self.intensity })
+    }
+}
+
 /// A cosine-weighted point light (an area-light sample or a virtual point
 /// light): it radiates intensity * max(0, cos phi) towards a direction at
 /// angle phi from its normal.
@@ -186,6 +207,9 @@ pub struct Lights {
     pub oriented: Vec<OrientedLight>,
     pub directional: Vec<DirectionalLight>,
     pub spot: Vec<SpotLight>,
+    /// Lights that move over the shutter: in no tree, and not counted by
+    /// [`Lights::len`] or visited by [`Lights::for_each`].
+    pub moving: Vec<MovingOmniLight>,
 }
 
 impl Lights {
@@ -218,6 +242,13 @@ impl Lights {
             }
             match *source {
                 LightSource::Point { position, intensity } => lights.omni.push(OmniLight { position, intensity }),
+                // With the shutter closed, everything is where it is at its open.
+                LightSource::MovingPoint { start, end, intensity } if scene.moves() => {
+                    lights.moving.push(MovingOmniLight { start, end, intensity });
+                }
+                LightSource::MovingPoint { start, intensity, .. } => {
+                    lights.omni.push(OmniLight { position: start, intensity });
+                }
                 LightSource::Spot { position, direction, intensity, inner_angle_degrees, outer_angle_degrees } => {
                     lights.spot.push(SpotLight {
                         position,
@@ -290,6 +321,7 @@ impl Lights {
         self.oriented.extend_from_slice(&other.oriented);
         self.directional.extend_from_slice(&other.directional);
         self.spot.extend_from_slice(&other.spot);
+        self.moving.extend_from_slice(&other.moving);
     }
 
     #[must_use]

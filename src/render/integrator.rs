@@ -13,7 +13,7 @@ use crate::light::Lights;
 use crate::light_tree::LightTrees;
 use crate::lightcut::multidimensional::{GatherPoint, GatherScratch};
 use crate::lightcut::{self, CutScratch, CutSettings, StochasticScratch};
-use crate::shading::{BatchBuffers, Geometry, LightBatch, SurfacePoint};
+use crate::shading::{BatchBuffers, BatchResult, Geometry, LightBatch, SurfacePoint};
 use crate::util::sampling::Rng;
 
 /// How direct light is computed at each shading point.
@@ -263,10 +263,19 @@ impl<'a> Integrator<'a> {
             let embree = crate::embree::thread_timed_nanos() - embree_before;
             stats.cut_nanos += (start.elapsed().as_nanos() as u64).saturating_sub(embree);
         }
-        stats.record_point(found.cut.nodes, found.cut.shadow_rays);
+        let mut moving = BatchResult::default();
+        if self.lights.iter().any(|group| !group.moving.is_empty()) {
+            for point in points {
+                let found = self.moving_light(&point.sp, point.strength, &mut scratch.batch, groups);
+                moving.radiance += found.radiance;
+                moving.lights += found.lights;
+                moving.shadow_rays += found.shadow_rays;
+            }
+        }
+        stats.record_point(found.cut.nodes + moving.lights, found.cut.shadow_rays + moving.shadow_rays);
         stats.gather_points += points.len() as u64;
         stats.gather_nodes += found.gather_nodes;
-        Some(found.cut.radiance)
+        Some(found.cut.radiance + moving.radiance)
     }
 
     fn direct_light(
@@ -293,6 +302,9 @@ impl<'a> Integrator<'a> {
                                 #[inline(always)]
                                 |light| batch.add(&light),
                             );
+                            for light in &group.moving {
+                                batch.add(&light.at(sp.time));
+                            }
                             let found = batch.finish();
                             radiance += found.radiance;
                             lights += found.lights;
@@ -325,10 +337,38 @@ impl<'a> Integrator<'a> {
                     let embree = crate::embree::thread_timed_nanos() - embree_before;
                     stats.cut_nanos += (start.elapsed().as_nanos() as u64).saturating_sub(embree);
                 }
-                stats.record_point(found.nodes, found.shadow_rays);
-                found.radiance
+                let moving = self.moving_light(sp, DVec3::ONE, &mut scratch.batch, &mut scratch.point_groups);
+                stats.record_point(found.nodes + moving.lights, found.shadow_rays + moving.shadow_rays);
+                found.radiance + moving.radiance
             }
         }
+    }
+
+    /// The light of the moving lights (in no tree: docs/design.md §13.4)
+    /// at `sp`, each where it is at the point's time with a shadow ray of
+    /// its own, times `strength`; each group's share added to `groups`.
+    fn moving_light(
+        &self,
+        sp: &SurfacePoint<'_>,
+        strength: DVec3,
+        buffers: &mut BatchBuffers,
+        groups: &mut [DVec3],
+    ) -> BatchResult {
+        let mut total = BatchResult::default();
+        for (g, group) in self.lights.iter().enumerate().filter(|(_, group)| !group.moving.is_empty()) {
+            let mut batch = LightBatch::new(&self.geometry.embree, sp, buffers);
+            for light in &group.moving {
+                batch.add(&light.at(sp.time));
+            }
+            let found = batch.finish();
+            total.radiance += strength * found.radiance;
+            total.lights += found.lights;
+            total.shadow_rays += found.shadow_rays;
+            if let Some(slot) = groups.get_mut(g) {
+                *slot += strength * found.radiance;
+            }
+        }
+        total
     }
 }
 

@@ -234,8 +234,16 @@ fn render_tile(
             let mut rng = Rng::from_key(&[settings.seed, u64::from(x), u64::from(y), LENS_STREAM]);
             [rng.next_f32(), rng.next_f32()]
         });
+        let time_shift = camera.shutter_open().then(|| {
+            Rng::from_key(&[settings.seed, u64::from(x), u64::from(y), SHUTTER_STREAM]).next_f32()
+        });
         for s in 0..settings.spp {
-            let ray = camera_ray(camera, settings, x, y, s, lens_shift);
+            let ray = match time_shift {
+                None => camera_ray(camera, settings, x, y, s, lens_shift),
+                // The sample's time, stratified per pixel like the lens
+                // (docs/design.md §13.4).
+                Some(shift) => camera_ray(&camera.at(sampling::shutter_time(s, shift)), settings, x, y, s, lens_shift),
+            };
             let key = [settings.seed, u64::from(x), u64::from(y), u64::from(s)];
             let sample = integrator.trace(ray, key, settings.transparent, scratch, &mut groups, &mut gathered);
             stats.camera_rays += 1;
@@ -296,6 +304,8 @@ fn render_tile(
 
 /// Keeps a pixel's lens rotation apart from its samples' streams.
 const LENS_STREAM: u64 = 0x1e45_0ff0_c5a3;
+/// Keeps a pixel's shutter-time shift apart from the lens's and the samples'.
+const SHUTTER_STREAM: u64 = 0x5407_7e55;
 
 /// Camera sample `s` of pixel (x, y): a point of the pixel drawn from the
 /// sample's own stream (the same in every mode), and on a thin lens the

@@ -32,6 +32,11 @@ enum Source {
     Omni {
         position: Vec3,
     },
+    /// An omni light moving from `start` to `end` over the shutter.
+    MovingOmni {
+        start: Vec3,
+        end: Vec3,
+    },
     Oriented {
         position: Vec3,
         normal: Vec3,
@@ -88,7 +93,7 @@ pub fn trace(
     let mut sources: Vec<(Source, Vec3)> = Vec::new();
     let mut source_group: Vec<usize> = Vec::new();
     for (g, lights) in groups.iter().enumerate() {
-        source_group.resize(source_group.len() + lights.len(), g);
+        source_group.resize(source_group.len() + lights.len() + lights.moving.len(), g);
         lights.for_each(|light| {
             sources.push(match light {
                 Light::Omni(l) => (Source::Omni { position: l.position }, 4.0 * PI * l.intensity),
@@ -108,6 +113,9 @@ pub fn trace(
                 ),
             });
         });
+        for l in &lights.moving {
+            sources.push((Source::MovingOmni { start: l.start, end: l.end }, 4.0 * PI * l.intensity));
+        }
     }
     let total: f64 = sources.iter().map(|s| f64::from(luminance(s.1))).sum();
     if total <= 0.0 {
@@ -120,6 +128,7 @@ pub fn trace(
         cdf.push(running);
     }
     let eps = geometry.ray_epsilon;
+    let moves = geometry.scene.moves();
     let paths: Vec<(usize, Vec<OrientedLight>)> = (0..settings.paths)
         .into_par_iter()
         .map(|k| {
@@ -128,8 +137,15 @@ pub fn trace(
             let index = cdf.partition_point(|&c| c < u).min(sources.len() - 1);
             let p_source = f64::from(luminance(sources[index].1)) / total;
             let mut power = sources[index].1 / (p_source * settings.paths as f64) as f32;
+            // In a scene that moves, path k is traced at a time of its own,
+            // stratified over the shutter; its VPLs then stay where it left
+            // them for the whole shutter (docs/design.md §13.4).
+            let time = if moves { (k as f32 + rng.next_f32()) / settings.paths as f32 } else { 0.0 };
             let (origin, direction) = match sources[index].0 {
                 Source::Omni { position } => (position, uniform_direction(rng.next_f32(), rng.next_f32())),
+                Source::MovingOmni { start, end } => {
+                    (start.lerp(end, time), uniform_direction(rng.next_f32(), rng.next_f32()))
+                }
                 Source::Oriented { position, normal } => {
                     (position + normal * eps, cosine_direction(normal, rng.next_f32(), rng.next_f32()))
                 }
@@ -151,7 +167,7 @@ pub fn trace(
                     (centre + direction * (2.0 * radius) + t * (r * phi.cos()) + b * (r * phi.sin()), -direction)
                 }
             };
-            let mut ray = Ray { origin, direction, t_near: 0.0, t_far: f32::INFINITY };
+            let mut ray = Ray { origin, direction, t_near: 0.0, t_far: f32::INFINITY, time };
             let mut vpls = Vec::new();
             for _ in 0..settings.bounces {
                 let Some(hit) = geometry.embree.intersect(&ray) else { break };
@@ -162,7 +178,7 @@ pub fn trace(
                 vpls.push(OrientedLight { position: sp.offset_origin(), normal: sp.n, intensity: power * sp.kd / PI });
                 power *= sp.kd;
                 let direction = cosine_direction(sp.n, rng.next_f32(), rng.next_f32());
-                ray = Ray { origin: sp.offset_origin(), direction, t_near: 0.0, t_far: f32::INFINITY };
+                ray = Ray { origin: sp.offset_origin(), direction, t_near: 0.0, t_far: f32::INFINITY, time };
             }
             (source_group[index], vpls)
         })

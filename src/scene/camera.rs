@@ -20,6 +20,19 @@ pub struct Camera {
     /// plane in focus along the view direction, scene units.
     lens_radius: f32,
     focus_distance: f32,
+    /// What it was made from (the eye, the point looked at, the up
+    /// vector asked for), for placing it at another time.
+    look_at: Vec3,
+    up_hint: Vec3,
+    fov_y_degrees: f32,
+    /// Where the eye and the point looked at are at the shutter's close,
+    /// when the camera moves (docs/design.md §13.4).
+    end: Option<(Vec3, Vec3)>,
+    /// The time in the shutter (0 at its open, 1 at its close) this camera
+    /// stands at ([`Camera::at`]); its rays carry it.
+    time: f32,
+    /// Whether the shutter stays open, so that camera samples spread over it.
+    shutter_open: bool,
 }
 
 impl Camera {
@@ -27,10 +40,78 @@ impl Camera {
     #[must_use]
     pub fn new(eye: Vec3, look_at: Vec3, up: Vec3, fov_y_degrees: f32, width: u32, height: u32) -> Self {
         let forward = (look_at - eye).normalize();
+        let up_hint = up;
         let right = forward.cross(up).normalize();
         let up = right.cross(forward);
         let tan_half_fov_y = (fov_y_degrees.to_radians() * 0.5).tan();
-        Self { eye, right, up, forward, tan_half_fov_y, width, height, lens_radius: 0.0, focus_distance: 1.0 }
+        Self {
+            eye,
+            right,
+            up,
+            forward,
+            tan_half_fov_y,
+            width,
+            height,
+            lens_radius: 0.0,
+            focus_distance: 1.0,
+            look_at,
+            up_hint,
+            fov_y_degrees,
+            end: None,
+            time: 0.0,
+            shutter_open: false,
+        }
+    }
+
+    /// The same camera with its shutter open for a while: its samples are
+    /// spread over the shutter, and what moves blurs.
+    #[must_use]
+    pub fn with_open_shutter(mut self) -> Self {
+        self.shutter_open = true;
+        self
+    }
+
+    /// Whether camera samples spread over the shutter.
+    #[must_use]
+    pub fn shutter_open(&self) -> bool {
+        self.shutter_open
+    }
+
+    /// The same camera moving over the shutter: its eye and the point it
+    /// looks at travel in straight lines to `eye_end` and `look_at_end`
+    /// (at the close), the up vector and the lens staying as they are.
+    /// Every position in between must keep the view direction non-zero
+    /// and not along up (checked by the scene loader).
+    #[must_use]
+    pub fn with_motion(mut self, eye_end: Vec3, look_at_end: Vec3) -> Self {
+        self.end = Some((eye_end, look_at_end));
+        self
+    }
+
+    /// Whether the camera moves over the shutter.
+    #[must_use]
+    pub fn moves(&self) -> bool {
+        self.end.is_some()
+    }
+
+    /// The camera where it is at `time` of the shutter (0 at its open, 1
+    /// at its close): its rays are traced at that time.
+    #[must_use]
+    pub fn at(&self, time: f32) -> Self {
+        let mut placed = match self.end {
+            None => self.clone(),
+            Some((eye_end, look_at_end)) => {
+                let (eye, look_at) = (self.eye.lerp(eye_end, time), self.look_at.lerp(look_at_end, time));
+                let moved = Self::new(eye, look_at, self.up_hint, self.fov_y_degrees, self.width, self.height);
+                Self {
+                    end: self.end,
+                    shutter_open: self.shutter_open,
+                    ..moved.with_lens(self.lens_radius, self.focus_distance)
+                }
+            }
+        };
+        placed.time = time;
+        placed
     }
 
     /// The same camera with a thin lens of `lens_radius` (scene units; 0
@@ -91,7 +172,7 @@ impl Camera {
     #[must_use]
     pub fn ray(&self, x: f32, y: f32) -> Ray {
         let direction = self.pinhole_direction(x, y).normalize();
-        Ray { origin: self.eye, direction, t_near: 0.0, t_far: f32::INFINITY }
+        Ray { origin: self.eye, direction, t_near: 0.0, t_far: f32::INFINITY, time: self.time }
     }
 
     /// The direction through film position (x, y) from the eye, with a
@@ -118,7 +199,7 @@ impl Camera {
         }
         let focus = self.eye + self.focus_distance * self.pinhole_direction(x, y);
         let origin = self.eye + self.lens_radius * (lens.x * self.right + lens.y * self.up);
-        Ray { origin, direction: (focus - origin).normalize(), t_near: 0.0, t_far: f32::INFINITY }
+        Ray { origin, direction: (focus - origin).normalize(), t_near: 0.0, t_far: f32::INFINITY, time: self.time }
     }
 }
 

@@ -160,13 +160,39 @@ pub struct CameraSpec {
     /// units; by default the distance from the eye to `look_at`.
     #[serde(default)]
     pub focus_distance: Option<f32>,
+    /// When the shutter opens and closes, in seconds (`[0, 0]`, the
+    /// default: no motion blur). Motion given in the scene (`eye_end`,
+    /// shapes' `motion`, lights' `position_end`) spans the whole interval.
+    #[serde(default)]
+    pub shutter: [f32; 2],
+    /// Where the eye is at the shutter's close (it travels from `eye` in a
+    /// straight line); by default it stays.
+    pub eye_end: Option<[f32; 3]>,
+    /// Where the point looked at is at the shutter's close.
+    pub look_at_end: Option<[f32; 3]>,
 }
 
 impl CameraSpec {
     /// A pinhole camera (no lens).
     #[must_use]
     pub fn pinhole(eye: [f32; 3], look_at: [f32; 3], up: [f32; 3], fov_y: f32) -> Self {
-        Self { eye, look_at, up, fov_y, lens_radius: 0.0, focus_distance: None }
+        Self {
+            eye,
+            look_at,
+            up,
+            fov_y,
+            lens_radius: 0.0,
+            focus_distance: None,
+            shutter: [0.0; 2],
+            eye_end: None,
+            look_at_end: None,
+        }
+    }
+
+    /// Whether the shutter stays open for a while: then motion blurs.
+    #[must_use]
+    pub fn shutter_open(&self) -> bool {
+        self.shutter[1] > self.shutter[0]
     }
 }
 
@@ -250,6 +276,23 @@ pub struct SphereSpec {
     pub segments: u32,
 }
 
+/// A shape's `motion`: over the shutter it moves by `translate` and turns
+/// by `rotate_degrees` about `rotate_axis` through its own centre (the
+/// centre of its bounding box at the shutter's open), both growing
+/// linearly with time.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MotionSpec {
+    /// Metres, the displacement from the shutter's open to its close.
+    #[serde(default)]
+    pub translate: [f32; 3],
+    #[serde(default)]
+    pub rotate_axis: Option<[f32; 3]>,
+    /// Degrees, right-handed about `rotate_axis`; at most 360 in magnitude.
+    #[serde(default)]
+    pub rotate_degrees: f32,
+}
+
 /// A Wavefront OBJ file (relative to the scene file), scaled then translated.
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -284,6 +327,9 @@ fn unit_f32() -> f32 {
 pub struct PointSpec {
     pub position: [f32; 3],
     pub intensity: [f32; 3],
+    /// Where the light is at the shutter's close (it travels from
+    /// `position` in a straight line); by default it stays.
+    pub position_end: Option<[f32; 3]>,
 }
 
 /// A spot light: intensity in W/sr along `direction`, with the smooth
@@ -429,6 +475,21 @@ pub fn take_string(value: &mut toml::Value, key: &str, path: &'static str) -> Re
         Some(toml::Value::String(s)) => Ok(Some(s)),
         Some(other) => Err(SpecError::NotAString { path, found: other.type_str() }),
     }
+}
+
+/// Takes the optional `motion` table out of a `[[shapes]]` entry, leaving
+/// the rest for the shape's own fields.
+pub fn take_motion(value: &mut toml::Value) -> Result<Option<MotionSpec>, SpecError> {
+    let toml::Value::Table(table) = value else { return Ok(None) };
+    table
+        .remove("motion")
+        .map(|motion| {
+            fields(motion).map_err(|e| match e {
+                SpecError::Field { path, source } => SpecError::Field { path: format!(".motion{path}"), source },
+                other => other,
+            })
+        })
+        .transpose()
 }
 
 /// Splits a `{ type = "...", ... }` table into its type and the rest.

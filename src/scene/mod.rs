@@ -57,6 +57,9 @@ pub struct Film {
 pub enum LightSource {
     /// One omni light of `intensity` W/sr.
     Point { position: Vec3, intensity: Vec3 },
+    /// A point light moving in a straight line over the shutter (`[[lights]]`
+    /// `point` with `position_end`).
+    MovingPoint { start: Vec3, end: Vec3, intensity: Vec3 },
     /// A spot light of `intensity` W/sr along `direction` (any length),
     /// falling off smoothly from the inner to the outer cone half-angle.
     Spot { position: Vec3, direction: Vec3, intensity: Vec3, inner_angle_degrees: f32, outer_angle_degrees: f32 },
@@ -134,7 +137,22 @@ impl Scene {
         let c = &self.camera_spec;
         let (eye, look_at) = (Vec3::from(c.eye), Vec3::from(c.look_at));
         let focus = c.focus_distance.unwrap_or_else(|| (look_at - eye).length());
-        Camera::new(eye, look_at, Vec3::from(c.up), c.fov_y, width, height).with_lens(c.lens_radius, focus)
+        let camera = Camera::new(eye, look_at, Vec3::from(c.up), c.fov_y, width, height).with_lens(c.lens_radius, focus);
+        if !self.moves() {
+            return camera;
+        }
+        let camera = camera.with_open_shutter();
+        if c.eye_end.is_none() && c.look_at_end.is_none() {
+            return camera;
+        }
+        camera.with_motion(Vec3::from(c.eye_end.unwrap_or(c.eye)), Vec3::from(c.look_at_end.unwrap_or(c.look_at)))
+    }
+
+    /// Whether the shutter stays open: then camera samples, shadow rays and
+    /// light paths are spread over it, and what moves blurs.
+    #[must_use]
+    pub fn moves(&self) -> bool {
+        self.camera_spec.shutter_open()
     }
 
     /// Bounds of all geometry in the world: (min, max), infinite when there
@@ -152,7 +170,7 @@ impl Scene {
             .lights
             .iter()
             .map(|source| match *source {
-                LightSource::Point { .. } | LightSource::Spot { .. } => 1,
+                LightSource::Point { .. } | LightSource::MovingPoint { .. } | LightSource::Spot { .. } => 1,
                 LightSource::Grid { count, .. } => u64::from(count[0]) * u64::from(count[1]),
                 LightSource::Area { samples, both_sides, .. } => u64::from(samples) * if both_sides { 2 } else { 1 },
                 LightSource::Sun { samples, .. } => u64::from(samples),

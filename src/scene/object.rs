@@ -21,6 +21,68 @@ pub struct Object {
     /// What Cryptomatte's object mattes are keyed by (a glTF node's name;
     /// `node[i]` for EXT_mesh_gpu_instancing's instance i).
     pub name: String,
+    /// How the object moves over the shutter, from where `transform` (or
+    /// the mesh itself) puts it; None: it stands still.
+    pub motion: Option<Motion>,
+}
+
+/// An object's motion over the shutter (docs/design.md §13.4): its
+/// placements at evenly spaced times, the first at the shutter's open
+/// (time 0), the last at its close (time 1), each mapping the object's
+/// still position to its moved one. Between two steps the matrices are
+/// interpolated linearly, as Embree interpolates an instance's transforms,
+/// so that shading places a hit exactly where Embree found it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Motion {
+    pub steps: Vec<Affine3A>,
+}
+
+/// Most degrees a step of a rotation turns: between steps the linearly
+/// interpolated matrix shrinks the object by 1 - cos(step / 2), 0.015% at 2
+/// degrees.
+const MAX_STEP_DEGREES: f32 = 2.0;
+
+impl Motion {
+    /// A displacement by `translate` and a rotation by `degrees` about
+    /// `axis` through `centre`, both growing linearly over the shutter.
+    /// `axis` must be non-zero when `degrees` is; at most 129 steps
+    /// (Embree's limit).
+    #[must_use]
+    pub fn rigid(centre: Vec3, translate: Vec3, axis: Vec3, degrees: f32) -> Self {
+        let turns = degrees != 0.0;
+        let count = if turns {
+            ((degrees.abs() / MAX_STEP_DEGREES).ceil() as usize + 1).min(crate::embree::MAX_TIME_STEPS)
+        } else {
+            2
+        };
+        let axis = if turns { axis.normalize() } else { Vec3::Y };
+        let steps = (0..count)
+            .map(|k| {
+                let time = k as f32 / (count - 1) as f32;
+                let rotation = Affine3A::from_axis_angle(axis, (degrees * time).to_radians());
+                Affine3A::from_translation(centre + translate * time) * rotation * Affine3A::from_translation(-centre)
+            })
+            .collect();
+        Self { steps }
+    }
+
+    /// The placement at `time` (in [0, 1]): the steps' matrices
+    /// interpolated linearly, as Embree does.
+    #[must_use]
+    pub fn at(&self, time: f32) -> Affine3A {
+        let segments = self.steps.len() - 1;
+        if segments == 0 {
+            return self.steps[0];
+        }
+        let scaled = time.clamp(0.0, 1.0) * segments as f32;
+        let k = (scaled.floor() as usize).min(segments - 1);
+        let f = scaled - k as f32;
+        let (a, b) = (self.steps[k], self.steps[k + 1]);
+        Affine3A {
+            matrix3: a.matrix3 * (1.0 - f) + b.matrix3 * f,
+            translation: a.translation * (1.0 - f) + b.translation * f,
+        }
+    }
 }
 
 /// The objects of a scene: `instances`, then every mesh they do not
@@ -33,34 +95,37 @@ pub fn place(meshes: &[Mesh], instances: Vec<Object>) -> Vec<Object> {
     }
     let mut objects: Vec<Object> = (0..meshes.len())
         .filter(|&i| !instanced[i])
-        .map(|i| Object { mesh: i, transform: None, name: meshes[i].name.clone() })
+        .map(|i| Object { mesh: i, transform: None, name: meshes[i].name.clone(), motion: None })
         .collect();
     objects.extend(instances);
     objects
 }
 
 /// Bounds of the objects in the world: (min, max), infinite when there are
-/// none. An instance's are its mesh's box's eight corners, placed.
+/// none. An instance's are its mesh's box's eight corners, placed; a moving
+/// object's, those of every time step (between steps a point moves on the
+/// segment between its placed positions, inside the box).
 #[must_use]
 pub fn world_bounds(meshes: &[Mesh], objects: &[Object]) -> (Vec3, Vec3) {
     let mut lo = Vec3::splat(f32::INFINITY);
     let mut hi = Vec3::splat(f32::NEG_INFINITY);
     for object in objects {
         let (a, b) = meshes[object.mesh].bounds();
-        match object.transform {
-            None => {
-                lo = lo.min(a);
-                hi = hi.max(b);
-            }
-            Some(t) if a.x <= b.x => {
+        let placed = object.transform.unwrap_or(Affine3A::IDENTITY);
+        let still = [Affine3A::IDENTITY];
+        let steps = object.motion.as_ref().map_or(&still[..], |m| &m.steps[..]);
+        if object.transform.is_none() && object.motion.is_none() {
+            lo = lo.min(a);
+            hi = hi.max(b);
+        } else if a.x <= b.x {
+            for step in steps {
                 for k in 0..8 {
                     let corner = Vec3::select(glam::BVec3::new(k & 1 != 0, k & 2 != 0, k & 4 != 0), b, a);
-                    let p = t.transform_point3(corner);
+                    let p = (*step * placed).transform_point3(corner);
                     lo = lo.min(p);
                     hi = hi.max(p);
                 }
             }
-            Some(_) => {}
         }
     }
     (lo, hi)
@@ -84,8 +149,8 @@ mod tests {
         let meshes = [triangle("a"), triangle("shared"), triangle("c")];
         let moved = Affine3A::from_translation(Vec3::new(10.0, 0.0, 0.0));
         let instances = vec![
-            Object { mesh: 1, transform: Some(moved), name: "n0".into() },
-            Object { mesh: 1, transform: Some(Affine3A::from_scale(Vec3::splat(2.0))), name: "n1".into() },
+            Object { mesh: 1, transform: Some(moved), name: "n0".into(), motion: None },
+            Object { mesh: 1, transform: Some(Affine3A::from_scale(Vec3::splat(2.0))), name: "n1".into(), motion: None },
         ];
         let objects = place(&meshes, instances);
         let names: Vec<&str> = objects.iter().map(|o| o.name.as_str()).collect();
@@ -95,5 +160,32 @@ mod tests {
         let (lo, hi) = world_bounds(&meshes, &objects);
         assert_eq!((lo, hi), (Vec3::ZERO, Vec3::new(11.0, 2.0, 0.0)));
         assert!(world_bounds(&meshes, &[]).0.x.is_infinite());
+    }
+
+    #[test]
+    fn a_rigid_motion_moves_and_turns_about_the_centre_and_bounds_cover_its_path() {
+        let centre = Vec3::new(1.0, 0.0, 0.0);
+        let motion = Motion::rigid(centre, Vec3::new(0.0, 2.0, 0.0), Vec3::Z, 90.0);
+        assert_eq!(motion.steps.len(), 46, "2 degrees a step");
+        assert_eq!(motion.at(0.0), motion.steps[0]);
+        assert!(motion.at(0.0).abs_diff_eq(Affine3A::IDENTITY, 1e-6));
+        // At the close the centre has moved by translate and a point one
+        // unit along x has turned a quarter about z around it.
+        let end = motion.at(1.0);
+        assert!(end.transform_point3(centre).abs_diff_eq(Vec3::new(1.0, 2.0, 0.0), 1e-5));
+        assert!(end.transform_point3(Vec3::new(2.0, 0.0, 0.0)).abs_diff_eq(Vec3::new(1.0, 3.0, 0.0), 1e-5));
+        // Halfway: half the displacement, 45 degrees, within the steps'
+        // shrinkage (1 - cos 1 degree).
+        let p = motion.at(0.5).transform_point3(Vec3::new(2.0, 0.0, 0.0));
+        let expected = Vec3::new(1.0, 1.0, 0.0) + Vec3::new(1.0, 1.0, 0.0).normalize();
+        assert!(p.distance(expected) < 2e-4, "{p} vs {expected}");
+        // A translation alone is two steps; the bounds hold both ends.
+        let slide = Motion::rigid(Vec3::ZERO, Vec3::new(5.0, 0.0, 0.0), Vec3::ZERO, 0.0);
+        assert_eq!(slide.steps.len(), 2);
+        let meshes = [triangle("t")];
+        let object = Object { mesh: 0, transform: None, name: "t".into(), motion: Some(slide) };
+        assert_eq!(world_bounds(&meshes, &[object]), (Vec3::ZERO, Vec3::new(6.0, 1.0, 0.0)));
+        // A full turn is capped at Embree's 129 steps.
+        assert_eq!(Motion::rigid(centre, Vec3::ZERO, Vec3::Y, 360.0).steps.len(), 129);
     }
 }

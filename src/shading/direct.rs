@@ -165,7 +165,13 @@ impl<'a, 'p> LightEvaluator<'a, 'p> {
                 let value = term * *w;
                 let ray = (value != DVec3::ZERO).then(|| {
                     let direction = Vec3::new(lanes.point[0][k], lanes.point[1][k], lanes.point[2][k]);
-                    ShadowRay::new(Ray { origin: self.origin_point, direction, t_near: 0.0, t_far: f32::INFINITY })
+                    ShadowRay::new(Ray {
+                        origin: self.origin_point,
+                        direction,
+                        t_near: 0.0,
+                        t_far: f32::INFINITY,
+                        time: self.sp.time,
+                    })
                 });
                 sink(k, value, ray);
             }
@@ -218,7 +224,13 @@ impl<'a, 'p> LightEvaluator<'a, 'p> {
             let value = DVec3::new(terms[0][k], terms[1][k], terms[2][k]) * *w;
             let ray = (value != DVec3::ZERO && too_close[k] == 0.0).then(|| {
                 let direction = Vec3::new(direction[0][k], direction[1][k], direction[2][k]);
-                ShadowRay::new(Ray { origin: self.origin_point, direction, t_near: 0.0, t_far: t_far[k] })
+                ShadowRay::new(Ray {
+                    origin: self.origin_point,
+                    direction,
+                    t_near: 0.0,
+                    t_far: t_far[k],
+                    time: self.sp.time,
+                })
             });
             sink(k, value, ray);
         }

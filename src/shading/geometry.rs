@@ -19,9 +19,8 @@ pub struct Geometry<'s> {
     pub embree: embree::Scene,
     /// Object index (into `Scene::objects`) of each Embree geometry id.
     object_of_geometry: Vec<usize>,
-    /// Each object's placement, for shading its hits: None for a mesh in
-    /// world space.
-    placements: Vec<Option<Placement>>,
+    /// Each object's placement, for shading its hits.
+    placements: Vec<Placing>,
     /// Offset that lifts ray origins off the surface they leave, in metres.
     /// It scales with the scene: 2^-16 of the largest coordinate magnitude,
     /// i.e. about 500 f32 ulps of the coordinates, far above the few ulps of
@@ -44,9 +43,9 @@ impl<'s> Geometry<'s> {
         let mut instanced: HashMap<usize, Arc<embree::Scene>> = HashMap::new();
         for (i, object) in scene.objects.iter().enumerate() {
             let shape = |source| GeometryError::Mesh { shape: object.mesh, source };
-            let id = match object.transform {
-                None => attach_mesh(&mut builder, scene, object.mesh).map_err(shape)?,
-                Some(transform) => {
+            let id = match (object.transform, &object.motion) {
+                (None, None) => attach_mesh(&mut builder, scene, object.mesh).map_err(shape)?,
+                (transform, motion) => {
                     let child = match instanced.get(&object.mesh) {
                         Some(child) => Arc::clone(child),
                         None => {
@@ -57,18 +56,35 @@ impl<'s> Geometry<'s> {
                             child
                         }
                     };
-                    builder.attach_instance(&child, transform).map_err(shape)?
+                    let placed = transform.unwrap_or(Affine3A::IDENTITY);
+                    match motion {
+                        None => builder.attach_instance(&child, placed).map_err(shape)?,
+                        Some(motion) => {
+                            let steps: Vec<Affine3A> = motion.steps.iter().map(|s| *s * placed).collect();
+                            builder.attach_moving_instance(&child, &steps).map_err(shape)?
+                        }
+                    }
                 }
             };
             debug_assert_eq!(id as usize, object_of_geometry.len(), "Embree assigns ids in order");
             object_of_geometry.push(i);
         }
-        let placements = scene.objects.iter().map(|o| o.transform.map(Placement::of)).collect();
+        let placements = scene
+            .objects
+            .iter()
+            .map(|o| match (o.transform, &o.motion) {
+                (None, None) => Placing::World,
+                (Some(t), None) => Placing::Still(Placement::of(t)),
+                (t, Some(motion)) => Placing::Moving(crate::scene::object::Motion {
+                    steps: motion.steps.iter().map(|s| *s * t.unwrap_or(Affine3A::IDENTITY)).collect(),
+                }),
+            })
+            .collect();
         let embree = builder.commit()?;
         let (lo, hi) = lights
             .iter()
-            .flat_map(|group| &group.omni)
-            .fold(scene.mesh_bounds(), |(lo, hi), l| (lo.min(l.position), hi.max(l.position)));
+            .flat_map(|group| group.omni.iter().map(|l| l.position).chain(group.moving.iter().flat_map(|l| [l.start, l.end])))
+            .fold(scene.mesh_bounds(), |(lo, hi), p| (lo.min(p), hi.max(p)));
         let magnitude = if lo.is_finite() && hi.is_finite() { lo.abs().max(hi.abs()).max_element() } else { 0.0 };
         // The floor keeps the offset positive for a scene of a single point at the origin.
         let ray_epsilon = (magnitude * (1.0 / 65536.0)).max(1e-30);
@@ -96,12 +112,16 @@ impl<'s> Geometry<'s> {
     }
 
     /// The world-space corners of triangle `primitive` of the object `hit`
-    /// is on, and that object's placement.
-    fn triangle(&self, hit: &Hit) -> ([Vec3; 3], Option<&Placement>) {
+    /// is on, at time `time` of the shutter, and that object's placement then.
+    fn triangle(&self, hit: &Hit, time: f32) -> ([Vec3; 3], Option<Placement>) {
         let object = self.object_of(hit);
         let mesh = &self.scene.meshes[self.scene.objects[object].mesh];
         let corners = mesh.triangles[hit.primitive as usize].map(|i| mesh.positions[i as usize]);
-        let placement = self.placements[object].as_ref();
+        let placement = match &self.placements[object] {
+            Placing::World => None,
+            Placing::Still(p) => Some(*p),
+            Placing::Moving(motion) => Some(Placement::of(motion.at(time))),
+        };
         (placement.map_or(corners, |p| corners.map(|c| p.to_world.transform_point3(c))), placement)
     }
 
@@ -114,7 +134,7 @@ impl<'s> Geometry<'s> {
         if !self.scene.materials[mesh.material].culls_back_faces {
             return false;
         }
-        let ([p0, p1, p2], _) = self.triangle(hit);
+        let ([p0, p1, p2], _) = self.triangle(hit, ray.time);
         (p1 - p0).cross(p2 - p0).dot(ray.direction) > 0.0
     }
 
@@ -125,7 +145,7 @@ impl<'s> Geometry<'s> {
         let tri = mesh.triangles[hit.primitive as usize];
         let (u, v) = (hit.u, hit.v);
         let w = 1.0 - u - v;
-        let ([p0, p1, p2], placement) = self.triangle(hit);
+        let ([p0, p1, p2], placement) = self.triangle(hit, ray.time);
         // Barycentric interpolation is more accurate than origin + t * direction.
         let p = w * p0 + u * p1 + v * p2;
         let wo = (-ray.direction).normalize();
@@ -185,6 +205,7 @@ impl<'s> Geometry<'s> {
             material,
             pbr,
             distance: hit.t * ray.direction.length(),
+            time: ray.time,
             emitted: if material.unlit {
                 base
             } else if front || material.emits_both_sides {
@@ -198,8 +219,20 @@ impl<'s> Geometry<'s> {
     }
 }
 
+/// How an object's hits are placed in the world.
+enum Placing {
+    /// Its mesh is in world space.
+    World,
+    /// An instance that stands still.
+    Still(Placement),
+    /// A moving object: from its mesh's space to the world's at each time
+    /// (docs/design.md §13.4), the steps Embree was given.
+    Moving(crate::scene::object::Motion),
+}
+
 /// An instance's map from its mesh's space to the world's, and the
 /// inverse transpose that carries normals (docs/design.md §4.1).
+#[derive(Clone, Copy)]
 struct Placement {
     to_world: Affine3A,
     normal: Mat3A,

@@ -28,6 +28,9 @@ pub struct SurfacePoint<'s> {
     pub pbr: Option<Pbr>,
     /// Distance from the ray origin, metres.
     pub distance: f32,
+    /// The time of the ray that found the point, in the shutter (0 at its
+    /// open, 1 at its close): its shadow and mirror rays are traced then.
+    pub time: f32,
     /// Radiance the surface emits towards the viewer (area-light emitters).
     pub emitted: Vec3,
     /// The ray offset, metres (see `Geometry::ray_epsilon`).
@@ -55,19 +58,25 @@ impl SurfacePoint<'_> {
         if length <= 2.0 * self.epsilon {
             return None;
         }
-        Some(ShadowRay::new(Ray { origin, direction, t_near: 0.0, t_far: 1.0 - self.epsilon / length }))
+        Some(ShadowRay::new(Ray { origin, direction, t_near: 0.0, t_far: 1.0 - self.epsilon / length, time: self.time }))
     }
 
     /// The shadow ray towards a light at infinity in unit direction `d`.
     #[must_use]
     pub fn shadow_ray_towards(&self, d: Vec3) -> ShadowRay {
-        ShadowRay::new(Ray { origin: self.offset_origin(), direction: d, t_near: 0.0, t_far: f32::INFINITY })
+        ShadowRay::new(Ray {
+            origin: self.offset_origin(),
+            direction: d,
+            t_near: 0.0,
+            t_far: f32::INFINITY,
+            time: self.time,
+        })
     }
 
     /// The mirror-reflected ray.
     #[must_use]
     pub fn mirror_ray(&self) -> Ray {
-        Ray { origin: self.offset_origin(), direction: self.r, t_near: 0.0, t_far: f32::INFINITY }
+        Ray { origin: self.offset_origin(), direction: self.r, t_near: 0.0, t_far: f32::INFINITY, time: self.time }
     }
 
     /// The distance clamp for point-light singularities: squared distances

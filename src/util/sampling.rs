@@ -84,6 +84,28 @@ pub fn hammersley(i: u32, n: u32, shift: [f32; 2]) -> [f32; 2] {
     [wrap(u, shift[0]), wrap(v, shift[1])]
 }
 
+/// Time `i` of a pixel's camera samples in the shutter: the base-3 radical
+/// inverse of i (Halton's second dimension, so that it does not line up
+/// with the lens's base-2 Hammersley points of the same index), shifted by
+/// `shift` modulo 1. Any n consecutive indices from 0 spread over [0, 1)
+/// with at most a few strata of 1/n empty; a power of 3 fills each once.
+#[must_use]
+pub fn shutter_time(i: u32, shift: f32) -> f32 {
+    let (mut i, mut inverse, mut scale) = (u64::from(i), 0.0f64, 1.0f64 / 3.0);
+    while i > 0 {
+        inverse += (i % 3) as f64 * scale;
+        i /= 3;
+        scale /= 3.0;
+    }
+    let t = (inverse + f64::from(shift)).fract() as f32;
+    // f64 -> f32 may round up to 1.0.
+    if t >= 1.0 {
+        0.0
+    } else {
+        t
+    }
+}
+
 /// Shirley and Chiu's concentric map of the unit square onto the unit disc
 /// (area-preserving, so uniform points stay uniform and strata stay compact).
 #[must_use]
@@ -155,5 +177,21 @@ mod tests {
         assert_eq!(a, Rng::from_key(&[1, 2, 3]).next_u64());
         assert_ne!(a, Rng::from_key(&[1, 3, 2]).next_u64());
         assert_ne!(a, Rng::from_key(&[1, 2]).next_u64());
+    }
+
+    #[test]
+    fn shutter_times_of_a_power_of_three_fill_every_stratum_once() {
+        for n in [3u32, 9, 27, 81, 243] {
+            assert!((0..n).all(|i| (0.0..1.0).contains(&shutter_time(i, 0.37))));
+            // Unshifted, the times are k / n for k = 0..n, each once: a
+            // shift moves them all by the same amount, modulo 1.
+            let mut shifted: Vec<f32> = (0..n).map(|i| (shutter_time(i, 0.37) - 0.37).rem_euclid(1.0)).collect();
+            shifted.sort_by(f32::total_cmp);
+            for (k, t) in shifted.iter().enumerate() {
+                assert!((t * n as f32 - k as f32).abs() < 1e-3, "n {n}: point {k} at {t}");
+            }
+        }
+        assert_eq!(shutter_time(1, 0.0), 1.0 / 3.0);
+        assert_eq!(shutter_time(4, 0.0), 1.0 / 3.0 + 1.0 / 9.0);
     }
 }

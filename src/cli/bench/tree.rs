@@ -163,6 +163,7 @@ fn shading_points(material: &Material, count: usize) -> Vec<SurfacePoint<'_>> {
                 material,
                 pbr: None,
                 distance: 1.0,
+                time: 0.0,
                 emitted: Vec3::ZERO,
                 epsilon: 1e-4,
                 min_distance: 1e-4,

@@ -131,6 +131,7 @@ fn surface<'m>(rng: &mut Rng, material: &'m Material) -> SurfacePoint<'m> {
         material,
         pbr,
         distance: 1.0,
+        time: 0.0,
         emitted: Vec3::ZERO,
         epsilon: 1e-4,
         min_distance: 1e-4,

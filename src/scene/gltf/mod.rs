@@ -417,7 +417,7 @@ impl Importer<'_, '_> {
             let transform = Affine3A::from_mat4(world);
             let (lo, hi) = crate::scene::object::world_bounds(
                 self.parts.meshes,
-                &[Object { mesh: prototype, transform: Some(transform), name: String::new() }],
+                &[Object { mesh: prototype, transform: Some(transform), name: String::new(), motion: None }],
             );
             if !(within_limits(lo) && within_limits(hi)) {
                 return Err(self.error(
@@ -432,6 +432,7 @@ impl Importer<'_, '_> {
                 mesh: prototype,
                 transform: Some(transform),
                 name: node_name.to_string(),
+                motion: None,
             });
         }
         Ok(())

@@ -56,10 +56,17 @@ fn light_source(
 ) -> Result<LightSource, SceneError> {
     let field = |f: &str| format!("lights[{i}].{f}");
     Ok(match light {
-        LightSpec::Point(PointSpec { position, intensity }) => {
+        LightSpec::Point(PointSpec { position, intensity, position_end }) => {
             let position = v.point(*position, &field("position"))?;
             let intensity = v.non_negative_rgb(*intensity, &field("intensity"))?;
-            LightSource::Point { position, intensity }
+            match position_end {
+                Some(end) => LightSource::MovingPoint {
+                    start: position,
+                    end: v.point(*end, &field("position_end"))?,
+                    intensity,
+                },
+                None => LightSource::Point { position, intensity },
+            }
         }
         LightSpec::Spot(file::SpotSpec { position, direction, intensity, inner_angle, outer_angle }) => {
             let position = v.point(*position, &field("position"))?;

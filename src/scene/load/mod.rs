@@ -113,7 +113,8 @@ impl Scene {
         let mut inputs = Vec::new();
         let mut textures = Vec::new();
         let (mut materials, material_index) = materials::materials(&v, base, &spec, &mut inputs, &mut textures)?;
-        let mut meshes = shapes::shapes(&v, base, &spec, &material_index, &mut inputs)?;
+        let (mut meshes, shape_motions): (Vec<_>, Vec<_>) =
+            shapes::shapes(&v, base, &spec, &material_index, &mut inputs)?.into_iter().unzip();
         let (mut lights, mut requested_groups) =
             lights::lights(&v, base, &spec, &mut meshes, &mut materials, &mut inputs)?;
         let mut warnings = Vec::new();
@@ -140,7 +141,15 @@ impl Scene {
                 camera
             }
         };
-        let objects = object::place(&meshes, instances);
+        let mut objects = object::place(&meshes, instances);
+        // The shapes are the first meshes, each drawn once as itself; their
+        // motion counts only while the shutter is open.
+        if spec.camera.as_ref().is_some_and(file::CameraSpec::shutter_open) {
+            for (object, motion) in objects.iter_mut().zip(shape_motions) {
+                debug_assert!(object.transform.is_none());
+                object.motion = motion;
+            }
+        }
         let (camera_spec, film) =
             settings::camera_and_film(&v, &spec, gltf_camera, object::world_bounds(&meshes, &objects), &mut warnings)?;
         let environment = settings::environment(&v, base, &spec, &mut inputs)?;

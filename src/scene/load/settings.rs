@@ -55,6 +55,22 @@ fn check_camera(v: &Validator<'_>, cam: &file::CameraSpec, field: &str) -> Resul
     if let Some(d) = cam.focus_distance {
         v.check(d.is_finite() && d > 0.0, &f("focus_distance"), || format!("must be finite and above 0, got {d}"))?;
     }
+    let [open, close] = cam.shutter;
+    v.check(open.is_finite() && close.is_finite() && open <= close, &f("shutter"), || {
+        format!("must be [open, close] in seconds with open <= close, got {:?}", cam.shutter)
+    })?;
+    let eye_end = cam.eye_end.map(|e| v.point(e, &f("eye_end"))).transpose()?.unwrap_or(eye);
+    let look_at_end = cam.look_at_end.map(|l| v.point(l, &f("look_at_end"))).transpose()?.unwrap_or(look_at);
+    // The view must stay defined all the way: checked at 65 times, the
+    // ends included.
+    for k in 1..=64 {
+        let t = k as f32 / 64.0;
+        let forward = look_at.lerp(look_at_end, t) - eye.lerp(eye_end, t);
+        let field = if cam.look_at_end.is_some() { f("look_at_end") } else { f("eye_end") };
+        v.check(forward.length() > 0.0 && forward.normalize().cross(up).length() > 1e-6, &field, || {
+            format!("the camera's view direction vanishes or turns along up at {t} of the shutter")
+        })?;
+    }
     Ok(())
 }
 

@@ -5,23 +5,27 @@ use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
 use super::{within_limits, Validator, MAX_COORDINATE};
-use crate::scene::file::{self, BoxSpec, MeshSpec, QuadSpec, SceneFile, ShapeSpec, SphereSpec};
+use glam::Vec3;
+
+use crate::scene::file::{self, BoxSpec, MeshSpec, MotionSpec, QuadSpec, SceneFile, ShapeSpec, SphereSpec};
+use crate::scene::object::Motion;
 use crate::scene::{Mesh, SceneError};
 
-/// The shapes' meshes, in file order.
+/// The shapes' meshes, in file order, each with its motion over the shutter.
 pub(super) fn shapes(
     v: &Validator<'_>,
     base: &Path,
     spec: &SceneFile,
     material_index: &HashMap<String, usize>,
     inputs: &mut Vec<PathBuf>,
-) -> Result<Vec<Mesh>, SceneError> {
+) -> Result<Vec<(Mesh, Option<Motion>)>, SceneError> {
     let mut meshes = Vec::new();
     for (i, raw) in spec.shapes.iter().enumerate() {
         let field = |f: &str| format!("shapes[{i}].{f}");
         let entry_error = |e: file::SpecError| v.error(&format!("shapes[{i}]{}", e.field()), &e.to_string());
         let mut raw = raw.clone();
         let name = file::take_string(&mut raw, "name", ".name").map_err(entry_error)?;
+        let motion = file::take_motion(&mut raw).map_err(entry_error)?;
         let shape = ShapeSpec::parse(&raw).map_err(entry_error)?;
         let material_of = |name: &String| {
             material_index
@@ -81,7 +85,29 @@ pub(super) fn shapes(
                 ),
             ));
         }
-        meshes.push(Mesh { name: name.unwrap_or_else(|| format!("shapes[{i}]")), ..mesh });
+        let (lo, hi) = mesh.bounds();
+        let motion = motion.map(|m| motion_of(v, &m, 0.5 * (lo + hi), &field("motion"))).transpose()?;
+        meshes.push((Mesh { name: name.unwrap_or_else(|| format!("shapes[{i}]")), ..mesh }, motion));
     }
     Ok(meshes)
+}
+
+/// A shape's `motion`, about `centre` (its box's centre at the shutter's
+/// open); `field` names it.
+fn motion_of(v: &Validator<'_>, spec: &MotionSpec, centre: Vec3, field: &str) -> Result<Motion, SceneError> {
+    let translate = v.point(spec.translate, &format!("{field}.translate"))?;
+    let degrees = spec.rotate_degrees;
+    v.check(degrees.is_finite() && degrees.abs() <= 360.0, &format!("{field}.rotate_degrees"), || {
+        format!("must be between -360 and 360 degrees, got {degrees}")
+    })?;
+    let axis = match spec.rotate_axis {
+        Some(axis) => v.point(axis, &format!("{field}.rotate_axis"))?,
+        None => Vec3::ZERO,
+    };
+    v.check(degrees == 0.0 || axis.length() > 0.0, &format!("{field}.rotate_axis"), || {
+        "must be given, and not zero, when rotate_degrees is".into()
+    })?;
+    let motion = Motion::rigid(centre, translate, axis, degrees);
+    v.check(motion.steps.iter().all(|s| s.is_finite()), field, || "the motion's placements are not finite".into())?;
+    Ok(motion)
 }
