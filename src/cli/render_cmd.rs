@@ -47,7 +47,7 @@ pub fn run(args: &RenderArgs) -> Result<(), CliError> {
         scene_file: scene.path.clone(),
         render_mode: mode.describe(),
         render_seconds: result.seconds,
-        lights: result.lights.iter().sum::<usize>() as u64,
+        lights: (result.lights.iter().sum::<usize>() + result.moving_lights) as u64,
         spp: settings.spp,
         seed: settings.seed,
         scene_hash,
@@ -68,16 +68,17 @@ pub fn run(args: &RenderArgs) -> Result<(), CliError> {
 
 /// The statistics block every render ends with.
 fn print_summary(scene: &Scene, settings: &PassSettings, mode: Mode, result: &PassResult) {
-    let PassResult { stats, seconds, trees, vpls, vpl_time, lights, .. } = result;
+    let PassResult { stats, seconds, trees, vpls, vpl_time, lights, moving_lights, .. } = result;
     let rays = stats.shading.shadow_rays;
     let b = settings.bounds;
     let (major, minor, patch) = crate::embree::version();
     let pixels = b.area().max(1) as f64;
     println!("lightcuts {} (Embree {major}.{minor}.{patch})", env!("CARGO_PKG_VERSION"));
     println!("  scene            {}", scene.path.display());
+    let moving = if *moving_lights > 0 { format!(", moving {moving_lights}") } else { String::new() };
     println!(
-        "  lights           {} (omni {}, oriented {}, directional {}, spot {})",
-        lights.iter().sum::<usize>(),
+        "  lights           {} (omni {}, oriented {}, directional {}, spot {}{moving})",
+        lights.iter().sum::<usize>() + moving_lights,
         lights[0],
         lights[1],
         lights[2],

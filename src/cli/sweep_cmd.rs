@@ -152,7 +152,7 @@ fn metadata(
         scene_file: scene.path.clone(),
         render_mode: mode,
         render_seconds: result.seconds,
-        lights: result.lights.iter().sum::<usize>() as u64,
+        lights: (result.lights.iter().sum::<usize>() + result.moving_lights) as u64,
         spp: settings.spp,
         seed: settings.seed,
         scene_hash: crate::util::hash::combined_hex(key.inputs.iter().map(|(_, h)| *h)),

@@ -1,0 +1,190 @@
+//! Motion blur, run as the real binary: a moving quad covers each pixel for
+//! the part of the shutter it spends there; a moving light lights a still
+//! floor as the lights along its path do on average; a moving scene is the
+//! exact render at `--error 0` in the multidimensional mode, and the same
+//! bits for any thread count and window; bad motion is named.
+
+mod common;
+use common::*;
+
+/// A 1 m wide quad at z = 0 sliding 3 m along +x over the shutter, seen
+/// head-on from 10 m on a 48 x 4 film, `spp` samples per pixel.
+fn sliding_quad(shutter: &str, spp: u32) -> String {
+    format!(
+        "[film]\nwidth = 48\nheight = 4\nspp = {spp}\n\
+         [camera]\neye = [0, 0, 10]\nlook_at = [0, 0, 0]\nfov_y = 5.0\nshutter = {shutter}\n\
+         [materials.grey]\nalbedo = [0.5, 0.5, 0.5]\n\
+         [[shapes]]\ntype = \"quad\"\ncorner = [-3, -1, 0]\nu = [1, 0, 0]\nv = [0, 2, 0]\nmaterial = \"grey\"\n\
+         motion = {{ translate = [3, 0, 0] }}\n\
+         [[lights]]\ntype = \"point\"\nposition = [0, 0, 5]\nintensity = [1, 1, 1]\n"
+    )
+}
+
+/// The world x at z = 0 of the centre of pixel column `column` of
+/// [`sliding_quad`]'s film.
+fn column_x(column: usize) -> f64 {
+    let half_width = (2.5f64).to_radians().tan() * 12.0 * 10.0;
+    ((column as f64 + 0.5) / 48.0 * 2.0 - 1.0) * half_width
+}
+
+#[test]
+fn a_moving_quad_covers_each_pixel_for_the_part_of_the_shutter_it_spends_there() {
+    let dir = TempDir::new("quad-coverage");
+    // 243 = 3^5 samples: the shutter times fill every 1/243 of it once.
+    let scene = dir.write("q.toml", &sliding_quad("[0.0, 0.02]", 243));
+    let out = dir.path("q.exr");
+    lightcuts_ok(&["render", s(&scene), "-o", s(&out), "--exact", "--quiet"]);
+    let image = read_exr(&out).unwrap();
+    let alpha = &image.channels["A"];
+    let mut covered = 0.0;
+    for column in 0..48 {
+        // The quad spans [-3 + 3t, -2 + 3t] at time t: a point x is covered
+        // for t in [(x + 2) / 3, (x + 3) / 3], clipped to [0, 1].
+        let x = column_x(column);
+        let expected = (((x + 3.0) / 3.0).min(1.0) - ((x + 2.0) / 3.0).max(0.0)).max(0.0);
+        for row in 0..4 {
+            let a = f64::from(alpha[row * 48 + column]);
+            assert!((a - expected).abs() < 0.02, "column {column} (x = {x:.3}): coverage {a}, expected {expected}");
+            covered += a;
+        }
+    }
+    // In all, the quad covers 1 m of each row for the whole shutter: the
+    // coverages of a row sum to 1 m over a column's width.
+    let column_width = column_x(1) - column_x(0);
+    let expected_total = 4.0 / column_width;
+    assert!((covered - expected_total).abs() < 0.01 * expected_total, "{covered} vs {expected_total}");
+    // With the shutter closed the quad stands at its open position, sharp.
+    let still = dir.write("still.toml", &sliding_quad("[0.0, 0.0]", 9));
+    lightcuts_ok(&["render", s(&still), "-o", s(&out), "--exact", "--quiet"]);
+    let image = read_exr(&out).unwrap();
+    for column in 0..48 {
+        let x = column_x(column);
+        let a = image.channels["A"][column];
+        if (x + 3.0).abs() > 0.2 && (x + 2.0).abs() > 0.2 {
+            assert_eq!(a, if (-3.0..-2.0).contains(&x) { 1.0 } else { 0.0 }, "column {column} (x = {x:.3})");
+        }
+    }
+}
+
+/// A floor lit by one point light 1 m above it: moving from x = -1 to 1
+/// over an open shutter, or the `lights` given instead.
+fn floor_lit_by(lights: &str, shutter: &str) -> String {
+    format!(
+        "[film]\nwidth = 32\nheight = 24\nspp = 243\n\
+         [camera]\neye = [0, 4, 3]\nlook_at = [0, 0, 0]\nfov_y = 50.0\nshutter = {shutter}\n\
+         [materials.grey]\nalbedo = [0.5, 0.5, 0.5]\n\
+         [[shapes]]\ntype = \"quad\"\ncorner = [-4, 0, 4]\nu = [8, 0, 0]\nv = [0, 0, -8]\nmaterial = \"grey\"\n\
+         {lights}"
+    )
+}
+
+#[test]
+fn a_moving_light_lights_a_still_floor_as_the_lights_along_its_path_do_on_average() {
+    let dir = TempDir::new("moving-light");
+    let moving = dir.write(
+        "moving.toml",
+        &floor_lit_by(
+            "[[lights]]\ntype = \"point\"\nposition = [-1, 1, 0]\nposition_end = [1, 1, 0]\nintensity = [2, 2, 2]\n",
+            "[0, 1]",
+        ),
+    );
+    // The time average over the straight path, by the midpoint rule: 81
+    // lights at the centres of 81 equal stretches, each 1/81 of the light.
+    let path = dir.write(
+        "path.toml",
+        &floor_lit_by(
+            "[[lights]]\ntype = \"grid\"\ncorner = [-1, 1, -0.0005]\nu = [2, 0, 0]\nv = [0, 0, 0.001]\n\
+             count = [81, 1]\nintensity = [0.024691358, 0.024691358, 0.024691358]\n",
+            "[0, 0]",
+        ),
+    );
+    let render = |scene: &std::path::Path, name: &str, mode: &str| {
+        let out = dir.path(name);
+        lightcuts_ok(&["render", s(scene), "-o", s(&out), mode, "--quiet"]);
+        read_exr(&out).unwrap()
+    };
+    let reference = render(&path, "path.exr", "--exact");
+    for mode in ["--exact", "--bounded", "--stochastic", "--multidimensional"] {
+        let image = render(&moving, "moving.exr", mode);
+        let error = mean_relative_error(&image, &reference);
+        assert!(error < 0.01, "{mode}: mean relative error {error}");
+    }
+    // Standing at its start instead, the light is another picture.
+    let still = dir.write(
+        "still.toml",
+        &floor_lit_by(
+            "[[lights]]\ntype = \"point\"\nposition = [-1, 1, 0]\nposition_end = [1, 1, 0]\nintensity = [2, 2, 2]\n",
+            "[0, 0]",
+        ),
+    );
+    assert!(mean_relative_error(&render(&still, "still.exr", "--exact"), &reference) > 0.2);
+}
+
+/// The small scene with its shiny sphere sliding, its camera moving and a
+/// point light crossing it over an open shutter.
+fn moving_scene(lights_per_side: u32) -> String {
+    let scene = small_scene(lights_per_side)
+        .replacen("[camera]\n", "[camera]\nshutter = [0.0, 0.5]\neye_end = [0.4, 3.0, 6.0]\n", 1)
+        .replacen(
+            "radius = 0.7\nmaterial = \"shiny\"\n",
+            "radius = 0.7\nmaterial = \"shiny\"\nmotion = { translate = [0.8, 0, 0], rotate_axis = [0, 1, 0], rotate_degrees = 30 }\n",
+            1,
+        );
+    assert!(scene.contains("eye_end") && scene.contains("motion"));
+    format!(
+        "{scene}\n[[lights]]\ntype = \"point\"\nposition = [-1.5, 1.2, 1.5]\nposition_end = [1.5, 1.2, 1.5]\nintensity = [2, 2, 2]\n"
+    )
+}
+
+#[test]
+fn a_moving_scene_at_error_0_is_its_exact_render_and_the_same_for_any_threads_and_window() {
+    let dir = TempDir::new("motion-md");
+    let scene = dir.write("m.toml", &moving_scene(10));
+    let common = ["--spp", "9", "--resolution", "24x18", "--quiet"];
+    let render = |name: &str, mode: &[&str]| {
+        let out = dir.path(name);
+        lightcuts_ok(&[&["render", s(&scene), "-o", s(&out)][..], mode, &common].concat());
+        read_exr(&out).unwrap()
+    };
+    let exact = render("exact.exr", &["--exact"]);
+    let md = render("md.exr", &["--multidimensional", "--error", "0", "--max-cut", "100000000"]);
+    for channel in ["R", "G", "B"] {
+        for (i, (a, b)) in md.channels[channel].iter().zip(&exact.channels[channel]).enumerate() {
+            assert!((a - b).abs() <= 1e-5 * b.abs() + 1e-9, "{channel} pixel {i}: {a} vs exact {b}");
+        }
+    }
+    // The motion shows: the same scene with its shutter closed differs.
+    let still_text = moving_scene(10).replace("shutter = [0.0, 0.5]", "shutter = [0.0, 0.0]");
+    let still = dir.write("still.toml", &still_text);
+    let out = dir.path("still.exr");
+    lightcuts_ok(&[&["render", s(&still), "-o", s(&out), "--exact"][..], &common].concat());
+    let sharp = read_exr(&out).unwrap();
+    let differ = sharp.channels["G"].iter().zip(&exact.channels["G"]).filter(|(a, b)| a != b).count();
+    assert!(differ > 100, "{differ} pixels differ from the still scene's");
+    let threads = TempDir::new("motion-threads");
+    let scene = threads.write("m.toml", &moving_scene(16));
+    assert_same_bits_for_any_threads_and_window(&threads, &scene, 96, &["--multidimensional", "--spp", "4"]);
+    assert_same_bits_for_any_threads_and_window(&threads, &scene, 96, &["--bounded", "--spp", "2", "--cryptomatte"]);
+}
+
+#[test]
+fn bad_motion_is_named() {
+    let dir = TempDir::new("bad-motion");
+    let cases = [
+        (moving_scene(2).replace("shutter = [0.0, 0.5]", "shutter = [0.5, 0.0]"), "camera.shutter"),
+        (moving_scene(2).replace("rotate_axis = [0, 1, 0], ", ""), "shapes[1].motion.rotate_axis"),
+        (moving_scene(2).replace("rotate_degrees = 30", "rotate_degrees = 720"), "shapes[1].motion.rotate_degrees"),
+        (moving_scene(2).replace("translate = [0.8, 0, 0]", "translate = [0.8, nan, 0]"), "shapes[1].motion.translate"),
+        (moving_scene(2).replace("rotate_degrees = 30", "rotate_degree = 30"), "shapes[1].motion.rotate_degree"),
+        (moving_scene(2).replace("position_end = [1.5, 1.2, 1.5]", "position_end = [1.5, 1e30, 1.5]"), "position_end"),
+        (moving_scene(2).replace("eye_end = [0.4, 3.0, 6.0]", "eye_end = [0.0, 0.5, 0.0]"), "camera.eye_end"),
+    ];
+    for (k, (text, field)) in cases.iter().enumerate() {
+        let name = format!("bad{k}.toml");
+        let scene = dir.write(&name, text);
+        let out = dir.path("out.exr");
+        let stderr = lightcuts_fails(&["render", s(&scene), "-o", s(&out), "--quiet"]);
+        assert!(stderr.contains(&name) && stderr.contains(field), "case {k}: {stderr}");
+        assert!(!out.exists());
+    }
+}
