@@ -2,9 +2,11 @@
 # The multidimensional mode against the bounded and stochastic modes at the
 # same samples per pixel (16, 64, 256 gather points per pixel from camera
 # samples), each against the exact render of the same gather points, on
-# windows of the depth-of-field scene and the Cornell box (where the exact
-# render of the whole frame would take hours). Prints a Markdown table.
+# windows of the depth-of-field scene, the Cornell box and the motion-blur
+# scene (where the exact render of the whole frame would take hours).
+# Prints a Markdown table.
 # Usage: ci/multidimensional-table.sh [BINARY] [OUT_DIR]
+# SCENES="scenes/motion.toml 24,56,50,74" measures the listed entries only.
 set -euo pipefail
 bin=${1:-target/release/lightcuts}
 out=${2:-$(mktemp -d)}
@@ -20,7 +22,9 @@ row() { # scene window spp mode-args label
 }
 echo "| scene (window) | spp | mode | seconds | mean error | p99 error |"
 echo "|---|---|---|---|---|---|"
-for entry in "scenes/dof.toml 64,96,44,68" "scenes/cornell.toml 60,92,60,84"; do
+default_scenes=("scenes/dof.toml 64,96,44,68" "scenes/cornell.toml 60,92,60,84" "scenes/motion.toml 24,56,50,74")
+if [ -n "${SCENES:-}" ]; then entries=("$SCENES"); else entries=("${default_scenes[@]}"); fi
+for entry in "${entries[@]}"; do
     set -- $entry
     scene=$1 window=$2
     read -r _ one < <(row "$scene" "$window" 1 "--bounded" bounded1)

@@ -58,7 +58,7 @@ pub struct OmniLight {
 /// An omni light that moves over the shutter, in a straight line from
 /// `start` (at its open) to `end` (at its close). Moving lights are not
 /// clustered: every render mode evaluates each one at the shading point's
-/// time with a shadow ray of its own (docs/design.md §13.4).
+/// time with a shadow ray of its own (docs/design.md §13.6).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct MovingOmniLight {
     /// Metres, at the shutter's open and close.

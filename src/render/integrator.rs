@@ -344,7 +344,7 @@ impl<'a> Integrator<'a> {
         }
     }
 
-    /// The light of the moving lights (in no tree: docs/design.md §13.4)
+    /// The light of the moving lights (in no tree: docs/design.md §13.6)
     /// at `sp`, each where it is at the point's time with a shadow ray of
     /// its own, times `strength`; each group's share added to `groups`.
     fn moving_light(

@@ -241,7 +241,7 @@ fn render_tile(
             let ray = match time_shift {
                 None => camera_ray(camera, settings, x, y, s, lens_shift),
                 // The sample's time, stratified per pixel like the lens
-                // (docs/design.md §13.4).
+                // (docs/design.md §13.6).
                 Some(shift) => camera_ray(&camera.at(sampling::shutter_time(s, shift)), settings, x, y, s, lens_shift),
             };
             let key = [settings.seed, u64::from(x), u64::from(y), u64::from(s)];

@@ -99,7 +99,7 @@ pub struct PassResult {
     pub vpl_time: Duration,
     /// Lights of the pass, by kind (the scene's plus the VPLs): omni, oriented, directional, spot.
     pub lights: [usize; 4],
-    /// Lights that move over the shutter (in no tree; docs/design.md §13.4).
+    /// Lights that move over the shutter (in no tree; docs/design.md §13.6).
     pub moving_lights: usize,
     /// Rays of the pass that Embree was not given because a component was
     /// not finite or out of its range (see [`crate::embree::refused_rays`]):

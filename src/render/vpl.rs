@@ -139,7 +139,7 @@ pub fn trace(
             let mut power = sources[index].1 / (p_source * settings.paths as f64) as f32;
             // In a scene that moves, path k is traced at a time of its own,
             // stratified over the shutter; its VPLs then stay where it left
-            // them for the whole shutter (docs/design.md §13.4).
+            // them for the whole shutter (docs/design.md §13.6).
             let time = if moves { (k as f32 + rng.next_f32()) / settings.paths as f32 } else { 0.0 };
             let (origin, direction) = match sources[index].0 {
                 Source::Omni { position } => (position, uniform_direction(rng.next_f32(), rng.next_f32())),

@@ -26,7 +26,7 @@ pub struct Camera {
     up_hint: Vec3,
     fov_y_degrees: f32,
     /// Where the eye and the point looked at are at the shutter's close,
-    /// when the camera moves (docs/design.md §13.4).
+    /// when the camera moves (docs/design.md §13.6).
     end: Option<(Vec3, Vec3)>,
     /// The time in the shutter (0 at its open, 1 at its close) this camera
     /// stands at ([`Camera::at`]); its rays carry it.

@@ -26,7 +26,7 @@ pub struct Object {
     pub motion: Option<Motion>,
 }
 
-/// An object's motion over the shutter (docs/design.md §13.4): its
+/// An object's motion over the shutter (docs/design.md §13.6): its
 /// placements at evenly spaced times, the first at the shutter's open
 /// (time 0), the last at its close (time 1), each mapping the object's
 /// still position to its moved one. Between two steps the matrices are

@@ -226,7 +226,7 @@ enum Placing {
     /// An instance that stands still.
     Still(Placement),
     /// A moving object: from its mesh's space to the world's at each time
-    /// (docs/design.md §13.4), the steps Embree was given.
+    /// (docs/design.md §13.6), the steps Embree was given.
     Moving(crate::scene::object::Motion),
 }
 
