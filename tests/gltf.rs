@@ -1174,7 +1174,7 @@ fn light_units_are_stated_and_the_viewer_convention_is_a_flag() {
         "{:?}",
         scene.warnings
     );
-    let options = lightcuts::scene::LoadOptions { camera: None, lumens_per_watt: Some(1.0) };
+    let options = lightcuts::scene::LoadOptions { lumens_per_watt: Some(1.0), ..Default::default() };
     let viewer = Scene::load_with(&path, &options).unwrap();
     assert_eq!(
         viewer.lights[0],

@@ -233,13 +233,27 @@ pub struct PassArgs {
     /// matches glTF viewers, which take 1 cd as 1 W/sr.
     #[arg(long, value_name = "LM_PER_W")]
     pub lumens_per_watt: Option<f32>,
+    /// Open the shutter from OPEN to CLOSE seconds (overrides the scene's
+    /// [camera] shutter): what moves blurs, and a glTF file's animation is
+    /// played over it (its node transforms sampled at 33 times).
+    #[arg(long, value_name = "OPEN,CLOSE", value_parser = parse_shutter, allow_hyphen_values = true)]
+    pub shutter: Option<[f32; 2]>,
+    /// The glTF file's animation to play over the shutter, by name (its
+    /// first otherwise).
+    #[arg(long, value_name = "NAME")]
+    pub animation: Option<String>,
 }
 
 impl PassArgs {
     /// Loads the scene (through `--camera` when given) and prints its
     /// warnings, one line each.
     pub fn load(&self, path: &Path) -> Result<Scene, CliError> {
-        let options = LoadOptions { camera: self.camera.as_deref(), lumens_per_watt: self.lumens_per_watt };
+        let options = LoadOptions {
+            camera: self.camera.as_deref(),
+            lumens_per_watt: self.lumens_per_watt,
+            shutter: self.shutter,
+            animation: self.animation.as_deref(),
+        };
         let mut scene = Scene::load_with(path, &options)?;
         scene.add_lights(self.environment.as_deref(), self.sun)?;
         for warning in &scene.warnings {
@@ -326,6 +340,13 @@ pub fn parse_resolution(s: &str) -> Result<(u32, u32), String> {
 
 /// Parses `x0,x1,y0,y1`.
 /// `AZIMUTH,ELEVATION[,IRRADIANCE]` (degrees, degrees, W/m^2).
+pub fn parse_shutter(s: &str) -> Result<[f32; 2], String> {
+    let parts: Vec<&str> = s.split(',').collect();
+    let [open, close] = parts[..] else { return Err(format!("expected OPEN,CLOSE (seconds), got '{s}'")) };
+    let number = |v: &str| v.trim().parse::<f32>().map_err(|e| format!("'{v}' is not a number: {e}"));
+    Ok([number(open)?, number(close)?])
+}
+
 pub fn parse_sun(s: &str) -> Result<[f32; 3], String> {
     let parts: Vec<&str> = s.split(',').collect();
     if !(2..=3).contains(&parts.len()) {

@@ -685,7 +685,8 @@ impl ShadowRay {
     /// and whose t_far reads back as Embree's mark of an occluded ray: what
     /// a refused ray becomes, so that it blocks its light instead of
     /// letting it leak.
-    const BLOCKED: Self = Self(sys::LcRay { org: [0.0; 3], tnear: 0.0, dir: [0.0, 0.0, 1.0], tfar: f32::NEG_INFINITY, time: 0.0 });
+    const BLOCKED: Self =
+        Self(sys::LcRay { org: [0.0; 3], tnear: 0.0, dir: [0.0, 0.0, 1.0], tfar: f32::NEG_INFINITY, time: 0.0 });
 
     /// The shadow ray, or [`ShadowRay::BLOCKED`] when Embree must not see
     /// it (see [`refused_rays`]).

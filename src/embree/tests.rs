@@ -281,7 +281,8 @@ fn a_moving_instance_is_where_it_is_at_each_ray_time_on_every_query() {
     let device = Device::try_new().unwrap();
     let mut child = device.try_new_scene().unwrap();
     // A unit square in the plane z = 1, around x = 0.
-    let square = [Vec3::new(-0.5, -0.5, 1.0), Vec3::new(0.5, -0.5, 1.0), Vec3::new(0.5, 0.5, 1.0), Vec3::new(-0.5, 0.5, 1.0)];
+    let square =
+        [Vec3::new(-0.5, -0.5, 1.0), Vec3::new(0.5, -0.5, 1.0), Vec3::new(0.5, 0.5, 1.0), Vec3::new(-0.5, 0.5, 1.0)];
     child.attach_triangles(&square, &[[0, 1, 2], [0, 2, 3]]).unwrap();
     let child = Arc::new(child.commit().unwrap());
     let mut builder = device.try_new_scene().unwrap();
@@ -302,7 +303,8 @@ fn a_moving_instance_is_where_it_is_at_each_ray_time_on_every_query() {
         t_far: f32::INFINITY,
         time,
     };
-    for (x, time, hits) in [(0.0, 0.0, true), (0.0, 0.2, false), (2.0, 0.5, true), (2.0, 0.0, false), (3.8, 1.0, true)] {
+    for (x, time, hits) in [(0.0, 0.0, true), (0.0, 0.2, false), (2.0, 0.5, true), (2.0, 0.0, false), (3.8, 1.0, true)]
+    {
         let r = ray(x, 0.0, time);
         assert_eq!(scene.intersect(&r).map(|h| h.geometry), hits.then_some(sliding), "x {x} at {time}");
         assert_eq!(scene.occluded(&r), hits, "x {x} at {time}");

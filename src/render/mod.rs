@@ -234,9 +234,9 @@ fn render_tile(
             let mut rng = Rng::from_key(&[settings.seed, u64::from(x), u64::from(y), LENS_STREAM]);
             [rng.next_f32(), rng.next_f32()]
         });
-        let time_shift = camera.shutter_open().then(|| {
-            Rng::from_key(&[settings.seed, u64::from(x), u64::from(y), SHUTTER_STREAM]).next_f32()
-        });
+        let time_shift = camera
+            .shutter_open()
+            .then(|| Rng::from_key(&[settings.seed, u64::from(x), u64::from(y), SHUTTER_STREAM]).next_f32());
         for s in 0..settings.spp {
             let ray = match time_shift {
                 None => camera_ray(camera, settings, x, y, s, lens_shift),

@@ -56,6 +56,13 @@ pub struct GltfSpec {
     /// that matches wins, and a light no rule matches is in `default`.
     #[serde(default)]
     pub groups: Vec<GroupRule>,
+    /// The animation played over an open shutter, by name; the file's
+    /// first when absent.
+    pub animation: Option<String>,
+    /// The shutter `--shutter` gives (seconds of the file's animation),
+    /// when the TOML's camera gives none.
+    #[serde(skip)]
+    pub shutter: Option<[f32; 2]>,
 }
 
 /// One `[[gltf.groups]]` rule: lights whose light, node or material name
@@ -91,6 +98,8 @@ impl GltfSpec {
             lumens_per_watt: lumens_per_watt(),
             emitter_samples: emitter_samples(),
             groups: Vec::new(),
+            animation: None,
+            shutter: None,
         }
     }
 }

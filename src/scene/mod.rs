@@ -137,7 +137,8 @@ impl Scene {
         let c = &self.camera_spec;
         let (eye, look_at) = (Vec3::from(c.eye), Vec3::from(c.look_at));
         let focus = c.focus_distance.unwrap_or_else(|| (look_at - eye).length());
-        let camera = Camera::new(eye, look_at, Vec3::from(c.up), c.fov_y, width, height).with_lens(c.lens_radius, focus);
+        let camera =
+            Camera::new(eye, look_at, Vec3::from(c.up), c.fov_y, width, height).with_lens(c.lens_radius, focus);
         if !self.moves() {
             return camera;
         }

@@ -150,7 +150,12 @@ mod tests {
         let moved = Affine3A::from_translation(Vec3::new(10.0, 0.0, 0.0));
         let instances = vec![
             Object { mesh: 1, transform: Some(moved), name: "n0".into(), motion: None },
-            Object { mesh: 1, transform: Some(Affine3A::from_scale(Vec3::splat(2.0))), name: "n1".into(), motion: None },
+            Object {
+                mesh: 1,
+                transform: Some(Affine3A::from_scale(Vec3::splat(2.0))),
+                name: "n1".into(),
+                motion: None,
+            },
         ];
         let objects = place(&meshes, instances);
         let names: Vec<&str> = objects.iter().map(|o| o.name.as_str()).collect();

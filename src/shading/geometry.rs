@@ -83,7 +83,9 @@ impl<'s> Geometry<'s> {
         let embree = builder.commit()?;
         let (lo, hi) = lights
             .iter()
-            .flat_map(|group| group.omni.iter().map(|l| l.position).chain(group.moving.iter().flat_map(|l| [l.start, l.end])))
+            .flat_map(|group| {
+                group.omni.iter().map(|l| l.position).chain(group.moving.iter().flat_map(|l| [l.start, l.end]))
+            })
             .fold(scene.mesh_bounds(), |(lo, hi), p| (lo.min(p), hi.max(p)));
         let magnitude = if lo.is_finite() && hi.is_finite() { lo.abs().max(hi.abs()).max_element() } else { 0.0 };
         // The floor keeps the offset positive for a scene of a single point at the origin.

@@ -58,7 +58,13 @@ impl SurfacePoint<'_> {
         if length <= 2.0 * self.epsilon {
             return None;
         }
-        Some(ShadowRay::new(Ray { origin, direction, t_near: 0.0, t_far: 1.0 - self.epsilon / length, time: self.time }))
+        Some(ShadowRay::new(Ray {
+            origin,
+            direction,
+            t_near: 0.0,
+            t_far: 1.0 - self.epsilon / length,
+            time: self.time,
+        }))
     }
 
     /// The shadow ray towards a light at infinity in unit direction `d`.

@@ -5,6 +5,7 @@
 //! read by `io` rather than by the `gltf` crate's importer so that every
 //! error names the file and the JSON location (`meshes[2].primitives[0].indices`).
 
+mod animation;
 mod io;
 
 use std::collections::HashMap;
@@ -22,7 +23,7 @@ use super::groups::GltfLightNames;
 use super::image::{Encoding, RgbImage};
 use super::material::{Albedo, Cutout, Material, NormalMap, PbrMaterial, TextureRef};
 use super::mesh::Mesh;
-use super::object::Object;
+use super::object::{Motion, Object};
 use super::texture::{Filter, Texture, Wrap};
 use super::{within_limits, LightSource, SceneError, MAX_COORDINATE, MAX_EMITTER_SAMPLES};
 
@@ -98,13 +99,21 @@ pub struct GltfCamera {
     pub aspect_ratio: Option<f32>,
 }
 
+/// Times of the shutter a moving node's transform is sampled at, evenly
+/// spaced from its open to its close; Embree and shading interpolate
+/// linearly between them (docs/design.md §13.6).
+const SHUTTER_STEPS: usize = 33;
+
 /// Imports `spec.file` (relative to `base`) into `parts`; returns the chosen
-/// camera when `want_camera` (the TOML gives none).
+/// camera when `want_camera` (the TOML gives none). With a `shutter` (open
+/// before close, seconds), the file's animation (`spec.animation`, else
+/// its first) is sampled over it: what it moves, moves.
 pub fn import(
     scene_file: &Path,
     base: &Path,
     spec: &GltfSpec,
     want_camera: bool,
+    shutter: Option<[f32; 2]>,
     parts: Parts<'_>,
 ) -> Result<Option<GltfCamera>, SceneError> {
     let path = base.join(&spec.file);
@@ -130,6 +139,10 @@ pub fn import(
         .map_err(|e| SceneError::new(scene_file, "gltf.file", format!("cannot read '{}': {e}", path.display())))?;
     let gltf = io::parse(&path, &bytes)?;
     let data = io::Data::load(&path, &gltf.document, gltf.blob.as_deref())?;
+    let animation = match shutter {
+        Some(_) => animation::Animation::read(&path, &gltf.document, &data, spec.animation.as_deref())?,
+        None => None,
+    };
     let mut importer = Importer {
         file: &path,
         doc: &gltf.document,
@@ -143,11 +156,23 @@ pub fn import(
         placements: Vec::new(),
         prototypes: HashMap::new(),
         punctual: 0,
+        shutter: shutter.zip(animation),
+        still_moving: 0,
     };
     let camera = importer.import_scene(want_camera)?;
     // The buffer and image files, after the glTF file, in the order read.
     importer.parts.inputs.append(&mut importer.data.inputs);
     Ok(camera)
+}
+
+/// Where a mesh node puts its mesh: its world transform (at the shutter's
+/// open), whether other nodes place the mesh too, and its world transform
+/// at each step of the shutter when it moves.
+#[derive(Clone, Copy)]
+struct MeshPlacement<'a> {
+    world: Mat4,
+    shared: bool,
+    motion: Option<&'a [Mat4]>,
 }
 
 struct Importer<'a, 'p> {
@@ -172,6 +197,10 @@ struct Importer<'a, 'p> {
     prototypes: HashMap<(usize, usize), Option<usize>>,
     /// KHR_lights_punctual lights imported.
     punctual: usize,
+    /// The shutter and the animation played over it.
+    shutter: Option<([f32; 2], animation::Animation)>,
+    /// Moving primitives drawn still (emissive, mirrored or skinned).
+    still_moving: usize,
 }
 
 impl Importer<'_, '_> {
@@ -229,7 +258,15 @@ impl Importer<'_, '_> {
             return Err(self.error("scenes", "the file has no scene to render"));
         };
         self.name_ignored_extensions();
-        let visits = self.visit(&scene)?;
+        let mut visits = self.visit(&scene)?;
+        // Over an open shutter: each moving node's world transform at every
+        // step, and everything posed as at the shutter's open.
+        let moving = self.shutter_worlds(&visits)?;
+        for (node, world, _) in &mut visits {
+            if let Some(steps) = &moving[node.index()] {
+                *world = steps[0];
+            }
+        }
         // Every node's world transform first: a skin's joints may come
         // after the mesh they pose.
         let mut worlds = vec![None; self.doc.nodes().len()];
@@ -241,27 +278,61 @@ impl Importer<'_, '_> {
         self.placements = self.count_placements(&visits);
         for (node, world, location) in visits {
             let node_name = node.name().map_or_else(|| location.clone(), str::to_string);
+            let steps = moving[node.index()].as_deref();
             if let Some(mesh) = node.mesh() {
                 let weights = node.weights().or_else(|| mesh.weights()).unwrap_or(&[]);
                 let shared = node.skin().is_none() && node.weights().is_none() && self.placements[mesh.index()] > 1;
+                // A node with morph weights of its own keeps its own copy.
+                let motion = steps.filter(|_| node.weights().is_none());
                 if let Some(skin) = node.skin() {
                     skinned += 1;
+                    self.still_moving += usize::from(steps.is_some());
                     let joints = self.joint_matrices(&skin, &worlds)?;
                     self.import_mesh(&mesh, &Placement::Skinned(joints), weights, &node_name)?;
                 } else if let Some(value) = node.extension_value("EXT_mesh_gpu_instancing") {
                     for (i, instance) in self.instances(value, &location)?.into_iter().enumerate() {
                         let name = format!("{node_name}[{i}]");
-                        self.place_mesh(&mesh, world * instance, weights, &name, shared, &location)?;
+                        let motion: Option<Vec<Mat4>> = motion.map(|s| s.iter().map(|w| *w * instance).collect());
+                        let placed = MeshPlacement { world: world * instance, shared, motion: motion.as_deref() };
+                        self.place_mesh(&mesh, placed, weights, &name, &location)?;
                     }
                 } else {
-                    self.place_mesh(&mesh, world, weights, &node_name, shared, &location)?;
+                    self.still_moving += usize::from(steps.is_some() && motion.is_none());
+                    let placed = MeshPlacement { world, shared, motion };
+                    self.place_mesh(&mesh, placed, weights, &node_name, &location)?;
                 }
             }
             if let Some(camera) = node.camera() {
-                cameras.push((camera, world, location.clone()));
+                cameras.push((camera, world, location.clone(), steps.and_then(|s| s.last().copied())));
             }
             if let Some(light) = node.light() {
                 self.import_light(light.index(), &world, &node_name)?;
+                if let (Some(steps), Some(LightSource::Point { position, intensity })) =
+                    (steps, self.parts.lights.last())
+                {
+                    let end = steps[steps.len() - 1].w_axis.truncate();
+                    let (start, intensity) = (*position, *intensity);
+                    *self.parts.lights.last_mut().expect("just imported") =
+                        LightSource::MovingPoint { start, end, intensity };
+                } else if steps.is_some() {
+                    self.still_moving += 1;
+                }
+            }
+        }
+        if self.still_moving > 0 {
+            let n = self.still_moving;
+            self.warn(
+                "animations",
+                &format!(
+                    "{n} moving primitive(s) or light(s) drawn still as at the shutter's open: skinned, emissive, \
+                     mirrored or morphed meshes, and lights other than point lights, do not blur"
+                ),
+            );
+        }
+        if let Some((_, animation)) = &self.shutter {
+            if animation.weight_channels > 0 {
+                let n = animation.weight_channels;
+                self.warn("animations", &format!("{n} morph-target weight channel(s) not played"));
             }
         }
         self.state_light_units();
@@ -286,13 +357,13 @@ impl Importer<'_, '_> {
                 // `#N`: the N-th camera in node order (unnamed ones too).
                 let found = match name.strip_prefix('#').and_then(|n| n.parse::<usize>().ok()) {
                     Some(i) => cameras.get(i),
-                    None => cameras.iter().find(|(c, _, _)| c.name() == Some(name.as_str())),
+                    None => cameras.iter().find(|(c, ..)| c.name() == Some(name.as_str())),
                 };
                 if found.is_none() {
                     let names: Vec<String> = cameras
                         .iter()
                         .enumerate()
-                        .map(|(i, (c, _, _))| c.name().map_or_else(|| format!("#{i}"), |n| format!("{n} (#{i})")))
+                        .map(|(i, (c, ..))| c.name().map_or_else(|| format!("#{i}"), |n| format!("{n} (#{i})")))
                         .collect();
                     let names: Vec<&str> = names.iter().map(String::as_str).collect();
                     return Err(self.error(
@@ -303,7 +374,7 @@ impl Importer<'_, '_> {
                 found
             }
         };
-        let Some((camera, world, location)) = chosen else { return Ok(None) };
+        let Some((camera, world, location, end)) = chosen else { return Ok(None) };
         let gltf::camera::Projection::Perspective(p) = camera.projection() else {
             return Err(self.error(
                 format!("cameras[{}]", camera.index()),
@@ -324,10 +395,16 @@ impl Importer<'_, '_> {
             ));
         }
         let aspect_ratio = p.aspect_ratio().filter(|a| a.is_finite() && *a > 0.0);
-        Ok(Some(GltfCamera {
-            spec: CameraSpec::pinhole(eye.to_array(), (eye + forward).to_array(), up.to_array(), fov_y),
-            aspect_ratio,
-        }))
+        let mut spec = CameraSpec::pinhole(eye.to_array(), (eye + forward).to_array(), up.to_array(), fov_y);
+        // A moving camera travels in a straight line to where it is at the
+        // close, looking along its direction there.
+        if let Some(end) = end {
+            let (eye_end, forward_end) =
+                (end.w_axis.truncate(), end.transform_vector3(Vec3::NEG_Z).normalize_or_zero());
+            spec.eye_end = Some(eye_end.to_array());
+            spec.look_at_end = Some((eye_end + forward_end).to_array());
+        }
+        Ok(Some(GltfCamera { spec, aspect_ratio }))
     }
 
     /// One line on stderr: how many punctual lights were converted, at
@@ -379,13 +456,23 @@ impl Importer<'_, '_> {
     fn place_mesh(
         &mut self,
         mesh: &gltf::Mesh<'_>,
-        world: Mat4,
+        placed: MeshPlacement<'_>,
         weights: &[f32],
         node_name: &str,
-        shared: bool,
         location: &str,
     ) -> Result<(), SceneError> {
-        if !(shared && world.determinant() > 0.0) {
+        let MeshPlacement { world, shared, motion } = placed;
+        // A motion that scales to nothing or mirrors on the way cannot be
+        // one instance's: drawn still.
+        let motion = match motion {
+            Some(steps) if !steps.iter().all(|w| w.determinant() > 0.0) => {
+                self.still_moving += 1;
+                None
+            }
+            m => m,
+        };
+        if !((shared || motion.is_some()) && world.determinant() > 0.0) {
+            self.still_moving += usize::from(motion.is_some());
             return self.import_mesh(mesh, &Placement::Rigid(world), weights, node_name);
         }
         for primitive in mesh.primitives() {
@@ -411,14 +498,17 @@ impl Importer<'_, '_> {
                 }
             };
             let Some(prototype) = prototype else {
+                self.still_moving += usize::from(motion.is_some());
                 self.import_primitive(&primitive, mesh.index(), &Placement::Rigid(world), weights, node_name)?;
                 continue;
             };
             let transform = Affine3A::from_mat4(world);
-            let (lo, hi) = crate::scene::object::world_bounds(
-                self.parts.meshes,
-                &[Object { mesh: prototype, transform: Some(transform), name: String::new(), motion: None }],
-            );
+            // Each step's placement relative to the open's.
+            let motion = motion.map(|steps| Motion {
+                steps: steps.iter().map(|w| Affine3A::from_mat4(*w) * transform.inverse()).collect(),
+            });
+            let object = Object { mesh: prototype, transform: Some(transform), name: node_name.to_string(), motion };
+            let (lo, hi) = crate::scene::object::world_bounds(self.parts.meshes, std::slice::from_ref(&object));
             if !(within_limits(lo) && within_limits(hi)) {
                 return Err(self.error(
                     location,
@@ -428,14 +518,64 @@ impl Importer<'_, '_> {
             if self.parts.instances.len() >= MAX_INSTANCES {
                 return Err(self.error(location, format!("the scene has more than {MAX_INSTANCES} instances")));
             }
-            self.parts.instances.push(Object {
-                mesh: prototype,
-                transform: Some(transform),
-                name: node_name.to_string(),
-                motion: None,
-            });
+            self.parts.instances.push(object);
         }
         Ok(())
+    }
+
+    /// Each visited node's world transform at the shutter's steps, by node
+    /// index, for the nodes the animation moves (it drives them or one of
+    /// their ancestors); None for the others, and for every node without
+    /// a shutter.
+    fn shutter_worlds(&self, visits: &[(gltf::Node<'_>, Mat4, String)]) -> Result<Vec<Option<Vec<Mat4>>>, SceneError> {
+        let mut moving: Vec<Option<Vec<Mat4>>> = vec![None; self.doc.nodes().len()];
+        let Some(([open, close], animation)) = &self.shutter else { return Ok(moving) };
+        let mut parent = vec![None; self.doc.nodes().len()];
+        for node in self.doc.nodes() {
+            for child in node.children() {
+                parent[child.index()] = Some(node.index());
+            }
+        }
+        let mut rest = vec![Mat4::IDENTITY; self.doc.nodes().len()];
+        for (node, world, _) in visits {
+            rest[node.index()] = *world;
+        }
+        let times: Vec<f32> =
+            (0..SHUTTER_STEPS).map(|k| open + (close - open) * k as f32 / (SHUTTER_STEPS - 1) as f32).collect();
+        // Parents come before their children in `visits`.
+        for (node, _, location) in visits {
+            let parent_steps = parent[node.index()].and_then(|p| moving[p].clone());
+            if parent_steps.is_none() && !animation.drives(node.index()) {
+                continue;
+            }
+            let steps: Vec<Mat4> = times
+                .iter()
+                .enumerate()
+                .map(|(k, &t)| {
+                    let local = if animation.drives(node.index()) {
+                        animation.local(node, t)
+                    } else {
+                        Mat4::from_cols_array_2d(&node.transform().matrix())
+                    };
+                    let parent_world = match (&parent_steps, parent[node.index()]) {
+                        (Some(steps), _) => steps[k],
+                        (None, Some(p)) => rest[p],
+                        (None, None) => Mat4::IDENTITY,
+                    };
+                    parent_world * local
+                })
+                .collect();
+            if !steps.iter().all(|w| w.is_finite() && within_limits(w.w_axis.truncate())) {
+                return Err(self.error(
+                    location,
+                    format!(
+                        "the animation places it outside +/-{MAX_COORDINATE:e} m or makes its transform not finite"
+                    ),
+                ));
+            }
+            moving[node.index()] = Some(steps);
+        }
+        Ok(moving)
     }
 
     fn import_mesh(

@@ -60,11 +60,9 @@ fn light_source(
             let position = v.point(*position, &field("position"))?;
             let intensity = v.non_negative_rgb(*intensity, &field("intensity"))?;
             match position_end {
-                Some(end) => LightSource::MovingPoint {
-                    start: position,
-                    end: v.point(*end, &field("position_end"))?,
-                    intensity,
-                },
+                Some(end) => {
+                    LightSource::MovingPoint { start: position, end: v.point(*end, &field("position_end"))?, intensity }
+                }
                 None => LightSource::Point { position, intensity },
             }
         }

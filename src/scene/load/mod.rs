@@ -25,6 +25,11 @@ pub struct LoadOptions<'a> {
     pub camera: Option<&'a str>,
     /// `--lumens-per-watt`: the glTF import's luminous efficacy.
     pub lumens_per_watt: Option<f32>,
+    /// `--shutter OPEN,CLOSE`: the camera's shutter, seconds (the glTF
+    /// file's animation is played over it).
+    pub shutter: Option<[f32; 2]>,
+    /// `--animation NAME`: the glTF file's animation played over the shutter.
+    pub animation: Option<&'a str>,
 }
 
 impl Scene {
@@ -39,7 +44,7 @@ impl Scene {
     /// or `.glb` file is a scene by itself: the import of `[gltf]` with
     /// every default.
     pub fn load_with_camera(path: &Path, camera: Option<&str>) -> Result<Self, SceneError> {
-        Self::load_with(path, &LoadOptions { camera, lumens_per_watt: None })
+        Self::load_with(path, &LoadOptions { camera, ..LoadOptions::default() })
     }
 
     /// [`Scene::load`] with the command line's overrides of the scene file.
@@ -90,6 +95,31 @@ impl Scene {
             }
             gltf.lumens_per_watt = lpw;
         }
+        if let Some(name) = options.animation {
+            let Some(gltf) = spec.gltf.as_mut() else {
+                return Err(SceneError::new(
+                    path,
+                    "--animation",
+                    "plays a glTF animation, but the scene imports no glTF file",
+                ));
+            };
+            gltf.animation = Some(name.to_string());
+        }
+        if let Some([open, close]) = options.shutter {
+            if !(open.is_finite() && close.is_finite() && open <= close) {
+                return Err(SceneError::new(
+                    path,
+                    "--shutter",
+                    format!("must be OPEN,CLOSE in seconds with open <= close, got {open},{close}"),
+                ));
+            }
+            if let Some(camera) = spec.camera.as_mut() {
+                camera.shutter = [open, close];
+            }
+            if let Some(gltf) = spec.gltf.as_mut() {
+                gltf.shutter = Some([open, close]);
+            }
+        }
         let imports_itself =
             spec.gltf.as_ref().is_some_and(|g| path.file_name() == Some(std::ffi::OsStr::new(&g.file)))
                 && (extension("gltf") || extension("glb"));
@@ -100,6 +130,12 @@ impl Scene {
         if let Some(lpw) = options.lumens_per_watt {
             // Not a file the scene read: part of its hash all the same.
             scene.additions.push(format!("--lumens-per-watt {lpw}"));
+        }
+        if let Some([open, close]) = options.shutter {
+            scene.additions.push(format!("--shutter {open},{close}"));
+        }
+        if let Some(name) = options.animation {
+            scene.additions.push(format!("--animation {name}"));
         }
         Ok(scene)
     }
@@ -133,7 +169,8 @@ impl Scene {
                     inputs: &mut inputs,
                     warnings: &mut warnings,
                 };
-                let camera = gltf::import(path, base, g, spec.camera.is_none(), parts)?;
+                let shutter = spec.camera.as_ref().map_or(g.shutter, |c| Some(c.shutter)).filter(|[o, c]| o < c);
+                let camera = gltf::import(path, base, g, spec.camera.is_none(), shutter, parts)?;
                 let matched = groups::apply_rules(path, &g.groups, &light_names)?;
                 for (k, group) in matched.into_iter().enumerate() {
                     requested_groups.push((group, format!("gltf.groups (glTF light {k})")));
@@ -150,8 +187,12 @@ impl Scene {
                 object.motion = motion;
             }
         }
-        let (camera_spec, film) =
+        let (mut camera_spec, film) =
             settings::camera_and_film(&v, &spec, gltf_camera, object::world_bounds(&meshes, &objects), &mut warnings)?;
+        // A glTF file's (or the framing) camera opens the shutter --shutter gives.
+        if let (None, Some(shutter)) = (&spec.camera, spec.gltf.as_ref().and_then(|g| g.shutter)) {
+            camera_spec.shutter = shutter;
+        }
         let environment = settings::environment(&v, base, &spec, &mut inputs)?;
         let indirect = settings::indirect(&v, &spec)?;
         let groups = LightGroups::assign(
