@@ -280,43 +280,14 @@ impl Importer<'_, '_> {
             let node_name = node.name().map_or_else(|| location.clone(), str::to_string);
             let steps = moving[node.index()].as_deref();
             if let Some(mesh) = node.mesh() {
-                let weights = node.weights().or_else(|| mesh.weights()).unwrap_or(&[]);
-                let shared = node.skin().is_none() && node.weights().is_none() && self.placements[mesh.index()] > 1;
-                // A node with morph weights of its own keeps its own copy.
-                let motion = steps.filter(|_| node.weights().is_none());
-                if let Some(skin) = node.skin() {
-                    skinned += 1;
-                    self.still_moving += usize::from(steps.is_some());
-                    let joints = self.joint_matrices(&skin, &worlds)?;
-                    self.import_mesh(&mesh, &Placement::Skinned(joints), weights, &node_name)?;
-                } else if let Some(value) = node.extension_value("EXT_mesh_gpu_instancing") {
-                    for (i, instance) in self.instances(value, &location)?.into_iter().enumerate() {
-                        let name = format!("{node_name}[{i}]");
-                        let motion: Option<Vec<Mat4>> = motion.map(|s| s.iter().map(|w| *w * instance).collect());
-                        let placed = MeshPlacement { world: world * instance, shared, motion: motion.as_deref() };
-                        self.place_mesh(&mesh, placed, weights, &name, &location)?;
-                    }
-                } else {
-                    self.still_moving += usize::from(steps.is_some() && motion.is_none());
-                    let placed = MeshPlacement { world, shared, motion };
-                    self.place_mesh(&mesh, placed, weights, &node_name, &location)?;
-                }
+                skinned += usize::from(node.skin().is_some());
+                self.import_node_mesh(&node, &mesh, world, (&location, &node_name), steps, &worlds)?;
             }
             if let Some(camera) = node.camera() {
                 cameras.push((camera, world, location.clone(), steps.and_then(|s| s.last().copied())));
             }
             if let Some(light) = node.light() {
-                self.import_light(light.index(), &world, &node_name)?;
-                if let (Some(steps), Some(LightSource::Point { position, intensity })) =
-                    (steps, self.parts.lights.last())
-                {
-                    let end = steps[steps.len() - 1].w_axis.truncate();
-                    let (start, intensity) = (*position, *intensity);
-                    *self.parts.lights.last_mut().expect("just imported") =
-                        LightSource::MovingPoint { start, end, intensity };
-                } else if steps.is_some() {
-                    self.still_moving += 1;
-                }
+                self.import_node_light(light.index(), &world, &node_name, steps)?;
             }
         }
         if self.still_moving > 0 {
@@ -351,6 +322,18 @@ impl Importer<'_, '_> {
         if !want_camera {
             return Ok(None);
         }
+        self.chosen_camera(&cameras)
+    }
+
+    /// The camera `[gltf] camera` (or `--camera`) names among `cameras`
+    /// (each with its node's world transform at the open, its location
+    /// and, when it moves, its world transform at the close), else the
+    /// first; None when the file has none.
+    #[allow(clippy::type_complexity)]
+    fn chosen_camera(
+        &self,
+        cameras: &[(gltf::Camera<'_>, Mat4, String, Option<Mat4>)],
+    ) -> Result<Option<GltfCamera>, SceneError> {
         let chosen = match &self.spec.camera {
             None => cameras.first(),
             Some(name) => {
@@ -405,6 +388,65 @@ impl Importer<'_, '_> {
             spec.look_at_end = Some((eye_end + forward_end).to_array());
         }
         Ok(Some(GltfCamera { spec, aspect_ratio }))
+    }
+
+    /// A mesh node's mesh: posed by its skin, or placed (and moving, with
+    /// `steps`, its world transforms over the shutter) once or once per
+    /// EXT_mesh_gpu_instancing instance. `at` is the node's location and name.
+    fn import_node_mesh(
+        &mut self,
+        node: &gltf::Node<'_>,
+        mesh: &gltf::Mesh<'_>,
+        world: Mat4,
+        (location, node_name): (&str, &str),
+        steps: Option<&[Mat4]>,
+        worlds: &[Option<Mat4>],
+    ) -> Result<(), SceneError> {
+        let weights = node.weights().or_else(|| mesh.weights()).unwrap_or(&[]);
+        let shared = node.skin().is_none() && node.weights().is_none() && self.placements[mesh.index()] > 1;
+        // A node with morph weights of its own keeps its own copy.
+        let motion = steps.filter(|_| node.weights().is_none());
+        if let Some(skin) = node.skin() {
+            self.still_moving += usize::from(steps.is_some());
+            let joints = self.joint_matrices(&skin, worlds)?;
+            self.import_mesh(mesh, &Placement::Skinned(joints), weights, node_name)
+        } else if let Some(value) = node.extension_value("EXT_mesh_gpu_instancing") {
+            for (i, instance) in self.instances(value, location)?.into_iter().enumerate() {
+                let name = format!("{node_name}[{i}]");
+                let motion: Option<Vec<Mat4>> = motion.map(|s| s.iter().map(|w| *w * instance).collect());
+                let placed = MeshPlacement { world: world * instance, shared, motion: motion.as_deref() };
+                self.place_mesh(mesh, placed, weights, &name, location)?;
+            }
+            Ok(())
+        } else {
+            self.still_moving += usize::from(steps.is_some() && motion.is_none());
+            self.place_mesh(mesh, MeshPlacement { world, shared, motion }, weights, node_name, location)
+        }
+    }
+
+    /// A node's punctual light; a point light the animation moves (`steps`)
+    /// moves in a straight line from where it is at the open to the close.
+    fn import_node_light(
+        &mut self,
+        index: usize,
+        world: &Mat4,
+        node_name: &str,
+        steps: Option<&[Mat4]>,
+    ) -> Result<(), SceneError> {
+        let before = self.parts.lights.len();
+        self.import_light(index, world, node_name)?;
+        let Some(steps) = steps else { return Ok(()) };
+        // The light this node added, if it added one.
+        let added = self.parts.lights.get_mut(before..).and_then(<[LightSource]>::first_mut);
+        if let Some(light) = added {
+            if let LightSource::Point { position, intensity } = *light {
+                let end = steps[steps.len() - 1].w_axis.truncate();
+                *light = LightSource::MovingPoint { start: position, end, intensity };
+            } else {
+                self.still_moving += 1;
+            }
+        }
+        Ok(())
     }
 
     /// One line on stderr: how many punctual lights were converted, at
