@@ -246,6 +246,42 @@ fn a_gltf_animation_blurs_over_the_shutter_the_command_line_opens() {
 }
 
 #[test]
+fn hostile_animations_are_errors_naming_the_field_never_panics() {
+    let dir = TempDir::new("gltf-hostile-animation");
+    let base = animated_quad();
+    let times = base.json["animations"][0]["samplers"][0]["input"].as_u64().unwrap();
+    let cases: Vec<(Box<dyn Fn(&mut serde_json::Value)>, &str)> = vec![
+        (Box::new(|j| j["animations"][0]["channels"][0]["target"]["node"] = json!(99)), "channels[0].target.node"),
+        (Box::new(|j| j["animations"][0]["channels"][0]["target"]["path"] = json!("wobble")), "target.path"),
+        (Box::new(|j| j["animations"][0]["channels"][0]["sampler"] = json!(5)), "channels[0].sampler"),
+        (Box::new(|j| j["animations"][0]["samplers"][0]["input"] = json!(99)), "samplers[0].input"),
+        // The key times' accessor as the output: 2 values for 2 keys, but SCALAR.
+        (Box::new(move |j| j["animations"][0]["samplers"][0]["output"] = json!(times)), "samplers[0].output"),
+        (Box::new(|j| j["animations"][0]["samplers"][0]["interpolation"] = json!("CUBICSPLINE")), "samplers[0].output"),
+        (Box::new(|j| j["animations"][0]["samplers"][0]["interpolation"] = json!("BOUNCY")), "interpolation"),
+    ];
+    for (k, (break_it, field)) in cases.iter().enumerate() {
+        let mut g = animated_quad();
+        break_it(&mut g.json);
+        let file = dir.write(&format!("bad{k}.gltf"), &g.embedded());
+        let out = dir.path("out.exr");
+        let stderr = lightcuts_fails(&["render", s(&file), "-o", s(&out), "--shutter", "0,1", "--quiet"]);
+        assert!(stderr.contains(&format!("bad{k}.gltf")) && stderr.contains(field), "case {k}: {stderr}");
+        assert!(!stderr.contains("panicked"), "case {k}: {stderr}");
+        assert!(!out.exists());
+    }
+    // Key times that go back are named too.
+    let mut g = GltfBuilder::new();
+    g.json = base.json.clone();
+    g.bin = base.bin.clone();
+    let backwards = g.floats(&[2.0, 0.0], "SCALAR", 1);
+    g.json["animations"][0]["samplers"][0]["input"] = json!(backwards);
+    let file = dir.write("backwards.gltf", &g.embedded());
+    let stderr = lightcuts_fails(&["render", s(&file), "-o", s(&dir.path("b.exr")), "--shutter", "0,1"]);
+    assert!(stderr.contains("samplers[0].input") && stderr.contains("strictly increasing"), "{stderr}");
+}
+
+#[test]
 fn bad_motion_is_named() {
     let dir = TempDir::new("bad-motion");
     let cases = [

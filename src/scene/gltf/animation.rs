@@ -113,6 +113,21 @@ impl Animation {
             }
         };
         let Some(animation) = chosen else { return Ok(None) };
+        // The validator gltf-json runs checks neither a channel's target
+        // node nor its path, and the gltf crate unwraps both: checked here.
+        let json = &doc.as_json().animations[animation.index()];
+        for (c, channel) in json.channels.iter().enumerate() {
+            let at = format!("animations[{}].channels[{c}].target", animation.index());
+            if channel.target.node.value() >= doc.nodes().len() {
+                let message =
+                    format!("node {} does not exist (the file has {})", channel.target.node.value(), doc.nodes().len());
+                return Err(SceneError::new(file, format!("{at}.node"), message));
+            }
+            if !matches!(channel.target.path, gltf::json::validation::Checked::Valid(_)) {
+                let message = "must be translation, rotation, scale or weights";
+                return Err(SceneError::new(file, format!("{at}.path"), message));
+            }
+        }
         let mut read = Self::default();
         for channel in animation.channels() {
             let sampler = channel.sampler();
