@@ -250,7 +250,8 @@ fn hostile_animations_are_errors_naming_the_field_never_panics() {
     let dir = TempDir::new("gltf-hostile-animation");
     let base = animated_quad();
     let times = base.json["animations"][0]["samplers"][0]["input"].as_u64().unwrap();
-    let cases: Vec<(Box<dyn Fn(&mut serde_json::Value)>, &str)> = vec![
+    type Breaks = Box<dyn Fn(&mut serde_json::Value)>;
+    let cases: Vec<(Breaks, &str)> = vec![
         (Box::new(|j| j["animations"][0]["channels"][0]["target"]["node"] = json!(99)), "channels[0].target.node"),
         (Box::new(|j| j["animations"][0]["channels"][0]["target"]["path"] = json!("wobble")), "target.path"),
         (Box::new(|j| j["animations"][0]["channels"][0]["sampler"] = json!(5)), "channels[0].sampler"),
