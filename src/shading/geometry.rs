@@ -41,45 +41,28 @@ impl<'s> Geometry<'s> {
         let mut object_of_geometry = Vec::with_capacity(scene.objects.len());
         // One committed scene per instanced mesh, shared by its instances.
         let mut instanced: HashMap<usize, Arc<embree::Scene>> = HashMap::new();
-        for (i, object) in scene.objects.iter().enumerate() {
+        let placements: Vec<Placing> = scene.objects.iter().map(Placing::of).collect();
+        for (i, (object, placing)) in scene.objects.iter().zip(&placements).enumerate() {
             let shape = |source| GeometryError::Mesh { shape: object.mesh, source };
-            let id = match (object.transform, &object.motion) {
-                (None, None) => attach_mesh(&mut builder, scene, object.mesh).map_err(shape)?,
-                (transform, motion) => {
-                    let child = match instanced.get(&object.mesh) {
-                        Some(child) => Arc::clone(child),
-                        None => {
-                            let mut child = device.try_new_scene()?;
-                            attach_mesh(&mut child, scene, object.mesh).map_err(shape)?;
-                            let child = Arc::new(child.commit()?);
-                            instanced.insert(object.mesh, Arc::clone(&child));
-                            child
-                        }
-                    };
-                    let placed = transform.unwrap_or(Affine3A::IDENTITY);
-                    match motion {
-                        None => builder.attach_instance(&child, placed).map_err(shape)?,
-                        Some(motion) => {
-                            let steps: Vec<Affine3A> = motion.steps.iter().map(|s| *s * placed).collect();
-                            builder.attach_moving_instance(&child, &steps).map_err(shape)?
-                        }
-                    }
+            let mut child = || -> Result<Arc<embree::Scene>, GeometryError> {
+                if let Some(child) = instanced.get(&object.mesh) {
+                    return Ok(Arc::clone(child));
                 }
+                let mut child = device.try_new_scene()?;
+                attach_mesh(&mut child, scene, object.mesh).map_err(shape)?;
+                let child = Arc::new(child.commit()?);
+                instanced.insert(object.mesh, Arc::clone(&child));
+                Ok(child)
             };
+            let id = match placing {
+                Placing::World => attach_mesh(&mut builder, scene, object.mesh),
+                Placing::Still(p) => builder.attach_instance(&child()?, p.to_world),
+                Placing::Moving(motion) => builder.attach_moving_instance(&child()?, &motion.steps),
+            }
+            .map_err(shape)?;
             debug_assert_eq!(id as usize, object_of_geometry.len(), "Embree assigns ids in order");
             object_of_geometry.push(i);
         }
-        let placements = scene
-            .objects
-            .iter()
-            .map(|o| match (o.transform, &o.motion) {
-                (None, None) => Placing::World,
-                (Some(t), None) => Placing::Still(Placement::of(t)),
-                (t, Some(motion)) => Placing::Moving(crate::scene::object::Motion {
-                    steps: motion.steps.iter().map(|s| *s * t.unwrap_or(Affine3A::IDENTITY)).collect(),
-                }),
-            })
-            .collect();
         let embree = builder.commit()?;
         let (lo, hi) = lights
             .iter()
@@ -228,8 +211,21 @@ enum Placing {
     /// An instance that stands still.
     Still(Placement),
     /// A moving object: from its mesh's space to the world's at each time
-    /// (docs/design.md §13.6), the steps Embree was given.
+    /// (docs/design.md §13.6), the steps Embree is given.
     Moving(crate::scene::object::Motion),
+}
+
+impl Placing {
+    /// How `object` is placed: its motion's steps after its own transform.
+    fn of(object: &crate::scene::object::Object) -> Self {
+        match (object.transform, &object.motion) {
+            (None, None) => Self::World,
+            (Some(t), None) => Self::Still(Placement::of(t)),
+            (t, Some(motion)) => Self::Moving(crate::scene::object::Motion {
+                steps: motion.steps.iter().map(|s| *s * t.unwrap_or(Affine3A::IDENTITY)).collect(),
+            }),
+        }
+    }
 }
 
 /// An instance's map from its mesh's space to the world's, and the

@@ -586,23 +586,19 @@ impl Importer<'_, '_> {
             (0..SHUTTER_STEPS).map(|k| open + (close - open) * k as f32 / (SHUTTER_STEPS - 1) as f32).collect();
         // Parents come before their children in `visits`.
         for (node, _, location) in visits {
-            let parent_steps = parent[node.index()].and_then(|p| moving[p].clone());
-            if parent_steps.is_none() && !animation.drives(node.index()) {
+            let driven = animation.drives(node.index());
+            if !driven && parent[node.index()].is_none_or(|p| moving[p].is_none()) {
                 continue;
             }
+            let still = Mat4::from_cols_array_2d(&node.transform().matrix());
             let steps: Vec<Mat4> = times
                 .iter()
                 .enumerate()
                 .map(|(k, &t)| {
-                    let local = if animation.drives(node.index()) {
-                        animation.local(node, t)
-                    } else {
-                        Mat4::from_cols_array_2d(&node.transform().matrix())
-                    };
-                    let parent_world = match (&parent_steps, parent[node.index()]) {
-                        (Some(steps), _) => steps[k],
-                        (None, Some(p)) => rest[p],
-                        (None, None) => Mat4::IDENTITY,
+                    let local = if driven { animation.local(node, t) } else { still };
+                    let parent_world = match parent[node.index()] {
+                        Some(p) => moving[p].as_ref().map_or(rest[p], |steps| steps[k]),
+                        None => Mat4::IDENTITY,
                     };
                     parent_world * local
                 })

@@ -71,38 +71,20 @@ impl Scene {
             }
         };
         if let Some(name) = camera {
-            let Some(gltf) = spec.gltf.as_mut() else {
-                return Err(SceneError::new(
-                    path,
-                    "--camera",
-                    "picks a glTF camera, but the scene imports no glTF file",
-                ));
-            };
+            let gltf = imported_gltf(path, &mut spec, "--camera", "picks a glTF camera")?;
             gltf.camera = Some(name.to_string());
             // The TOML's own camera would win over the one asked for.
             spec.camera = None;
         }
         if let Some(lpw) = options.lumens_per_watt {
-            let Some(gltf) = spec.gltf.as_mut() else {
-                return Err(SceneError::new(
-                    path,
-                    "--lumens-per-watt",
-                    "converts a glTF file's lights, but the scene imports no glTF file",
-                ));
-            };
+            let gltf = imported_gltf(path, &mut spec, "--lumens-per-watt", "converts a glTF file's lights")?;
             if !(lpw.is_finite() && lpw > 0.0) {
                 return Err(SceneError::new(path, "--lumens-per-watt", format!("must be finite and > 0, got {lpw}")));
             }
             gltf.lumens_per_watt = lpw;
         }
         if let Some(name) = options.animation {
-            let Some(gltf) = spec.gltf.as_mut() else {
-                return Err(SceneError::new(
-                    path,
-                    "--animation",
-                    "plays a glTF animation, but the scene imports no glTF file",
-                ));
-            };
+            let gltf = imported_gltf(path, &mut spec, "--animation", "plays a glTF animation")?;
             gltf.animation = Some(name.to_string());
         }
         if let Some([open, close]) = options.shutter {
@@ -224,6 +206,17 @@ impl Scene {
             additions: Vec::new(),
         })
     }
+}
+
+/// The scene's `[gltf]` import, for the command-line `flag` that `does`
+/// something to it; an error naming the flag when the scene imports none.
+fn imported_gltf<'s>(
+    path: &Path,
+    spec: &'s mut SceneFile,
+    flag: &str,
+    does: &str,
+) -> Result<&'s mut file::GltfSpec, SceneError> {
+    spec.gltf.as_mut().ok_or_else(|| SceneError::new(path, flag, format!("{does}, but the scene imports no glTF file")))
 }
 
 fn parse_toml(path: &Path, text: &str) -> Result<SceneFile, SceneError> {
