@@ -80,6 +80,36 @@ fn a_moving_quad_covers_each_pixel_for_the_part_of_the_shutter_it_spends_there()
     }
 }
 
+#[test]
+fn a_turning_quad_is_shaded_where_it_is_at_each_sample_time() {
+    // A 2 m quad facing the camera turns 60 degrees about +y through its
+    // centre: the centre pixels see it all along, with the normal
+    // (sin t, 0, cos t) at angle t, whose mean over the turn is
+    // ((1 - cos 60) / (pi / 3), 0, sin 60 / (pi / 3)). Shading that placed
+    // the hit as at the shutter's open would see (0, 0, 1).
+    let dir = TempDir::new("turning-quad");
+    let text = sliding_quad("[0.0, 0.02]", 243)
+        .replace("corner = [-3, -1, 0]\nu = [1, 0, 0]", "corner = [-1, -1, 0]\nu = [2, 0, 0]")
+        .replace("translate = [3, 0, 0]", "rotate_axis = [0, 1, 0], rotate_degrees = 60");
+    assert!(text.contains("rotate_degrees") && text.contains("corner = [-1, -1, 0]"));
+    let scene = dir.write("turn.toml", &text);
+    let out = dir.path("turn.exr");
+    lightcuts_ok(&["render", s(&scene), "-o", s(&out), "--exact", "--quiet"]);
+    let image = read_exr(&out).unwrap();
+    let third = std::f64::consts::PI / 3.0;
+    let expected = [(1.0 - third.cos()) / third, 0.0, third.sin() / third];
+    for column in [23, 24] {
+        for row in 0..4 {
+            let at = row * 48 + column;
+            assert_eq!(image.channels["A"][at], 1.0, "the centre is covered all along");
+            for (axis, want) in ["N.X", "N.Y", "N.Z"].iter().zip(expected) {
+                let found = f64::from(image.channels[*axis][at]);
+                assert!((found - want).abs() < 0.01, "{axis} at column {column}, row {row}: {found} vs {want}");
+            }
+        }
+    }
+}
+
 /// A floor lit by one point light 1 m above it: moving from x = -1 to 1
 /// over an open shutter, or the `lights` given instead.
 fn floor_lit_by(lights: &str, shutter: &str) -> String {
