@@ -158,93 +158,23 @@ impl Cut<'_, '_> {
     /// * V; the other waits for its representative's evaluation.
     #[inline(always)]
     fn add_slots(&mut self, tree: u8, b: usize, bounds: [f32; 2], parent: Option<(u32, DVec3)>) {
-        for (k, &bound) in bounds.iter().enumerate() {
-            self.add_slot(tree, b, k, bound, parent);
-        }
-    }
-
-    /// The entry of slot `k` of block `b` (see [`Cut::add_slots`]).
-    #[inline(always)]
-    fn add_slot(&mut self, tree: u8, b: usize, k: usize, bound: f32, parent: Option<(u32, DVec3)>) {
         let block = &self.trees[tree as usize].blocks[b];
         let (shared, unit) = parent.unwrap_or((u32::MAX, DVec3::ZERO));
-        let child = block.child[k];
-        if child == Child::EMPTY {
-            return;
-        }
-        let representative = block.representative[k];
-        let intensity = Vec3::new(block.intensity[0][k], block.intensity[1][k], block.intensity[2][k]);
-        let index = self.scratch.entries.len();
-        if representative == shared && parent.is_some() {
-            self.scratch.entries.push(Entry { unit, intensity, bound, child, representative, tree, in_cut: true });
-            self.admit(index);
-        } else {
-            let entry = Entry { unit: DVec3::ZERO, intensity, bound, child, representative, tree, in_cut: true };
-            self.scratch.entries.push(entry);
-            self.scratch.pending.push(Pending { entry: index as u32, block: b as u32, slot: k as u8 });
-        }
-    }
-
-    /// Refines the node whose children are block `b` as a node of the
-    /// 4-ary collapse of the tree: it is replaced by its grandchildren (a
-    /// child whose estimate is exact stands for itself), the four bounded at
-    /// once when both children are internal.
-    #[inline(always)]
-    fn add_grandchildren(&mut self, tree: u8, b: usize, parent: (u32, DVec3)) {
-        let t = &self.trees[tree as usize];
-        let [c0, c1] = t.blocks[b].child;
-        let open = |c: Child| c != Child::EMPTY && !c.is_exact();
-        match (open(c0), open(c1)) {
-            (true, true) => {
-                let (b0, b1) = (c0.index(), c1.index());
-                let cones = t.cones_of(b0).zip(t.cones_of(b1)).map(|(x, y)| [x, y]);
-                let [a0, a1, d0, d1] = self.bounds.quad(t.kind, [&t.blocks[b0], &t.blocks[b1]], cones);
-                self.add_slots(tree, b0, [a0, a1], Some(parent));
-                self.add_slots(tree, b1, [d0, d1], Some(parent));
+        for (k, &bound) in bounds.iter().enumerate() {
+            let child = block.child[k];
+            if child == Child::EMPTY {
+                continue;
             }
-            (open0, open1) => {
-                for (k, (c, open)) in [(c0, open0), (c1, open1)].into_iter().enumerate() {
-                    if open {
-                        self.add_children(tree, c.index(), Some(parent));
-                    } else {
-                        self.add_slot(tree, b, k, 0.0, Some(parent));
-                    }
-                }
-            }
-        }
-    }
-
-    /// Refines the node whose children are block `b`, and at once each
-    /// child whose bound is above `threshold` (it would be refined when
-    /// popped): that child's children join the cut in its place.
-    #[inline(always)]
-    fn add_children_eager(&mut self, tree: u8, b: usize, parent: (u32, DVec3), threshold: f32) -> usize {
-        let t = &self.trees[tree as usize];
-        let bounds = self.bounds.pair(t.kind, &t.blocks[b], t.cones_of(b));
-        let [c0, c1] = t.blocks[b].child;
-        let open = [bounds[0] > threshold, bounds[1] > threshold];
-        match open {
-            [true, true] => {
-                let (b0, b1) = (c0.index(), c1.index());
-                let cones = t.cones_of(b0).zip(t.cones_of(b1)).map(|(x, y)| [x, y]);
-                let [a0, a1, d0, d1] = self.bounds.quad(t.kind, [&t.blocks[b0], &t.blocks[b1]], cones);
-                self.add_slots(tree, b0, [a0, a1], Some(parent));
-                self.add_slots(tree, b1, [d0, d1], Some(parent));
-                2
-            }
-            [false, false] => {
-                self.add_slots(tree, b, bounds, Some(parent));
-                0
-            }
-            _ => {
-                for (k, c) in [c0, c1].into_iter().enumerate() {
-                    if open[k] {
-                        self.add_children(tree, c.index(), Some(parent));
-                    } else {
-                        self.add_slot(tree, b, k, bounds[k], Some(parent));
-                    }
-                }
-                1
+            let representative = block.representative[k];
+            let intensity = Vec3::new(block.intensity[0][k], block.intensity[1][k], block.intensity[2][k]);
+            let index = self.scratch.entries.len();
+            if representative == shared && parent.is_some() {
+                self.scratch.entries.push(Entry { unit, intensity, bound, child, representative, tree, in_cut: true });
+                self.admit(index);
+            } else {
+                let entry = Entry { unit: DVec3::ZERO, intensity, bound, child, representative, tree, in_cut: true };
+                self.scratch.entries.push(entry);
+                self.scratch.pending.push(Pending { entry: index as u32, block: b as u32, slot: k as u8 });
             }
         }
     }
@@ -374,42 +304,15 @@ fn cut_through(
         }
     }
     cut.flush();
-    // Measurement switches of the 4-ary collapse experiment
-    // (docs/measurements.md, "A 4-ary collapse of the tree"), reverted in the
-    // next commit: LC_FOUR refines every node into its grandchildren,
-    // LC_EAGER also refines a new child above the threshold at once, LC_DEEP=k
-    // refines into grandchildren the nodes whose bound is above k times it.
-    let four = std::env::var_os("LC_FOUR").is_some();
-    let eager = std::env::var_os("LC_EAGER").is_some();
-    let deep: f32 = std::env::var("LC_DEEP").ok().and_then(|v| v.parse().ok()).unwrap_or(f32::INFINITY);
     loop {
         // In the bounds' normalised units.
         let threshold = (settings.error * cut.total.max(0.0) * f64::from(scale)) as f32;
         let mut refined = 0;
         // Only internal nodes have bounds above 0, so a popped entry has a block.
         let max_cut = settings.max_cut.min(MAX_ENTRIES / 2 - REFINE_BATCH);
-        if eager {
-            while refined < REFINE_BATCH && cut.cut_nodes + 3 * refined + 3 < max_cut {
-                let Some(first) = cut.pop_above(threshold) else { break };
-                refined += 1;
-                cut.add_children_eager(first.tree, first.child.index(), (first.representative, first.unit), threshold);
-            }
-        }
-        if four {
-            while refined < REFINE_BATCH && cut.cut_nodes + 3 * refined + 3 < max_cut {
-                let Some(first) = cut.pop_above(threshold) else { break };
-                refined += 1;
-                cut.add_grandchildren(first.tree, first.child.index(), (first.representative, first.unit));
-            }
-        }
-        while !four && !eager && refined < REFINE_BATCH && cut.cut_nodes + refined < max_cut {
+        while refined < REFINE_BATCH && cut.cut_nodes + refined < max_cut {
             let Some(first) = cut.pop_above(threshold) else { break };
             refined += 1;
-            if first.bound > deep * threshold && cut.cut_nodes + refined + 2 < max_cut {
-                refined += 2;
-                cut.add_grandchildren(first.tree, first.child.index(), (first.representative, first.unit));
-                continue;
-            }
             // The next largest too, when it is of the same tree and the batch
             // and the cut have room: both nodes' children are bounded at once.
             let room = refined < REFINE_BATCH && cut.cut_nodes + refined + 1 < max_cut;
