@@ -14,7 +14,11 @@
 //! A refinement reads one block of the tree's layout (both children's boxes,
 //! intensities, cones and representatives), bounds both children at once
 //! (`bounds`), and keys the heap with integers: the bound's f32 bits (a
-//! non-negative float orders like its bits) above the entry's index.
+//! non-negative float orders like its bits) above the entry's index. Only
+//! nodes whose bounds are above the threshold are kept in the heap; the
+//! others wait in a list and join it if the threshold falls below them
+//! (`Cut::set_threshold`), so the nodes refined are the same, in the same
+//! order, as with every node in one heap.
 //!
 //! Bounds and estimates are compared on luminance. Estimates are f64: the
 //! representative's M G V, exactly the exact renderer's, times the node's
@@ -108,6 +112,9 @@ pub struct CutScratch {
     batch: BatchBuffers,
     entries: Vec<Entry>,
     heap: BinaryHeap<u64>,
+    /// The keys of entries in the cut whose bound was at most the threshold
+    /// when they joined it (see [`Cut::admit`]).
+    below: Vec<u64>,
     pending: Vec<Pending>,
     chosen: Choices,
     evaluations: Evaluations,
@@ -121,6 +128,13 @@ struct Cut<'a, 'p> {
     bounds: PointBounds,
     embree: &'a EmbreeScene,
     scratch: &'a mut CutScratch,
+    /// The threshold the refinements in progress compare bounds with (-inf
+    /// before the first): every entry of the cut whose bound is above it is
+    /// in the heap, the others may wait in `below`.
+    threshold: f32,
+    /// The largest bound in `below` (or 0): a threshold at or above it
+    /// moves nothing.
+    below_max: f32,
     /// The luminance of the cut's total estimate (what the threshold is
     /// relative to): each entry's estimate's luminance added when it joins
     /// the cut and taken away when it is refined.
@@ -197,15 +211,45 @@ impl Cut<'_, '_> {
     }
 
     /// Counts entry `index` into the cut: its estimate into the total, its
-    /// bound into the heap.
+    /// bound into the heap, or, when the bound is not above the threshold,
+    /// into `below`: most of the cut's nodes are never refined, and a heap
+    /// of only the nodes that may be is smaller and cheaper to keep.
     #[inline(always)]
     fn admit(&mut self, index: usize) {
         let entry = &self.scratch.entries[index];
         self.total += luminance64(entry.estimate());
         self.cut_nodes += 1;
-        if entry.bound > 0.0 {
+        if entry.bound > self.threshold {
             self.scratch.heap.push(key(entry.bound, entry.tree, index));
+        } else if entry.bound > 0.0 {
+            self.scratch.below.push(key(entry.bound, entry.tree, index));
+            self.below_max = self.below_max.max(entry.bound);
         }
+    }
+
+    /// Sets the threshold of the next refinements. When it falls, the
+    /// entries waiting in `below` whose bounds are now above it join the
+    /// heap, so that the heap's largest key above the threshold is the
+    /// cut's: the nodes refined, and their order, are those of one heap of
+    /// every entry.
+    #[inline(always)]
+    fn set_threshold(&mut self, threshold: f32) {
+        if threshold < self.below_max {
+            let CutScratch { heap, below, .. } = &mut *self.scratch;
+            let mut below_max = 0.0f32;
+            below.retain(|&k| {
+                let bound = key_bound(k);
+                if bound > threshold {
+                    heap.push(k);
+                    false
+                } else {
+                    below_max = below_max.max(bound);
+                    true
+                }
+            });
+            self.below_max = below_max;
+        }
+        self.threshold = threshold;
     }
 
     /// Evaluates the pending entries' representatives (M * G * V per unit
@@ -286,6 +330,7 @@ fn cut_through(
 
     scratch.entries.clear();
     scratch.heap.clear();
+    scratch.below.clear();
     scratch.pending.clear();
     let scale = all.scale;
     let mut cut = Cut {
@@ -294,6 +339,8 @@ fn cut_through(
         bounds: PointBounds::new(sp, scale),
         embree,
         scratch,
+        threshold: f32::NEG_INFINITY,
+        below_max: 0.0,
         total: luminance64(fixed),
         cut_nodes: 0,
         shadow_rays: 0,
@@ -307,6 +354,7 @@ fn cut_through(
     loop {
         // In the bounds' normalised units.
         let threshold = (settings.error * cut.total.max(0.0) * f64::from(scale)) as f32;
+        cut.set_threshold(threshold);
         let mut refined = 0;
         // Only internal nodes have bounds above 0, so a popped entry has a block.
         let max_cut = settings.max_cut.min(MAX_ENTRIES / 2 - REFINE_BATCH);

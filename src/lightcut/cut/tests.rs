@@ -34,6 +34,16 @@ fn scene_with(n: u32, lights: &str) -> Scene {
 /// Runs `check(cut, exact, error_bound)` at shading points seen through
 /// random pixels.
 fn at_shading_points(scene: &Scene, settings: CutSettings, mut check: impl FnMut(DVec3, DVec3, f64)) {
+    at_shading_points_with(scene, settings, |cut, exact, _, _| check(cut.radiance, exact, cut.error_bound));
+}
+
+/// [`at_shading_points`], `check` also given the cut's scratch (its
+/// entries) and the trees' scale.
+fn at_shading_points_with(
+    scene: &Scene,
+    settings: CutSettings,
+    mut check: impl FnMut(&CutResult, DVec3, &CutScratch, f32),
+) {
     let device = Device::try_new().unwrap();
     let lights = Lights::from_scene(scene);
     let geometry = Geometry::try_new(&device, scene, std::slice::from_ref(&lights)).unwrap();
@@ -50,7 +60,7 @@ fn at_shading_points(scene: &Scene, settings: CutSettings, mut check: impl FnMut
         let cut = evaluate(&trees, &sp, &geometry.embree, &settings, &mut scratch, &mut []);
         let mut exact = LightBatch::new(&geometry.embree, &sp, &mut batch);
         lights.for_each(|light| exact.add(&light));
-        check(cut.radiance, exact.finish().radiance, cut.error_bound);
+        check(&cut, exact.finish().radiance, &scratch, trees.scale);
         points += 1;
     }
 }
@@ -110,4 +120,28 @@ fn spots() -> String {
 #[test]
 fn spot_cuts_are_within_the_sum_of_their_bounds() {
     check_error_within_bounds(&scene_with(4, &spots()));
+}
+
+/// Lightcuts' stopping rule holds at the end of every cut that stayed under
+/// `max_cut`: no node of the cut has a bound above error x the cut's total.
+/// Nodes whose bounds were under the threshold when they joined wait
+/// outside the heap (`Cut::admit`); when the total falls they must join it
+/// again, which this checks.
+#[test]
+fn no_node_of_a_finished_cut_has_a_bound_above_the_threshold() {
+    let scene = scene(24);
+    let settings = CutSettings { error: 0.02, max_cut: 100_000, ..CutSettings::default() };
+    let mut refined = 0;
+    at_shading_points_with(&scene, settings, |cut, _, scratch, scale| {
+        let threshold = settings.error * luminance64(cut.radiance).max(0.0) * f64::from(scale);
+        for entry in scratch.entries.iter().filter(|e| e.in_cut) {
+            let bound = f64::from(entry.bound);
+            assert!(
+                bound <= threshold * (1.0 + 1e-6),
+                "a node of bound {bound} left in a cut whose threshold is {threshold}"
+            );
+        }
+        refined += usize::from(scratch.entries.iter().any(|e| !e.in_cut));
+    });
+    assert!(refined > 100, "the cuts must refine");
 }
