@@ -110,14 +110,6 @@ pub fn build(kind: LightKind, lights: &[TreeLight], seed: u64) -> LightTree {
 #[must_use]
 pub fn build_with_radius(kind: LightKind, lights: &[TreeLight], seed: u64, radius: usize) -> LightTree {
     let radius = radius.max(1);
-    let sorted: Vec<TreeLight>;
-    let lights = if std::env::var_os("LC_MORTON").is_some() {
-        let leaves: Vec<Leaf> = lights.iter().map(|l| Leaf { point: l.point, intensity: l.intensity }).collect();
-        sorted = morton_order(&leaves).iter().map(|&i| lights[i as usize]).collect();
-        &sorted[..]
-    } else {
-        lights
-    };
     let mut builder = TreeBuilder::new(kind, lights, seed);
     if lights.len() <= 1 {
         let root = (!lights.is_empty()).then(|| builder.leaf_cluster(0).node);
@@ -203,18 +195,6 @@ fn pair_size(metric: &Metric, clusters: &[Slim], cones: &[Cone], i: usize, j: us
     }
 }
 
-/// A lower bound of an oriented pair's [`pair_size`] without its angular
-/// term (no acos or cos): the same f64 products less a non-negative term,
-/// and rounding is monotonic, so it is <= the size to the bit (NaN, where
-/// the size would be infinity, compares false and prunes nothing).
-#[inline]
-fn pair_size_without_angle(clusters: &[Slim], i: usize, j: usize) -> f32 {
-    let (ci, cj) = (&clusters[i], &clusters[j]);
-    let diagonal = ci.max.max(cj.max) - ci.min.min(cj.min);
-    let weight = ci.weight + cj.weight;
-    (f64::from(weight) * diagonal.as_dvec3().length_squared()) as f32
-}
-
 /// Tie-break of a pair with equal sizes: a hash of its indices. Ranking
 /// ties by index instead makes every cluster of a run of equal sizes (100,000
 /// coincident lights, say) choose the same neighbour, so each pass merges one
@@ -224,12 +204,6 @@ fn pair_size_without_angle(clusters: &[Slim], i: usize, j: usize) -> f32 {
 fn tie_break(a: usize, b: usize) -> u64 {
     crate::util::sampling::mix64(((a as u64) << 32) ^ b as u64)
 }
-
-// Measurement switches of two tree-build experiments (docs/measurements.md,
-// "The tree build: two experiments"), reverted in the next commit: LC_PRUNE
-// skips an oriented pair's acos and cos when its size without them already
-// loses at both ends; LC_MORTON permutes the lights into Morton order before
-// the build, so that the layout reads them in order.
 
 /// nearest[i] = the j within `radius` of i minimising (size(i u j),
 /// tie_break(i, j), min(i,j), max(i,j)): a strict total order on pairs, so
@@ -249,8 +223,7 @@ fn nearest_neighbours(metric: &Metric, clusters: &[Slim], cones: &[Cone], radius
         let mut best_size = vec![f32::INFINITY; out.len()];
         let mut best_tie = vec![u64::MAX; out.len()];
         let mut best = vec![usize::MAX; out.len()];
-        let oriented = metric.kind.has_cone() && std::env::var_os("LC_PRUNE").is_some();
-        let mut offer = |best_size: &mut [f32], target: usize, candidate: usize, size: f32, tie: u64| {
+        let mut offer = |target: usize, candidate: usize, size: f32, tie: u64| {
             let t = target - start;
             let better = size < best_size[t] || (size == best_size[t] && tie < best_tie[t]);
             if better || best[t] == usize::MAX {
@@ -264,25 +237,13 @@ fn nearest_neighbours(metric: &Metric, clusters: &[Slim], cones: &[Cone], radius
                 if j >= end && i < start {
                     break;
                 }
-                let (to_i, to_j) = (i >= start, (start..end).contains(&j));
-                // An oriented pair whose size without its angular term is
-                // already above the best size of every end it is offered to
-                // cannot be kept: skip its acos and cos (about 40% of an
-                // oriented build). Same choices, so the same tree.
-                if oriented {
-                    let lower = pair_size_without_angle(clusters, i, j);
-                    let beaten = |t: usize| lower > best_size[t - start];
-                    if (!to_i || beaten(i)) && (!to_j || beaten(j)) {
-                        continue;
-                    }
-                }
                 let size = pair_size(metric, clusters, cones, i, j);
                 let tie = tie_break(i, j);
-                if to_i {
-                    offer(&mut best_size, i, j, size, tie);
+                if i >= start {
+                    offer(i, j, size, tie);
                 }
-                if to_j {
-                    offer(&mut best_size, j, i, size, tie);
+                if (start..end).contains(&j) {
+                    offer(j, i, size, tie);
                 }
             }
         }
