@@ -219,11 +219,15 @@ impl Cut<'_, '_> {
         let entry = &self.scratch.entries[index];
         self.total += luminance64(entry.estimate());
         self.cut_nodes += 1;
-        if entry.bound > self.threshold {
-            self.scratch.heap.push(key(entry.bound, entry.tree, index));
-        } else if entry.bound > 0.0 {
-            self.scratch.below.push(key(entry.bound, entry.tree, index));
-            self.below_max = self.below_max.max(entry.bound);
+        // An exact node (bound 0) is never refined: it goes in neither.
+        if entry.bound > 0.0 {
+            let key = key(entry.bound, entry.tree, index);
+            if entry.bound > self.threshold {
+                self.scratch.heap.push(key);
+            } else {
+                self.scratch.below.push(key);
+                self.below_max = self.below_max.max(entry.bound);
+            }
         }
     }
 
