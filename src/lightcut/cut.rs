@@ -194,11 +194,12 @@ impl Cut<'_, '_> {
     }
 
     /// Takes the node with the largest bound out of the cut, if that bound
-    /// exceeds `threshold`: the node to refine.
+    /// exceeds the threshold (the one the heap holds every node above:
+    /// [`Cut::set_threshold`]): the node to refine.
     #[inline(always)]
-    fn pop_above(&mut self, threshold: f32) -> Option<Entry> {
+    fn pop_above(&mut self) -> Option<Entry> {
         let &top = self.scratch.heap.peek()?;
-        if key_bound(top) <= threshold {
+        if key_bound(top) <= self.threshold {
             return None;
         }
         self.scratch.heap.pop();
@@ -357,19 +358,18 @@ fn cut_through(
     cut.flush();
     loop {
         // In the bounds' normalised units.
-        let threshold = (settings.error * cut.total.max(0.0) * f64::from(scale)) as f32;
-        cut.set_threshold(threshold);
+        cut.set_threshold((settings.error * cut.total.max(0.0) * f64::from(scale)) as f32);
         let mut refined = 0;
         // Only internal nodes have bounds above 0, so a popped entry has a block.
         let max_cut = settings.max_cut.min(MAX_ENTRIES / 2 - REFINE_BATCH);
         while refined < REFINE_BATCH && cut.cut_nodes + refined < max_cut {
-            let Some(first) = cut.pop_above(threshold) else { break };
+            let Some(first) = cut.pop_above() else { break };
             refined += 1;
             // The next largest too, when it is of the same tree and the batch
             // and the cut have room: both nodes' children are bounded at once.
             let room = refined < REFINE_BATCH && cut.cut_nodes + refined + 1 < max_cut;
             let same_tree = cut.scratch.heap.peek().is_some_and(|&k| key_tree(k) == first.tree);
-            match (room && same_tree).then(|| cut.pop_above(threshold)).flatten() {
+            match (room && same_tree).then(|| cut.pop_above()).flatten() {
                 Some(second) => {
                     refined += 1;
                     cut.add_children_of_two(first.tree, [&first, &second]);
