@@ -97,6 +97,10 @@ fn bench_tree_and_rays_print_json_figures() {
         assert!(v[key].as_f64().unwrap() > 0.0, "{key}: {v}");
     }
     assert!(v["recorded_rays"].as_u64().unwrap() > 1000);
+    // A share of the pass's time: Embree was timed, and not all of it is Embree.
+    let own = v["lightcuts_over_embree_own_rays"].as_f64().unwrap();
+    assert!(own > 0.0 && own < 1.0, "lightcuts_over_embree_own_rays: {v}");
+    assert!(v["lightcuts_timed_embree_seconds"].as_f64().unwrap() > 0.0, "{v}");
 }
 
 #[test]
