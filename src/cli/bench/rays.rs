@@ -52,7 +52,9 @@ pub struct RayFigures {
     /// counts in and out of Embree alike).
     pub lightcuts_timed_embree_seconds: f64,
     /// The pass's rate over Embree's on the same rays as the pass traces
-    /// them: the share of the timed pass's thread-seconds inside Embree.
+    /// them (its shadow rays, and its camera rays, under 1% of them on
+    /// the measuring scenes): the share of the timed pass's
+    /// thread-seconds inside Embree.
     /// (a) is Embree on the exact renderer's rays, which are cheaper per
     /// ray than the cut's (docs/measurements.md, "What the speed targets
     /// leave the cut"); this is the comparison on the same rays.
