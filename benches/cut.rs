@@ -38,8 +38,7 @@ fn cut(c: &mut Criterion) {
                 let mut nodes = 0;
                 for sp in &points {
                     nodes +=
-                        std::hint::black_box(evaluate(&trees, sp, &geometry.embree, &settings, &mut scratch, &mut []))
-                            .nodes;
+                        std::hint::black_box(evaluate(&trees, sp, &geometry.embree, &settings, &mut scratch, 0)).nodes;
                 }
                 nodes
             });

@@ -283,17 +283,17 @@ impl Cut<'_, '_> {
     }
 }
 
-/// Direct light at `sp` from every tree, by a lightcut. When `groups` is
-/// not empty (a scene with light groups: one slot per group), each group's
-/// share of the radiance is added to its slot, and the cut controls the
-/// error as `settings.group_error` says.
+/// Direct light at `sp` from every tree, by a lightcut. With `groups`
+/// slots (a scene with light groups whose pass splits the radiance by
+/// group), each group's share of the radiance is credited to its slot, and
+/// the cut controls the error as `settings.group_error` says.
 pub fn evaluate(
     trees: &LightTrees,
     sp: &SurfacePoint<'_>,
     embree: &EmbreeScene,
     settings: &CutSettings,
     scratch: &mut CutScratch,
-    groups: &mut [DVec3],
+    groups: usize,
 ) -> CutResult {
     // The cut is inlined into the entry point compiled for the CPU's best
     // instruction set (docs/design.md §4).
@@ -305,15 +305,15 @@ pub fn evaluate(
                 groups,
                 settings.group_error,
                 #[inline(always)]
-                |range, groups| cut_through(trees, range, sp, embree, settings, scratch, groups),
+                |range, result| cut_through(trees, range, sp, embree, settings, scratch, result),
             )
         },
     )
 }
 
 /// One cut through `trees.trees[range]`, its threshold relative to their
-/// total. With `groups`, every node's estimate is also added to the slot of
-/// its tree's group.
+/// total, added to `result`: every node's estimate is also credited to the
+/// slot of its tree's group.
 #[inline(always)]
 fn cut_through(
     all: &LightTrees,
@@ -322,15 +322,15 @@ fn cut_through(
     embree: &EmbreeScene,
     settings: &CutSettings,
     scratch: &mut CutScratch,
-    mut groups: Option<&mut [DVec3]>,
-) -> CutResult {
+    result: &mut CutResult,
+) {
     let trees = &all.trees[range.clone()];
     // Small trees first, light by light with the exact renderer's code; their
     // sum is exact and counts in the total the threshold is relative to.
-    let mut result = exhaustive_part(all, &range, sp, embree, &mut scratch.batch, groups.as_deref_mut());
-    let fixed = result.radiance;
+    let fixed = exhaustive_part(all, &range, sp, embree, &mut scratch.batch, result);
     if trees.iter().all(|t| t.blocks.is_empty()) {
-        return result;
+        result.radiance += fixed;
+        return;
     }
 
     scratch.entries.clear();
@@ -382,20 +382,18 @@ fn cut_through(
         }
         cut.flush();
     }
+    // The cut's sum, in the order its entries were made (after the exact part).
     let (mut radiance, mut bound) = (fixed, 0.0f64);
     for entry in cut.scratch.entries.iter().filter(|e| e.in_cut) {
         radiance += entry.estimate();
         bound += f64::from(entry.bound);
-        if let Some(groups) = groups.as_deref_mut() {
-            groups[all.group_of_tree[range.start + entry.tree as usize]] += entry.estimate();
-        }
+        result.credit(all.group_of_tree[range.start + entry.tree as usize], entry.estimate());
     }
-    result.radiance = radiance;
-    result.error_bound = bound / f64::from(scale);
-    // The exhaustive part's lights are in the point's cut too.
+    result.radiance += radiance;
+    result.error_bound += bound / f64::from(scale);
+    // The exhaustive part's lights are in the point's cut too (counted there).
     result.nodes += cut.cut_nodes as u64;
     result.shadow_rays += cut.shadow_rays;
-    result
 }
 
 #[cfg(test)]

@@ -89,11 +89,19 @@ impl GroupError {
     }
 }
 
-/// What one shading point's cut found.
-#[derive(Debug, Clone, Copy, Default, PartialEq)]
+/// What a shading point's direct light came to (or a pixel's, in the
+/// multidimensional mode): the radiance, each light group's share of it
+/// when the pass splits the radiance by group, the cut's error bound and
+/// what it cost. Every mode, and the integrator's parts outside the cut
+/// (moving lights), add into one of these; [`CutResult::add_scaled_to`]
+/// moves it into a pixel.
+#[derive(Debug, Clone, Default, PartialEq)]
 pub struct CutResult {
     /// Direct radiance towards the viewer, W/(m^2 sr) per channel.
     pub radiance: DVec3,
+    /// Each light group's share of `radiance`: one slot per group when the
+    /// pass splits the radiance by group, none otherwise.
+    pub groups: Vec<DVec3>,
     /// Sum of the error bounds of the final cut's nodes: the design's
     /// guarantee on this point's error in luminance (|L_cut - L_exact| <= it).
     pub error_bound: f64,
@@ -101,6 +109,43 @@ pub struct CutResult {
     /// light by light as one node.
     pub nodes: u64,
     pub shadow_rays: u64,
+}
+
+impl CutResult {
+    /// Nothing found yet, with `groups` slots (0: the radiance is not split).
+    #[must_use]
+    pub fn with_groups(groups: usize) -> Self {
+        Self { groups: vec![DVec3::ZERO; groups], ..Self::default() }
+    }
+
+    /// Credits `value` (already counted in, or about to be added to, the
+    /// radiance) to group `group`'s slot; nothing when there are no slots.
+    #[inline(always)]
+    pub fn credit(&mut self, group: usize, value: DVec3) {
+        if let Some(slot) = self.groups.get_mut(group) {
+            *slot += value;
+        }
+    }
+
+    /// The light of a batch of lights of group `group` (its radiance
+    /// credited to the group's slot), with what it cost; returns the
+    /// batch's radiance, which the caller adds to its running sum.
+    #[inline(always)]
+    pub fn count_batch(&mut self, group: usize, batch: &BatchResult) -> DVec3 {
+        self.credit(group, batch.radiance);
+        self.nodes += batch.lights;
+        self.shadow_rays += batch.shadow_rays;
+        batch.radiance
+    }
+
+    /// Adds `scale` times this radiance to `radiance`, and times each
+    /// group's share to `groups`' slots (a pixel's sums).
+    pub fn add_scaled_to(&self, scale: DVec3, radiance: &mut DVec3, groups: &mut [DVec3]) {
+        *radiance += scale * self.radiance;
+        for (slot, value) in groups.iter_mut().zip(&self.groups) {
+            *slot += scale * *value;
+        }
+    }
 }
 
 /// Every light of the trees too small for a cut, one by one with the exact
@@ -122,9 +167,10 @@ pub(crate) fn exhaustive(
 }
 
 /// The exact part of a cut through `trees.trees[range]` (every light of its
-/// trees too small for a cut, by [`exhaustive`]) as the start of the cut's
-/// result. With `groups`, group by group (the range holds whole groups'
-/// trees), each group's sum also added to its slot.
+/// trees too small for a cut, by [`exhaustive`]): counted into `result`
+/// (its nodes and shadow rays; with group slots, group by group, the range
+/// holding whole groups' trees, each group's sum credited to its slot).
+/// Returns its radiance, where the cut's sum starts.
 #[inline(always)]
 pub(crate) fn exhaustive_part(
     trees: &LightTrees,
@@ -132,52 +178,41 @@ pub(crate) fn exhaustive_part(
     sp: &SurfacePoint<'_>,
     embree: &EmbreeScene,
     batch: &mut BatchBuffers,
-    groups: Option<&mut [DVec3]>,
-) -> CutResult {
-    let found = |trees: &[CutTree], batch: &mut BatchBuffers| {
-        let f = exhaustive(trees, sp, embree, batch);
-        CutResult { radiance: f.radiance, error_bound: 0.0, nodes: f.lights, shadow_rays: f.shadow_rays }
-    };
-    let Some(groups) = groups else { return found(&trees.trees[range.clone()], batch) };
-    let mut total = CutResult::default();
+    result: &mut CutResult,
+) -> DVec3 {
+    if result.groups.is_empty() {
+        let found = exhaustive(&trees.trees[range.clone()], sp, embree, batch);
+        return result.count_batch(0, &found);
+    }
+    let mut radiance = DVec3::ZERO;
     let inside = |r: &&std::ops::Range<usize>| range.start <= r.start && r.end <= range.end;
     for (g, group) in trees.groups.iter().enumerate().filter(|(_, r)| inside(r)) {
-        let part = found(&trees.trees[group.clone()], batch);
-        groups[g] += part.radiance;
-        total.radiance += part.radiance;
-        total.nodes += part.nodes;
-        total.shadow_rays += part.shadow_rays;
+        let found = exhaustive(&trees.trees[group.clone()], sp, embree, batch);
+        radiance += result.count_batch(g, &found);
     }
-    total
+    radiance
 }
 
-/// Runs `cut` (one cut through the trees of a range, crediting each tree's
-/// group's slot when given the slots) as `group_error` says: through every
-/// tree at once when there are no slots or with [`GroupError::Pixel`],
-/// else once per group, summing the results. Shared by both cut modes.
+/// Runs `cut` (one cut through the trees of a range, adding what it finds
+/// to the result it is given: its radiance, its group slots, its counters)
+/// as `group_error` says: through every tree at once when the result has
+/// no group slots or with [`GroupError::Pixel`], else once per group.
+/// Shared by every cut mode. `groups`: the group slots of the result (0:
+/// the radiance is not split by group).
 #[inline(always)]
 pub(crate) fn by_group(
     trees: &LightTrees,
-    groups: &mut [DVec3],
+    groups: usize,
     group_error: GroupError,
-    mut cut: impl FnMut(std::ops::Range<usize>, Option<&mut [DVec3]>) -> CutResult,
+    mut cut: impl FnMut(std::ops::Range<usize>, &mut CutResult),
 ) -> CutResult {
-    let all = 0..trees.trees.len();
-    if groups.is_empty() {
-        return cut(all, None);
-    }
-    match group_error {
-        GroupError::Pixel => cut(all, Some(groups)),
-        GroupError::Group => {
-            let mut total = CutResult::default();
-            for range in &trees.groups {
-                let found = cut(range.clone(), Some(&mut *groups));
-                total.radiance += found.radiance;
-                total.error_bound += found.error_bound;
-                total.nodes += found.nodes;
-                total.shadow_rays += found.shadow_rays;
-            }
-            total
+    let mut result = CutResult::with_groups(groups);
+    if groups == 0 || group_error == GroupError::Pixel {
+        cut(0..trees.trees.len(), &mut result);
+    } else {
+        for range in &trees.groups {
+            cut(range.clone(), &mut result);
         }
     }
+    result
 }

@@ -153,7 +153,7 @@ impl GatherScratch {
 }
 
 /// What a pixel's cut found, beside the radiance: its gather tree's size.
-#[derive(Debug, Clone, Copy, Default, PartialEq)]
+#[derive(Debug, Clone, Default, PartialEq)]
 pub struct PixelCut {
     pub cut: CutResult,
     pub gather_nodes: u64,
@@ -165,7 +165,7 @@ const GATHER_STREAM: u64 = 0x6a7b_e412_0d05_c3e1;
 /// The direct light of a pixel's gather points, summed with their
 /// strengths (Σ S_g L_g), by a multidimensional lightcut per light group
 /// as `settings.group_error` says; each group's share is added to
-/// `groups` when it has slots. `key` is (seed, pixel x, pixel y): it
+/// its slot when there are `groups` slots. `key` is (seed, pixel x, pixel y): it
 /// draws the gather clusters' representatives.
 pub fn evaluate(
     trees: &LightTrees,
@@ -174,7 +174,7 @@ pub fn evaluate(
     settings: &CutSettings,
     key: [u64; 3],
     scratch: &mut GatherScratch,
-    groups: &mut [DVec3],
+    groups: usize,
 ) -> PixelCut {
     if points.is_empty() {
         return PixelCut::default();
@@ -189,9 +189,9 @@ pub fn evaluate(
                 groups,
                 settings.group_error,
                 #[inline(always)]
-                |range, groups| {
+                |range, result| {
                     let gathered = Gathered { points, root, salt };
-                    product_cut(trees, range, &gathered, embree, settings, scratch, groups)
+                    product_cut(trees, range, &gathered, embree, settings, scratch, result);
                 },
             )
         },
@@ -507,8 +507,8 @@ struct Gathered<'g, 'p> {
 
 /// One product-graph cut through `trees.trees[range]` for the pixel's
 /// gather tree (root `root`), its threshold relative to the pixel's total
-/// through those trees. With `groups`, every pair's estimate is also added
-/// to the slot of its tree's group.
+/// through those trees, added to `result`: every pair's estimate is also
+/// credited to the slot of its tree's group.
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
 fn product_cut(
@@ -518,12 +518,11 @@ fn product_cut(
     embree: &EmbreeScene,
     settings: &CutSettings,
     scratch: &mut GatherScratch,
-    mut groups: Option<&mut [DVec3]>,
-) -> CutResult {
+    result: &mut CutResult,
+) {
     let Gathered { points, root, salt } = *gathered;
     let trees = &all.trees[range.clone()];
-    let mut result = exhaustive_trees(all, &range, points, embree, scratch, groups.as_deref_mut());
-    let fixed = result.radiance;
+    let fixed = exhaustive_trees(all, &range, points, embree, scratch, result);
     scratch.pairs.clear();
     scratch.heap.clear();
     scratch.pending.clear();
@@ -562,41 +561,37 @@ fn product_cut(
     for pair in cut.scratch.pairs.iter().filter(|p| p.in_cut) {
         radiance += pair.estimate();
         bound += f64::from(pair.bound);
-        if let Some(groups) = groups.as_deref_mut() {
-            groups[all.group_of_tree[range.start + pair.tree as usize]] += pair.estimate();
-        }
+        result.credit(all.group_of_tree[range.start + pair.tree as usize], pair.estimate());
     }
-    result.radiance = radiance;
-    result.error_bound = bound / scale;
+    result.radiance += radiance;
+    result.error_bound += bound / scale;
     result.nodes += cut.pairs as u64;
     result.shadow_rays += cut.shadow_rays;
-    result
 }
 
 /// The trees laid out light by light (none when built for this mode, which
 /// builds every tree as a tree): each light at each gather point, times
-/// the point's strength.
+/// the point's strength, counted into `result` (each value credited to its
+/// group's slot); returns their radiance.
 fn exhaustive_trees(
     all: &LightTrees,
     range: &std::ops::Range<usize>,
     points: &[GatherPoint<'_>],
     embree: &EmbreeScene,
     scratch: &mut GatherScratch,
-    mut groups: Option<&mut [DVec3]>,
-) -> CutResult {
-    let mut result = CutResult::default();
+    result: &mut CutResult,
+) -> DVec3 {
+    let mut radiance = DVec3::ZERO;
     for t in range.clone().filter(|&t| !all.trees[t].lights.is_empty()) {
         let tree = &all.trees[t];
         for g in points {
             let found = super::exhaustive(std::slice::from_ref(tree), &g.sp, embree, &mut scratch.batch);
             let value = found.radiance * g.strength;
-            result.radiance += value;
+            radiance += value;
             result.nodes += found.lights;
             result.shadow_rays += found.shadow_rays;
-            if let Some(groups) = groups.as_deref_mut() {
-                groups[all.group_of_tree[t]] += value;
-            }
+            result.credit(all.group_of_tree[t], value);
         }
     }
-    result
+    radiance
 }

@@ -98,9 +98,9 @@ pub fn walk_importance(bounds: &PointBounds) -> impl Importance + '_ {
 /// random choices come from `rng`. `settings.error` and `settings.max_cut`
 /// choose the cut: a node is split while its bound is above `error` times
 /// the cut's summed bounds and the cut has fewer than `max_cut` nodes.
-/// When `groups` is not empty (one slot per light group), every drawn
-/// light's contribution is also added to its group's slot, so each group's
-/// sum is an unbiased estimate of that group's light; the cut is chosen per
+/// With `groups` slots (one per light group), every drawn light's
+/// contribution is also credited to its group's slot, so each group's sum
+/// is an unbiased estimate of that group's light; the cut is chosen per
 /// group or through every group's trees as `settings.group_error` says.
 pub fn evaluate(
     trees: &LightTrees,
@@ -109,7 +109,7 @@ pub fn evaluate(
     settings: &CutSettings,
     rng: &mut Rng,
     scratch: &mut StochasticScratch,
-    groups: &mut [DVec3],
+    groups: usize,
 ) -> CutResult {
     let bounds = PointBounds::new(sp, trees.scale);
     let importance = walk_importance(&bounds);
@@ -127,7 +127,7 @@ pub(crate) fn evaluate_with(
     scratch: &mut StochasticScratch,
     bounds: &PointBounds,
     importance: &impl Importance,
-    groups: &mut [DVec3],
+    groups: usize,
 ) -> CutResult {
     // Inlined into the entry point compiled for the CPU's best instruction
     // set (docs/design.md §4).
@@ -139,8 +139,8 @@ pub(crate) fn evaluate_with(
                 groups,
                 settings.group_error,
                 #[inline(always)]
-                |range, groups| {
-                    cut_through(trees, range, sp, embree, settings, rng, scratch, bounds, importance, groups)
+                |range, result| {
+                    cut_through(trees, range, sp, embree, settings, rng, scratch, bounds, importance, result);
                 },
             )
         },
@@ -148,8 +148,8 @@ pub(crate) fn evaluate_with(
 }
 
 /// One stochastic cut through `trees.trees[range]`, its threshold relative
-/// to their summed bounds; with `groups`, each drawn light's contribution
-/// is also added to its tree's group's slot.
+/// to their summed bounds, added to `result`: each drawn light's
+/// contribution is also credited to its tree's group's slot.
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
 fn cut_through(
@@ -162,13 +162,12 @@ fn cut_through(
     scratch: &mut StochasticScratch,
     bounds: &PointBounds,
     importance: &impl Importance,
-    mut groups: Option<&mut [DVec3]>,
-) -> CutResult {
-    let mut result = exhaustive_part(trees, &range, sp, embree, &mut scratch.batch, groups.as_deref_mut());
-    let fixed = result.radiance;
-    let groups = groups.unwrap_or_default();
+    result: &mut CutResult,
+) {
+    let fixed = exhaustive_part(trees, &range, sp, embree, &mut scratch.batch, result);
     if trees.trees[range.clone()].iter().all(|t| t.blocks.is_empty()) {
-        return result;
+        result.radiance += fixed;
+        return;
     }
     let cut_nodes = choose_cut(trees, range, settings, bounds, scratch);
     result.nodes += cut_nodes as u64;
@@ -190,12 +189,9 @@ fn cut_through(
     let mut radiance = fixed;
     for (slot, value) in scratch.chosen.slots().zip(values) {
         radiance += *value;
-        if let Some(group) = groups.get_mut(slot as usize) {
-            *group += *value;
-        }
+        result.credit(slot as usize, *value);
     }
-    result.radiance = radiance;
-    result
+    result.radiance += radiance;
 }
 
 /// Draws one light per cut node of `scratch.nodes` into `scratch.drawn`,

@@ -12,8 +12,8 @@ use glam::{DVec3, Vec3};
 use crate::light::Lights;
 use crate::light_tree::LightTrees;
 use crate::lightcut::multidimensional::{GatherPoint, GatherScratch};
-use crate::lightcut::{self, CutScratch, CutSettings, StochasticScratch};
-use crate::shading::{BatchBuffers, BatchResult, Geometry, LightBatch, SurfacePoint};
+use crate::lightcut::{self, CutResult, CutScratch, CutSettings, StochasticScratch};
+use crate::shading::{BatchBuffers, Geometry, LightBatch, SurfacePoint};
 use crate::util::sampling::Rng;
 
 /// How direct light is computed at each shading point.
@@ -50,8 +50,6 @@ pub struct Scratch {
     cut: CutScratch,
     stochastic: StochasticScratch,
     gather: GatherScratch,
-    /// One shading point's direct light by light group.
-    point_groups: Vec<DVec3>,
 }
 
 /// Buckets of the cut-size histogram: bucket k counts cuts of 2^k to
@@ -210,13 +208,9 @@ impl<'a> Integrator<'a> {
             if let DirectLighting::Multidimensional { .. } = self.direct {
                 gather.push(GatherPoint { sp: sp.clone(), strength: throughput });
             } else {
-                scratch.point_groups.clear();
-                scratch.point_groups.resize(groups.len(), DVec3::ZERO);
-                let direct = self.direct_light(&sp, sample, depth, scratch, &mut result.stats);
-                result.radiance += throughput * direct;
-                for (slot, value) in groups.iter_mut().zip(&scratch.point_groups) {
-                    *slot += throughput * *value;
-                }
+                let direct = self.direct_light(&sp, sample, depth, groups.len(), scratch, &mut result.stats);
+                result.stats.record_point(direct.nodes, direct.shadow_rays);
+                direct.add_scaled_to(throughput, &mut result.radiance, groups);
             }
             if !sp.material.has_mirror() || depth == self.max_mirror_depth {
                 break;
@@ -257,45 +251,57 @@ impl<'a> Integrator<'a> {
         let DirectLighting::Multidimensional { trees, settings } = self.direct else { return None };
         let timed = crate::embree::timing().then(|| (Instant::now(), crate::embree::thread_timed_nanos()));
         let embree = &self.geometry.embree;
-        let found =
-            lightcut::multidimensional::evaluate(trees, points, embree, &settings, pixel, &mut scratch.gather, groups);
+        let mut found = lightcut::multidimensional::evaluate(
+            trees,
+            points,
+            embree,
+            &settings,
+            pixel,
+            &mut scratch.gather,
+            groups.len(),
+        );
         if let Some((start, embree_before)) = timed {
             let embree = crate::embree::thread_timed_nanos() - embree_before;
             stats.cut_nanos += (start.elapsed().as_nanos() as u64).saturating_sub(embree);
         }
-        let mut moving = BatchResult::default();
+        let mut moving = DVec3::ZERO;
         if self.lights.iter().any(|group| !group.moving.is_empty()) {
             for point in points {
-                let found = self.moving_light(&point.sp, point.strength, &mut scratch.batch, groups);
-                moving.radiance += found.radiance;
-                moving.lights += found.lights;
-                moving.shadow_rays += found.shadow_rays;
+                moving += self.moving_light(&point.sp, point.strength, &mut scratch.batch, &mut found.cut);
             }
         }
-        stats.record_point(found.cut.nodes + moving.lights, found.cut.shadow_rays + moving.shadow_rays);
+        found.cut.radiance += moving;
+        stats.record_point(found.cut.nodes, found.cut.shadow_rays);
         stats.gather_points += points.len() as u64;
         stats.gather_nodes += found.gather_nodes;
-        Some(found.cut.radiance + moving.radiance)
+        let mut radiance = DVec3::ZERO;
+        found.cut.add_scaled_to(DVec3::ONE, &mut radiance, groups);
+        Some(radiance)
     }
 
+    /// The direct light at `sp` by the pass's mode, with `groups` group
+    /// slots (0: not split by group); the time spent choosing a cut is
+    /// added to `stats`.
     fn direct_light(
         &self,
         sp: &SurfacePoint<'_>,
         sample: SampleKey,
         depth: u32,
+        groups: usize,
         scratch: &mut Scratch,
         stats: &mut ShadingStats,
-    ) -> DVec3 {
+    ) -> CutResult {
         match self.direct {
             DirectLighting::Exact => {
                 // Every light, one shadow ray each, in batches; summed group
                 // by group, in light order (omni, oriented, directional,
                 // spot) within each: deterministic.
                 // Run in the CPU's best instruction set (docs/design.md §4).
-                let (radiance, lights, shadow_rays) = crate::util::simd::best(
+                crate::util::simd::best(
                     #[inline(always)]
                     || {
-                        let (mut radiance, mut lights, mut shadow_rays) = (DVec3::ZERO, 0, 0);
+                        let mut found = CutResult::with_groups(groups);
+                        let mut radiance = DVec3::ZERO;
                         for (g, group) in self.lights.iter().enumerate() {
                             let mut batch = LightBatch::new(&self.geometry.embree, sp, &mut scratch.batch);
                             group.for_each(
@@ -305,27 +311,19 @@ impl<'a> Integrator<'a> {
                             for light in &group.moving {
                                 batch.add(&light.at(sp.time));
                             }
-                            let found = batch.finish();
-                            radiance += found.radiance;
-                            lights += found.lights;
-                            shadow_rays += found.shadow_rays;
-                            if let Some(slot) = scratch.point_groups.get_mut(g) {
-                                *slot += found.radiance;
-                            }
+                            radiance += found.count_batch(g, &batch.finish());
                         }
-                        (radiance, lights, shadow_rays)
+                        found.radiance = radiance;
+                        found
                     },
-                );
-                stats.record_point(lights, shadow_rays);
-                radiance
+                )
             }
             // Its points are gathered, never lit one by one.
-            DirectLighting::Multidimensional { .. } => DVec3::ZERO,
+            DirectLighting::Multidimensional { .. } => CutResult::with_groups(groups),
             DirectLighting::Lightcuts { trees, settings } | DirectLighting::StochasticLightcuts { trees, settings } => {
                 let timed = crate::embree::timing().then(|| (Instant::now(), crate::embree::thread_timed_nanos()));
                 let embree = &self.geometry.embree;
-                let groups = &mut scratch.point_groups;
-                let found = if let DirectLighting::Lightcuts { .. } = self.direct {
+                let mut found = if let DirectLighting::Lightcuts { .. } = self.direct {
                     lightcut::evaluate(trees, sp, embree, &settings, &mut scratch.cut, groups)
                 } else {
                     let [seed, x, y, s] = sample;
@@ -337,38 +335,35 @@ impl<'a> Integrator<'a> {
                     let embree = crate::embree::thread_timed_nanos() - embree_before;
                     stats.cut_nanos += (start.elapsed().as_nanos() as u64).saturating_sub(embree);
                 }
-                let moving = self.moving_light(sp, DVec3::ONE, &mut scratch.batch, &mut scratch.point_groups);
-                stats.record_point(found.nodes + moving.lights, found.shadow_rays + moving.shadow_rays);
-                found.radiance + moving.radiance
+                let moving = self.moving_light(sp, DVec3::ONE, &mut scratch.batch, &mut found);
+                found.radiance += moving;
+                found
             }
         }
     }
 
     /// The light of the moving lights (in no tree: docs/design.md §13.6)
     /// at `sp`, each where it is at the point's time with a shadow ray of
-    /// its own, times `strength`; each group's share added to `groups`.
+    /// its own, times `strength`: counted into `found` (each group's share
+    /// credited to its slot); returns the radiance, which the caller adds.
     fn moving_light(
         &self,
         sp: &SurfacePoint<'_>,
         strength: DVec3,
         buffers: &mut BatchBuffers,
-        groups: &mut [DVec3],
-    ) -> BatchResult {
-        let mut total = BatchResult::default();
+        found: &mut CutResult,
+    ) -> DVec3 {
+        let mut radiance = DVec3::ZERO;
         for (g, group) in self.lights.iter().enumerate().filter(|(_, group)| !group.moving.is_empty()) {
             let mut batch = LightBatch::new(&self.geometry.embree, sp, buffers);
             for light in &group.moving {
                 batch.add(&light.at(sp.time));
             }
-            let found = batch.finish();
-            total.radiance += strength * found.radiance;
-            total.lights += found.lights;
-            total.shadow_rays += found.shadow_rays;
-            if let Some(slot) = groups.get_mut(g) {
-                *slot += strength * found.radiance;
-            }
+            let mut batch = batch.finish();
+            batch.radiance *= strength;
+            radiance += found.count_batch(g, &batch);
         }
-        total
+        radiance
     }
 }
 

@@ -177,7 +177,7 @@ pub fn average_cut(tree: &LightTree, points: &[SurfacePoint<'_>], embree: &crate
     let settings = CutSettings { error: 0.02, max_cut: 1_000_000, ..CutSettings::default() };
     let mut scratch = CutScratch::default();
     let trees = LightTrees::of(tree);
-    let nodes: u64 = points.iter().map(|sp| evaluate(&trees, sp, embree, &settings, &mut scratch, &mut []).nodes).sum();
+    let nodes: u64 = points.iter().map(|sp| evaluate(&trees, sp, embree, &settings, &mut scratch, 0).nodes).sum();
     nodes as f64 / points.len().max(1) as f64
 }
 

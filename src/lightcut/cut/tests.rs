@@ -57,7 +57,7 @@ fn at_shading_points_with(
         let ray = camera.ray(rng.range_f32(0.0, 64.0), rng.range_f32(0.0, 48.0));
         let Some(hit) = geometry.embree.intersect(&ray) else { continue };
         let sp = geometry.surface(&ray, &hit);
-        let cut = evaluate(&trees, &sp, &geometry.embree, &settings, &mut scratch, &mut []);
+        let cut = evaluate(&trees, &sp, &geometry.embree, &settings, &mut scratch, 0);
         let mut exact = LightBatch::new(&geometry.embree, &sp, &mut batch);
         lights.for_each(|light| exact.add(&light));
         check(&cut, exact.finish().radiance, &scratch, trees.scale);

@@ -144,9 +144,9 @@ fn estimates(scene: &Scene, biased: bool) -> Vec<(f64, f64, f64)> {
                 let mut rng = Rng::from_key(&[seed, rows.len() as u64]);
                 let embree = &geometry.embree;
                 let found = if biased {
-                    evaluate_with(trees, sp, embree, &settings, &mut rng, &mut scratch, &bounds, &wrong, &mut [])
+                    evaluate_with(trees, sp, embree, &settings, &mut rng, &mut scratch, &bounds, &wrong, 0)
                 } else {
-                    evaluate(trees, sp, embree, &settings, &mut rng, &mut scratch, &mut [])
+                    evaluate(trees, sp, embree, &settings, &mut rng, &mut scratch, 0)
                 };
                 luminance64(found.radiance)
             })
