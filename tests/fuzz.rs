@@ -23,6 +23,7 @@ use std::path::Path;
 
 use lightcuts::embree::Device;
 use lightcuts::light::Lights;
+use lightcuts::lightcut::multidimensional::MULTIDIMENSIONAL_DEFAULTS;
 use lightcuts::lightcut::stochastic::STOCHASTIC_DEFAULTS;
 use lightcuts::lightcut::{self, CutSettings};
 use lightcuts::render::integrator::Integrator;
@@ -258,9 +259,15 @@ fn render_small(scene: &Scene) -> Outcome {
     if scene.light_count_bound() > 20_000 || scene.triangle_count() > 200_000 {
         return Outcome::TooBig; // Valid but too slow for a fuzz iteration.
     }
-    let lights = Lights::by_group(scene);
+    render_lit(scene, &Lights::by_group(scene))
+}
+
+/// Renders `scene` lit by `lights` (its lights by group) at 4x3 in every
+/// mode (exact, bounded, stochastic, multidimensional); panics when the
+/// film met a NaN or an infinity, or holds one.
+fn render_lit(scene: &Scene, lights: &[Lights]) -> Outcome {
     let device = Device::try_new().unwrap();
-    let Ok(geometry) = Geometry::try_new(&device, scene, &lights) else { return Outcome::GeometryRefused };
+    let Ok(geometry) = Geometry::try_new(&device, scene, lights) else { return Outcome::GeometryRefused };
     let camera = scene.camera(4, 3);
     let settings = PassSettings {
         width: 4,
@@ -271,27 +278,47 @@ fn render_small(scene: &Scene) -> Outcome {
         aovs: Aovs { cryptomatte: true, ..Aovs::all(true) },
         transparent: false,
     };
-    let trees = lightcut::build_trees(&lights, 1);
+    let trees = lightcut::build_trees(lights, 1);
+    // The multidimensional mode builds every tree as a tree (as its session does).
+    let whole_trees =
+        lightcut::build_trees_with(lights, 1, &CutSettings { exhaustive_lights: 0, ..MULTIDIMENSIONAL_DEFAULTS });
     let emission_group = scene.emission_groups();
     for direct in [
         DirectLighting::Exact,
         DirectLighting::Lightcuts { trees: &trees, settings: CutSettings::default() },
         DirectLighting::StochasticLightcuts { trees: &trees, settings: STOCHASTIC_DEFAULTS },
+        DirectLighting::Multidimensional { trees: &whole_trees, settings: MULTIDIMENSIONAL_DEFAULTS },
     ] {
         let integrator = Integrator {
             geometry: &geometry,
-            lights: &lights,
+            lights,
             direct,
             max_mirror_depth: scene.max_mirror_depth,
             split_groups: scene.groups.named(),
             emission_group: &emission_group,
         };
         let (film, _) = render::render(&integrator, &camera, &settings, &|_| {}).unwrap();
+        assert!(film.non_finite().is_empty(), "NaN or Inf reached the film: {:?}", film.non_finite());
         for channel in &film.channels {
             assert!(channel.values.iter().all(|v| v.is_finite()), "non-finite {}", channel.name);
         }
     }
     Outcome::Rendered
+}
+
+/// The check above can fail: one light whose intensity is NaN (which no
+/// scene file can give: the loader refuses it) reaches the film as NaN in
+/// every mode, and the check panics naming the channels.
+#[test]
+fn a_nan_in_one_light_fails_the_fuzzer_s_check() {
+    let scene = lightcuts::scene::builder::floor_spheres_grid(4).load(Path::new("nan.toml")).unwrap();
+    let mut lights = Lights::by_group(&scene);
+    assert_eq!(render_lit(&scene, &lights), Outcome::Rendered);
+    lights[0].omni[3].intensity.y = f32::NAN;
+    let caught = catch_unwind(AssertUnwindSafe(|| render_lit(&scene, &lights)));
+    let message = caught.expect_err("a NaN light must fail the check");
+    let message = message.downcast_ref::<String>().cloned().unwrap_or_default();
+    assert!(message.contains("NaN or Inf reached the film") && message.contains("(\"G\""), "{message}");
 }
 
 /// Loads `path` under `catch_unwind` and renders what loads; the outcome,

@@ -155,10 +155,14 @@ fn nan_inf_and_negative_values_in_every_numeric_field() {
         ("translate = [0, 0, 0]", "shapes[3].translate", &["[nan, 0, 0]", "[0, inf, 0]", "[0, 0, 1e20]"]),
         ("scale = 1", "shapes[3]", &["1e30"]),
         ("position = [0, 3, 0]", "lights[0].position", &["[nan, 3, 0]", "[0, inf, 0]", "[1e30, 3, 0]"]),
-        ("intensity = [1, 1, 1]", "lights[0].intensity", &["[nan, 1, 1]", "[-1, 1, 1]", "[1, inf, 1]"]),
+        ("intensity = [1, 1, 1]", "lights[0].intensity", &["[nan, 1, 1]", "[-1, 1, 1]", "[1, inf, 1]", "[1, 1, 2e30]"]),
         ("corner = [-1, 3, -1]", "lights[1].corner", &["[nan, 3, -1]"]),
         ("count = [2, 2]", "lights[1].count", &["[-2, 2]", "[0, 2]", "[nan, 2]", "[100000, 100000]"]),
-        ("intensity = [0.5, 0.5, 0.5]", "lights[1].intensity", &["[nan, 0.5, 0.5]", "[-0.5, 0.5, 0.5]"]),
+        (
+            "intensity = [0.5, 0.5, 0.5]",
+            "lights[1].intensity",
+            &["[nan, 0.5, 0.5]", "[-0.5, 0.5, 0.5]", "[0, 0, 3.4e38]"],
+        ),
         ("max_mirror_depth = 2", "render.max_mirror_depth", &["-1", "nan"]),
     ];
     for (line, field, values) in cases {
@@ -169,6 +173,28 @@ fn nan_inf_and_negative_values_in_every_numeric_field() {
             rejects(&dir, "scene.toml", bad.as_bytes(), &["scene.toml", field]);
         }
     }
+}
+
+/// Each light within its own cap, but their sum (which the light trees
+/// keep in f32), or the power [indirect]'s light paths share out, beyond
+/// what f32 holds: refused, naming the light that emits the most.
+#[test]
+fn lights_whose_sums_f32_cannot_hold() {
+    let dir = setup("sums");
+    let grid = full_scene().replacen("count = [2, 2]", "count = [1000, 1000]", 1).replacen(
+        "intensity = [0.5, 0.5, 0.5]",
+        "intensity = [1e30, 1, 1]",
+        1,
+    );
+    rejects(&dir, "grid.toml", grid.as_bytes(), &["grid.toml", "lights[1]", "1.000e36"]);
+    // A sun of 1e30 W/m^2 is allowed alone; over a scene 2e6 m wide, its
+    // light paths would carry 3e42 W.
+    let sun = "[[lights]]\ntype = \"sun\"\ndirection = [0, 1, 0]\nirradiance = [1e30, 1e30, 1e30]\n";
+    let far = "[[shapes]]\ntype = \"sphere\"\ncenter = [1e6, 0, 0]\nradius = 1\nmaterial = \"plain\"\n";
+    let alone = format!("{}{sun}{far}", full_scene());
+    lightcuts_ok(&["render", s(&dir.write("alone.toml", &alone)), "-o", s(&dir.path("alone.exr")), "--quiet"]);
+    let indirect = format!("{alone}[indirect]\npaths = 100\n");
+    rejects(&dir, "indirect.toml", indirect.as_bytes(), &["indirect.toml", "lights[2]", "[indirect]"]);
 }
 
 #[test]
@@ -501,6 +527,21 @@ fn hostile_gltf_files() {
         },
         &["nope.png", "images[0].uri"],
     );
+    // gltf 1.4.1 unwraps what the specification requires of an image.
+    for (name, image, expect) in [
+        ("no_source.gltf", json!({ "mimeType": "image/png" }), "images[0]"),
+        ("no_mime.gltf", json!({ "bufferView": 0 }), "images[0].mimeType"),
+    ] {
+        case(
+            name,
+            &|g| {
+                g.json["images"] = json!([image.clone()]);
+                g.json["textures"] = json!([{ "source": 0 }]);
+                g.json["materials"][0]["pbrMetallicRoughness"]["baseColorTexture"] = json!({ "index": 0 });
+            },
+            &[expect],
+        );
+    }
     std::fs::write(dir.path("junk.png"), b"junk").unwrap();
     case(
         "junk_image.gltf",

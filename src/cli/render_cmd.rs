@@ -34,12 +34,8 @@ pub fn run(args: &RenderArgs) -> Result<(), CliError> {
     crate::embree::set_timing(args.stats);
     let cpu_before = super::process::cpu_seconds();
     let result = session.render(&settings, mode, &|event| progress.report(event))?;
-    if result.refused_rays > 0 {
-        eprintln!(
-            "warning: {} rays had a non-finite or out-of-range component and were not traced \
-             (shadow rays among them counted as blocked): the scene holds a degenerate value",
-            result.refused_rays
-        );
+    for warning in result.warnings() {
+        eprintln!("warning: {warning}");
     }
     let cpu_seconds = super::process::cpu_seconds().zip(cpu_before).map(|(after, before)| after - before);
     let camera = scene.camera(settings.width, settings.height);
@@ -117,6 +113,7 @@ fn print_summary(scene: &Scene, settings: &PassSettings, mode: Mode, result: &Pa
     println!("  camera rays      {}", stats.camera_rays);
     println!("  shadow rays      {rays} ({:.1} per pixel)", rays as f64 / pixels);
     println!("  shadow rays/s    {:.2} M", rays as f64 / stats.time.as_secs_f64().max(1e-9) / 1e6);
+    println!("  non-finite       {} values (NaN or Inf before the film stored them)", result.non_finite_values());
     if let Mode::Multidimensional(_) = mode {
         // Its cuts are per pixel, through (gather cluster, light cluster) pairs.
         let cut_pixels = stats.shading.shading_points.max(1) as f64;

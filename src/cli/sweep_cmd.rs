@@ -193,6 +193,9 @@ fn reference(
     }
     let progress = Progress::for_stderr("exact", quiet);
     let result = session.render(settings, Mode::Exact, &|event| progress.report(event))?;
+    for warning in result.warnings() {
+        eprintln!("warning: {warning}");
+    }
     let meta = metadata(session.scene, key, settings, "exact".into(), &result);
     write_exr(&exr_path, &result.film, false, &meta)?;
     let record =
@@ -250,6 +253,9 @@ pub fn run(args: &SweepArgs) -> Result<(), CliError> {
                 let progress =
                     Progress::for_stderr(&format!("{} {spp} spp error {error}", sweep_mode.name()), args.quiet);
                 let result = session.render(&settings, mode, &|event| progress.report(event))?;
+                for warning in result.warnings() {
+                    eprintln!("warning: {warning}");
+                }
                 let comparison =
                     compare_rgb(&rgb(&result.film), &reference_rgb, b.width() as usize, b.height() as usize).summary;
                 let path = args.out.join(format!("{}-spp{spp}-error-{error}.exr", sweep_mode.name()));

@@ -55,6 +55,8 @@ pub fn assemble(output: &Path, tiles: &[PathBuf]) -> Result<Assembled, OutputErr
         .map(|name| FilmChannel {
             name: name.clone(),
             values: sources.iter().map(|&(image, at)| image.channels[name][at]).collect(),
+            // Read back from files the renderer wrote: finite already.
+            non_finite: 0,
         })
         .collect();
     let attributes = first

@@ -113,7 +113,8 @@ pub struct Film {
     /// The beauty ([`BEAUTY`]) first, then the AOVs the pass filled: the
     /// fixed ones, each light group's `Combined_<group>.R/G/B` (Cycles'
     /// names for light-group passes), Cryptomatte's `CryptoObject00.R`...
-    /// Every value is finite (the integrator sanitises before storing).
+    /// Every value is finite ([`film_value`] sanitises what the integrator
+    /// summed, and counts what it had to turn from NaN or infinite).
     pub channels: Vec<FilmChannel>,
     /// Header attributes the channels need (Cryptomatte's metadata).
     pub attributes: Vec<(String, String)>,
@@ -125,9 +126,38 @@ pub struct Film {
 pub struct FilmChannel {
     pub name: String,
     pub values: Vec<f32>,
+    /// How many of the values were NaN or infinite when the renderer
+    /// stored them (each stored as [`film_value`] says). Every one is a
+    /// defect: the render reports them, and the tests assert there are none.
+    pub non_finite: u64,
+}
+
+/// A finite f32 for the film: NaN becomes 0 and magnitudes beyond f32's
+/// range are clamped to the largest finite value, so no NaN or Inf ever
+/// reaches a pixel; a NaN or an infinity is counted in `non_finite` (a
+/// finite value beyond f32's range, such as 1e39 W/(m^2 sr) from a 1e30
+/// W/sr light, is not: it is the true value, clamped to what f32 holds).
+#[must_use]
+#[inline]
+pub fn film_value(x: f64, non_finite: &mut u64) -> f32 {
+    if !x.is_finite() {
+        *non_finite += 1;
+    }
+    if x.is_nan() {
+        0.0
+    } else {
+        x.clamp(f64::from(f32::MIN), f64::from(f32::MAX)) as f32
+    }
 }
 
 impl Film {
+    /// Each channel with NaN or infinite values the renderer had to turn
+    /// into finite ones, and how many ([`FilmChannel::non_finite`]).
+    #[must_use]
+    pub fn non_finite(&self) -> Vec<(&str, u64)> {
+        self.channels.iter().filter(|c| c.non_finite > 0).map(|c| (c.name.as_str(), c.non_finite)).collect()
+    }
+
     /// The named channel's values, if the film has it.
     #[must_use]
     pub fn channel(&self, name: &str) -> Option<&[f32]> {

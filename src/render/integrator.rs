@@ -3,7 +3,8 @@
 //!
 //! Radiance is accumulated in f64: a product M * G * I with intensities up to
 //! 1e30 W/sr and G up to 1/epsilon^2 overflows f32. Values are clamped to
-//! finite f32 only when a pixel is stored (see `film_value`).
+//! finite f32 only when a pixel is stored (`render::film::film_value`, which
+//! counts every non-finite value it meets).
 
 use std::time::Instant;
 
@@ -364,17 +365,5 @@ impl<'a> Integrator<'a> {
             radiance += found.count_batch(g, &batch);
         }
         radiance
-    }
-}
-
-/// A finite f32 for the film: NaN becomes 0 and magnitudes beyond f32's
-/// range are clamped to the largest finite value, so no NaN or Inf ever
-/// reaches a pixel.
-#[must_use]
-pub fn film_value(x: f64) -> f32 {
-    if x.is_nan() {
-        0.0
-    } else {
-        x.clamp(f64::from(f32::MIN), f64::from(f32::MAX)) as f32
     }
 }

@@ -21,9 +21,10 @@ use crate::embree::{EmbreeError, Ray};
 use crate::scene::{Camera, Scene};
 use crate::util::sampling::{self, Rng};
 use cryptomatte::{Coverage, CryptoType};
+use film::film_value;
 pub use film::{Aovs, Film, FilmChannel, PixelBounds, BACKGROUND_DEPTH, BEAUTY};
-use integrator::{film_value, Integrator, Scratch};
 pub use integrator::{DirectLighting, ShadingStats};
+use integrator::{Integrator, Scratch};
 
 /// Tile edge in pixels: small enough to balance load across threads.
 pub const TILE: u32 = 16;
@@ -159,7 +160,7 @@ pub fn render(
     let tile_list = tiles(settings.bounds, TILE);
     progress(PassProgress::Started { tiles: tile_list.len() as u64 });
     let embree = &integrator.geometry.embree;
-    let rendered: Vec<(Vec<f32>, PassStats)> = tile_list
+    let rendered: Vec<(Vec<f32>, Vec<u64>, PassStats)> = tile_list
         .par_iter()
         .map_init(Scratch::default, |scratch, tile| {
             let result = render_tile(integrator, camera, settings, &layout, *tile, scratch);
@@ -179,14 +180,17 @@ pub fn render(
         channels: layout
             .names
             .iter()
-            .map(|name| FilmChannel { name: name.clone(), values: vec![0.0; b.area()] })
+            .map(|name| FilmChannel { name: name.clone(), values: vec![0.0; b.area()], non_finite: 0 })
             .collect(),
         attributes: layout.attributes(integrator.geometry.scene),
     };
     let mut stats = PassStats::default();
-    for (tile, (values, tile_stats)) in tile_list.iter().zip(rendered) {
+    for (tile, (values, non_finite, tile_stats)) in tile_list.iter().zip(rendered) {
         stats.camera_rays += tile_stats.camera_rays;
         stats.shading.add(&tile_stats.shading);
+        for (channel, count) in film.channels.iter_mut().zip(non_finite) {
+            channel.non_finite += count;
+        }
         for (i, pixel) in values.chunks_exact(count).enumerate() {
             let x = tile.x0 + i as u32 % tile.width();
             let y = tile.y0 + i as u32 / tile.width();
@@ -201,7 +205,8 @@ pub fn render(
 }
 
 /// A tile's values (pixel by pixel, each pixel's channels in `layout`'s
-/// order) and its counters.
+/// order), how many values of each channel were NaN or infinite before
+/// they were stored (see [`film_value`]), and its counters.
 fn render_tile(
     integrator: &Integrator<'_>,
     camera: &Camera,
@@ -209,9 +214,10 @@ fn render_tile(
     layout: &Layout,
     tile: PixelBounds,
     scratch: &mut Scratch,
-) -> (Vec<f32>, PassStats) {
+) -> (Vec<f32>, Vec<u64>, PassStats) {
     let count = layout.names.len();
     let mut values = vec![0.0f32; tile.area() * count];
+    let mut non_finite = vec![0u64; count];
     let mut stats = PassStats::default();
     let inv_spp = 1.0 / f64::from(settings.spp);
     let mut groups = vec![DVec3::ZERO; layout.group_count];
@@ -269,15 +275,21 @@ fn render_tile(
         }
         gathered.clear();
         stats.shading.add(&pixel_stats);
-        let value = |v: DVec3, scale: f64| (v * scale).to_array().map(film_value);
+        // Every value the integrator summed in f64 reaches the film
+        // through here: a non-finite one is counted for its channel.
+        let mut put = |pixel: &mut [f32], at: usize, v: DVec3, scale: f64| {
+            for (k, x) in (v * scale).to_array().into_iter().enumerate() {
+                pixel[at + k] = film_value(x, &mut non_finite[at + k]);
+            }
+        };
         let hit_scale = if hits > 0 { 1.0 / f64::from(hits) } else { 0.0 };
-        pixel[..3].copy_from_slice(&value(radiance, inv_spp));
+        put(pixel, 0, radiance, inv_spp);
         pixel[3] = (f64::from(opaque) * inv_spp) as f32;
         if let Some(at) = layout.albedo {
-            pixel[at..at + 3].copy_from_slice(&value(albedo, hit_scale));
+            put(pixel, at, albedo, hit_scale);
         }
         if let Some(at) = layout.normal {
-            pixel[at..at + 3].copy_from_slice(&value(normal, hit_scale));
+            put(pixel, at, normal, hit_scale);
         }
         if let Some(at) = layout.depth {
             pixel[at] = if z.is_finite() { z } else { BACKGROUND_DEPTH };
@@ -288,8 +300,7 @@ fn render_tile(
             pixel[at + 1] = pixel_stats.shadow_rays as f32;
         }
         for (g, group) in groups.iter().enumerate() {
-            let at = layout.groups + 3 * g;
-            pixel[at..at + 3].copy_from_slice(&value(*group, inv_spp));
+            put(pixel, layout.groups + 3 * g, *group, inv_spp);
         }
         if layout.ids.is_some() {
             let ranks = [&mut objects, &mut materials].map(|coverage| coverage.ranks());
@@ -299,7 +310,7 @@ fn render_tile(
             }
         }
     }
-    (values, stats)
+    (values, non_finite, stats)
 }
 
 /// Keeps a pixel's lens rotation apart from its samples' streams.

@@ -108,6 +108,40 @@ pub struct PassResult {
     pub refused_rays: u64,
 }
 
+impl PassResult {
+    /// What the command line warns about after a pass, one line each:
+    /// rays Embree was not given, and values that were NaN or infinite
+    /// when the film stored them (each a defect; docs/design.md §5.1).
+    #[must_use]
+    pub fn warnings(&self) -> Vec<String> {
+        let mut lines = Vec::new();
+        if self.refused_rays > 0 {
+            lines.push(format!(
+                "{} rays had a non-finite or out-of-range component and were not traced \
+                 (shadow rays among them counted as blocked): the scene holds a degenerate value",
+                self.refused_rays
+            ));
+        }
+        let non_finite = self.film.non_finite();
+        if !non_finite.is_empty() {
+            let total: u64 = non_finite.iter().map(|(_, n)| n).sum();
+            let list: Vec<String> = non_finite.iter().map(|(name, n)| format!("{name} {n}")).collect();
+            lines.push(format!(
+                "{total} values were NaN or infinite before they were stored (NaN as 0, infinities as the \
+                 largest finite f32), by channel: {}: a defect of the renderer, please report it",
+                list.join(", ")
+            ));
+        }
+        lines
+    }
+
+    /// Values of the film that were NaN or infinite before they were stored.
+    #[must_use]
+    pub fn non_finite_values(&self) -> u64 {
+        self.film.channels.iter().map(|c| c.non_finite).sum()
+    }
+}
+
 impl<'s> Session<'s> {
     /// `threads`: 0 for one per CPU.
     pub fn try_new(scene: &'s Scene, threads: usize) -> Result<Self, SessionError> {
@@ -287,6 +321,42 @@ intensity = [1, 1, 1]
         let mut histogram = [0; crate::render::integrator::CUT_HISTOGRAM_BUCKETS];
         histogram[0] = 4;
         assert_eq!(stats.cut_histogram, histogram);
+    }
+
+    /// A NaN in one light's evaluation (a light no scene file can give:
+    /// the loader refuses it) is counted where the film stores it, in
+    /// every mode, and warned about; without it nothing is.
+    #[test]
+    fn a_nan_that_reaches_the_film_is_counted_and_warned_about() {
+        let scene = scene(COINCIDENT);
+        let mut session = Session::try_new(&scene, 1).unwrap();
+        let settings = PassSettings {
+            width: 2,
+            height: 2,
+            spp: 1,
+            seed: 0,
+            bounds: PixelBounds::full(2, 2),
+            aovs: Aovs::all(true),
+            transparent: false,
+        };
+        let modes = [Mode::Exact, Mode::Bounded(CutSettings::default())];
+        for mode in modes {
+            let clean = session.render(&settings, mode, &|_| {}).unwrap();
+            assert_eq!(clean.non_finite_values(), 0);
+            assert!(clean.warnings().is_empty());
+        }
+        session.lights[0].omni.push(crate::light::OmniLight {
+            position: glam::Vec3::new(0.0, 1.0, 0.0),
+            intensity: glam::Vec3::new(1.0, f32::NAN, 1.0),
+        });
+        for mode in modes {
+            let result = session.render(&settings, mode, &|_| {}).unwrap();
+            assert!(result.film.channels.iter().all(|c| c.values.iter().all(|v| v.is_finite())));
+            assert_eq!(result.film.non_finite(), vec![("G", 4)], "{mode:?}: one NaN per pixel, in G");
+            assert_eq!(result.non_finite_values(), 4);
+            let warnings = result.warnings();
+            assert!(warnings.len() == 1 && warnings[0].contains("4 values were NaN or infinite"), "{warnings:?}");
+        }
     }
 
     #[test]

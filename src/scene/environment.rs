@@ -43,6 +43,15 @@ impl EnvironmentMap {
         ((u * width as f32) as usize % width.max(1), ((v * height as f32) as usize).min(height - 1))
     }
 
+    /// The largest channel of the brightest radiance it holds, W/(m^2 sr).
+    #[must_use]
+    pub fn brightest(&self) -> f32 {
+        match self {
+            Self::Constant(c) => c.max_element(),
+            Self::LatLong { texels, scale, .. } => texels.iter().map(|t| t.max_element()).fold(0.0, f32::max) * scale,
+        }
+    }
+
     /// Radiance arriving from unit direction `d` (W/(m^2 sr)).
     #[must_use]
     pub fn radiance(&self, d: Vec3) -> Vec3 {

@@ -33,6 +33,19 @@ pub struct Mesh {
 }
 
 impl Mesh {
+    /// The area of its triangles, square metres (f64: a mesh may span
+    /// 1e16 m, whose squares overflow f32).
+    #[must_use]
+    pub fn surface_area(&self) -> f64 {
+        self.triangles
+            .iter()
+            .map(|t| {
+                let [a, b, c] = t.map(|i| self.positions[i as usize].as_dvec3());
+                0.5 * (b - a).cross(c - a).length()
+            })
+            .sum()
+    }
+
     /// Texture coordinates (sets 0 and 1) at barycentric coordinates (u,
     /// v) of triangle `triangle` (u weighs its second vertex, v its third,
     /// as Embree's hits do); (u, v) itself where the mesh has no texture
@@ -367,13 +380,7 @@ mod tests {
     }
 
     fn area(mesh: &Mesh) -> f32 {
-        mesh.triangles
-            .iter()
-            .map(|t| {
-                let [a, b, c] = t.map(|i| mesh.positions[i as usize]);
-                0.5 * (b - a).cross(c - a).length()
-            })
-            .sum()
+        mesh.surface_area() as f32
     }
 
     #[test]

@@ -75,6 +75,20 @@ pub enum LightSource {
     Sun { direction: Vec3, irradiance: Vec3, angular_radius_degrees: f32, samples: u32, seed: u64 },
 }
 
+impl LightSource {
+    /// Where its point lights are (none for emitters and the sun): a grid's
+    /// four corners bound its lights.
+    #[must_use]
+    pub fn positions(&self) -> Vec<Vec3> {
+        match *self {
+            Self::Point { position, .. } | Self::Spot { position, .. } => vec![position],
+            Self::MovingPoint { start, end, .. } => vec![start, end],
+            Self::Grid { corner, u, v, .. } => vec![corner, corner + u, corner + v, corner + u + v],
+            Self::Area { .. } | Self::Sun { .. } => Vec::new(),
+        }
+    }
+}
+
 /// A loaded, validated scene.
 #[derive(Debug, Clone)]
 pub struct Scene {

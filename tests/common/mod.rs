@@ -61,6 +61,14 @@ pub fn lightcuts_fails(args: &[&str]) -> String {
     stderr
 }
 
+/// Asserts that a render's summary (its stdout) counts no value that was
+/// NaN or infinite when the film stored it: the film turns such a value
+/// into a finite one, so the EXR alone cannot show it.
+pub fn assert_no_value_was_non_finite(stdout: &str) {
+    let line = stdout.lines().find(|l| l.trim_start().starts_with("non-finite")).expect("the summary counts them");
+    assert!(line.split_whitespace().nth(1) == Some("0"), "NaN or Inf reached the film: {line}");
+}
+
 pub fn s(path: &Path) -> &str {
     path.to_str().unwrap()
 }

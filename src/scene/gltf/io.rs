@@ -60,6 +60,21 @@ pub(super) fn parse(path: &Path, bytes: &[u8]) -> Result<gltf::Gltf, SceneError>
             }
         }
     }
+    // gltf 1.4.1's Image::source unwraps `uri` when there is no buffer
+    // view, and `mimeType` when there is (a panic on a hostile file): the
+    // specification requires exactly one of uri and bufferView, and a
+    // mimeType with a bufferView.
+    for (i, image) in root.images.iter().enumerate() {
+        let problem = match (&image.uri, &image.buffer_view, &image.mime_type) {
+            (None, None, _) => Some((String::new(), "has neither uri nor bufferView: one is required")),
+            (Some(_), Some(_), _) => Some((String::new(), "has both uri and bufferView: give one")),
+            (None, Some(_), None) => Some((".mimeType".into(), "missing: an image in a bufferView needs its mimeType")),
+            _ => None,
+        };
+        if let Some((field, message)) = problem {
+            return Err(SceneError::new(path, format!("images[{i}]{field}"), message));
+        }
+    }
     gltf::Document::from_json(root).map_err(|e| match e {
         gltf::Error::Validation(errors) => {
             let (location, error) = &errors[0];

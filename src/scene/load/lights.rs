@@ -7,7 +7,20 @@ use glam::Vec3;
 
 use super::{within_limits, Validator, MAX_COORDINATE};
 use crate::scene::file::{self, AreaMeshSpec, AreaSpec, GridSpec, LightSpec, PointSpec, SceneFile, SunSpec};
-use crate::scene::{Albedo, LightSource, Material, Mesh, SceneError, MAX_GRID_LIGHTS};
+use crate::scene::{Albedo, Environment, LightSource, Material, Mesh, SceneError, MAX_GRID_LIGHTS};
+
+/// The largest intensity (W/sr), radiance (W/(m^2 sr)) or irradiance
+/// (W/m^2) one light source may have, per channel (glTF's importer has the
+/// same cap on its lights' photometric values).
+pub const MAX_EMISSION: f32 = 1e30;
+
+/// The most the lights of a scene may emit in all: their intensities'
+/// sum (W/sr; irradiances in W/m^2 for lights at infinity, an area light
+/// counted as radiance x area), and with indirect light the power its light
+/// paths share out (W). The light trees sum intensities in f32 (at most
+/// 3.4e38) and VPLs carry a path's share of the power in f32: 1e36 keeps
+/// both finite with room to spare (docs/scene-format.md, "Limits").
+pub const MAX_TOTAL_EMISSION: f64 = 1e36;
 
 /// The light group each light asks for, with the field that names it.
 pub(super) type RequestedGroups = Vec<(Option<String>, String)>;
@@ -58,7 +71,7 @@ fn light_source(
     Ok(match light {
         LightSpec::Point(PointSpec { position, intensity, position_end }) => {
             let position = v.point(*position, &field("position"))?;
-            let intensity = v.non_negative_rgb(*intensity, &field("intensity"))?;
+            let intensity = v.emission(*intensity, &field("intensity"))?;
             match position_end {
                 Some(end) => {
                     LightSource::MovingPoint { start: position, end: v.point(*end, &field("position_end"))?, intensity }
@@ -70,7 +83,7 @@ fn light_source(
             let position = v.point(*position, &field("position"))?;
             let direction = v.point(*direction, &field("direction"))?;
             v.check(direction.length() > 0.0, &field("direction"), || "must not be zero".into())?;
-            let intensity = v.non_negative_rgb(*intensity, &field("intensity"))?;
+            let intensity = v.emission(*intensity, &field("intensity"))?;
             v.check(
                 outer_angle.is_finite() && *outer_angle > 0.0 && *outer_angle <= 90.0,
                 &field("outer_angle"),
@@ -92,7 +105,7 @@ fn light_source(
         LightSpec::Grid(GridSpec { corner, u, v: edge_v, count, intensity }) => {
             let c = v.point(*corner, &field("corner"))?;
             let (u, w) = (v.point(*u, &field("u"))?, v.point(*edge_v, &field("v"))?);
-            let intensity = v.non_negative_rgb(*intensity, &field("intensity"))?;
+            let intensity = v.emission(*intensity, &field("intensity"))?;
             let total = u64::from(count[0]) * u64::from(count[1]);
             v.check(count[0] >= 1 && count[1] >= 1 && total <= MAX_GRID_LIGHTS, &field("count"), || {
                 format!("must be at least [1, 1] and at most {MAX_GRID_LIGHTS} lights in all, got {count:?}")
@@ -112,7 +125,7 @@ fn light_source(
             v.check(u.cross(w).length() > 0.0, &field("v"), || {
                 "the emitter has zero area (u and v are parallel)".into()
             })?;
-            let radiance = v.non_negative_rgb(*radiance, &field("radiance"))?;
+            let radiance = v.emission(*radiance, &field("radiance"))?;
             v.sample_count(*samples, &field("samples"))?;
             let quad = Mesh { name: emitter_name, ..Mesh::quad(c, u, w, 0) };
             add_emitter(meshes, materials, quad, radiance, *samples, i as u64)
@@ -122,7 +135,7 @@ fn light_source(
                 format!("must be finite and > 0, got {scale}")
             })?;
             let t = v.point(*translate, &field("translate"))?;
-            let radiance = v.non_negative_rgb(*radiance, &field("radiance"))?;
+            let radiance = v.emission(*radiance, &field("radiance"))?;
             v.sample_count(*samples, &field("samples"))?;
             let mesh_path = base.join(file);
             inputs.push(mesh_path.clone());
@@ -140,7 +153,7 @@ fn light_source(
         LightSpec::Sun(SunSpec { direction, irradiance, angular_radius, samples }) => {
             let d = v.point(*direction, &field("direction"))?;
             v.check(d.length() > 0.0, &field("direction"), || "must not be zero".into())?;
-            let irradiance = v.non_negative_rgb(*irradiance, &field("irradiance"))?;
+            let irradiance = v.emission(*irradiance, &field("irradiance"))?;
             v.check(
                 angular_radius.is_finite() && (0.0..=45.0).contains(angular_radius),
                 &field("angular_radius"),
@@ -156,6 +169,73 @@ fn light_source(
             }
         }
     })
+}
+
+/// Checks that the light sources' sums stay within [`MAX_TOTAL_EMISSION`]
+/// (each one's emission is within [`MAX_EMISSION`] already): their
+/// intensities in all, and, when the scene has indirect light, the power
+/// its light paths carry (a light at infinity lights a disc as wide as the
+/// scene, `radius` metres). The error names the source that emits the most:
+/// `labels[i]` names source i, and `environment` the environment.
+pub(super) fn check_totals(
+    v: &Validator<'_>,
+    sources: &[LightSource],
+    labels: &[String],
+    meshes: &[Mesh],
+    environment: Option<&Environment>,
+    indirect: bool,
+    radius: f64,
+) -> Result<(), SceneError> {
+    use std::f64::consts::PI;
+    let most = |c: Vec3| f64::from(c.max_element());
+    // (intensity, power) of each source, and of the environment last.
+    let disc = PI * radius * radius;
+    let mut each: Vec<(f64, f64)> = sources
+        .iter()
+        .map(|source| match *source {
+            LightSource::Point { intensity, .. }
+            | LightSource::MovingPoint { intensity, .. }
+            | LightSource::Spot { intensity, .. } => (most(intensity), 4.0 * PI * most(intensity)),
+            LightSource::Grid { count, intensity, .. } => {
+                let n = f64::from(count[0]) * f64::from(count[1]);
+                (n * most(intensity), n * 4.0 * PI * most(intensity))
+            }
+            LightSource::Area { mesh, radiance, both_sides, .. } => {
+                let sides = if both_sides { 2.0 } else { 1.0 };
+                let intensity = sides * most(radiance) * meshes[mesh].surface_area();
+                (intensity, PI * intensity)
+            }
+            LightSource::Sun { irradiance, .. } => (most(irradiance), disc * most(irradiance)),
+        })
+        .collect();
+    if let Some(environment) = environment {
+        // Its directional lights' irradiances sum to the map's integral,
+        // at most 4 pi times its brightest radiance.
+        let brightest = f64::from(environment.map.brightest());
+        each.push((4.0 * PI * brightest, disc * 4.0 * PI * brightest));
+    }
+    let label = |k: usize| labels.get(k).map_or("environment", String::as_str).to_string();
+    let largest = |part: fn(&(f64, f64)) -> f64| {
+        (0..each.len()).max_by(|&a, &b| part(&each[a]).total_cmp(&part(&each[b]))).map_or(0, |k| k)
+    };
+    let intensity: f64 = each.iter().map(|e| e.0).sum();
+    v.check(intensity <= MAX_TOTAL_EMISSION, &label(largest(|e| e.0)), || {
+        format!(
+            "the lights' intensities sum to {intensity:.3e} in all (W/sr, and W/m^2 for the sun and the \
+             environment; this one emits the most): at most {MAX_TOTAL_EMISSION:e}, which the light trees' f32 \
+             sums hold"
+        )
+    })?;
+    if indirect {
+        let power: f64 = each.iter().map(|e| e.1).sum();
+        v.check(power <= MAX_TOTAL_EMISSION, &label(largest(|e| e.1)), || {
+            format!(
+                "the lights emit {power:.3e} W in all over the scene (this one the most), which [indirect]'s \
+                 light paths share out: at most {MAX_TOTAL_EMISSION:e} W, which their VPLs' f32 intensities hold"
+            )
+        })?;
+    }
+    Ok(())
 }
 
 /// Adds an area emitter's geometry: visible, black, emitting `radiance` from

@@ -16,7 +16,10 @@ use std::path::Path;
 use glam::Vec3;
 
 use super::file::{self, SceneFile};
-use super::{gltf, groups, object, within_limits, LightGroups, Scene, SceneError, MAX_COORDINATE, MAX_EMITTER_SAMPLES};
+use super::{
+    gltf, groups, object, within_limits, LightGroups, LightSource, Scene, SceneError, MAX_COORDINATE,
+    MAX_EMITTER_SAMPLES,
+};
 
 /// What the command line overrides in a scene file.
 #[derive(Debug, Clone, Copy, Default)]
@@ -177,6 +180,16 @@ impl Scene {
         }
         let environment = settings::environment(&v, base, &spec, &mut inputs)?;
         let indirect = settings::indirect(&v, &spec)?;
+        let labels: Vec<String> = (0..lights.len())
+            .map(|i| if i < spec.lights.len() { format!("lights[{i}]") } else { "gltf.file".to_string() })
+            .collect();
+        // The scene's extent as light paths see it: geometry and point lights.
+        let (lo, hi) = lights
+            .iter()
+            .flat_map(LightSource::positions)
+            .fold(object::world_bounds(&meshes, &objects), |(lo, hi), p| (lo.min(p), hi.max(p)));
+        let radius = if lo.is_finite() && hi.is_finite() { 0.5 * (hi - lo).as_dvec3().length() } else { 0.0 };
+        lights::check_totals(&v, &lights, &labels, &meshes, environment.as_ref(), indirect.is_some(), radius)?;
         let groups = LightGroups::assign(
             path,
             &requested_groups,
@@ -290,9 +303,13 @@ impl Validator<'_> {
         Ok(v)
     }
 
-    fn non_negative_rgb(&self, c: [f32; 3], field: &str) -> Result<Vec3, SceneError> {
+    /// A light's intensity, radiance or irradiance: finite, at least 0 and
+    /// at most [`lights::MAX_EMISSION`] per channel.
+    fn emission(&self, c: [f32; 3], field: &str) -> Result<Vec3, SceneError> {
         let v = Vec3::from(c);
-        self.check(v.is_finite() && v.min_element() >= 0.0, field, || format!("must be finite and >= 0, got {c:?}"))?;
+        self.check(v.is_finite() && v.min_element() >= 0.0 && v.max_element() <= lights::MAX_EMISSION, field, || {
+            format!("must be finite, >= 0 and at most {:e}, got {c:?}", lights::MAX_EMISSION)
+        })?;
         Ok(v)
     }
 

@@ -5,6 +5,7 @@ use std::path::{Path, PathBuf};
 
 use glam::Vec3;
 
+use super::lights::MAX_EMISSION;
 use super::Validator;
 use crate::scene::file::{self, SceneFile};
 use crate::scene::gltf::GltfCamera;
@@ -156,13 +157,21 @@ pub(super) fn environment(
             let map = match (&env.radiance, &env.file) {
                 (Some(_), Some(_)) => return Err(v.error(&field("file"), "give either radiance or file, not both")),
                 (None, None) => return Err(v.error(&field("radiance"), "missing: give radiance or file")),
-                (Some(r), None) => EnvironmentMap::Constant(v.non_negative_rgb(*r, &field("radiance"))?),
+                (Some(r), None) => EnvironmentMap::Constant(v.emission(*r, &field("radiance"))?),
                 (None, Some(f)) => {
                     let exr = base.join(f);
                     inputs.push(exr.clone());
-                    EnvironmentMap::load_exr(&exr, env.scale).map_err(|e| {
+                    let map = EnvironmentMap::load_exr(&exr, env.scale).map_err(|e| {
                         SceneError::new(&exr, field("file"), format!("cannot use as an environment: {e}"))
-                    })?
+                    })?;
+                    let brightest = map.brightest();
+                    v.check(brightest <= MAX_EMISSION, &field("scale"), || {
+                        format!(
+                            "the map's brightest texel times the scale is {brightest:e} W/(m^2 sr): at most \
+                             {MAX_EMISSION:e}"
+                        )
+                    })?;
+                    map
                 }
             };
             Some(Environment { map, samples: env.samples })
