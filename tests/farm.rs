@@ -89,6 +89,57 @@ fn assemble_refuses_gaps_overlaps_and_tiles_of_other_renders() {
     assert!(stderr.contains("--tile: 13 tiles of a frame 12 rows high"), "{stderr}");
 }
 
+/// Rewrites `from` into `to` with its data window moved to `origin` and
+/// its display window's corner to `display` (as another tool might write
+/// a tile), every attribute kept.
+fn moved(from: &std::path::Path, to: &std::path::Path, origin: (i32, i32), display: (i32, i32)) {
+    use exr::prelude::*;
+    let mut image = read()
+        .no_deep_data()
+        .largest_resolution_level()
+        .all_channels()
+        .all_layers()
+        .all_attributes()
+        .from_file(from)
+        .unwrap();
+    image.attributes.display_window.position = Vec2(display.0, display.1);
+    image.layer_data[0].attributes.layer_position = Vec2(origin.0, origin.1);
+    image.write().to_file(to).unwrap();
+}
+
+/// A tile from another tool whose data window reaches left of or above the
+/// frame, or whose display window does not start at (0, 0): an error naming
+/// the file, no frame, no panic.
+#[test]
+fn assemble_refuses_tiles_outside_the_frame() {
+    let dir = TempDir::new("farm-outside");
+    let scene = dir.write("s.toml", &small_scene(4));
+    let render = |out: &str, tile: &str| render_tile(&dir, &scene, out, tile, &["--resolution", "16x12"]);
+    let (a, b, c) = (render("a.exr", "0/3"), render("b.exr", "1/3"), render("c.exr", "2/3"));
+    let frame = dir.path("frame.exr");
+    for (name, origin, display, expect) in [
+        (
+            "left.exr",
+            (-4, 0),
+            (0, 0),
+            "its data window x -4..12, y 0..4 is not inside its display window x 0..16, y 0..12",
+        ),
+        ("above.exr", (0, -1), (0, 0), "its data window x 0..16, y -1..3 is not inside"),
+        ("right.exr", (2, 0), (0, 0), "its data window x 2..18, y 0..4 is not inside"),
+        ("display.exr", (0, 0), (3, 2), "its display window starts at (3, 2)"),
+    ] {
+        let tile = dir.path(name);
+        moved(&a, &tile, origin, display);
+        let stderr = lightcuts_fails(&["assemble", s(&frame), s(&tile), s(&b), s(&c)]);
+        assert!(stderr.contains(name) && stderr.contains(expect), "{stderr}");
+        assert!(!frame.exists(), "no frame written on refusal");
+    }
+    // The same tile moved back to where it was assembles.
+    let back = dir.path("back.exr");
+    moved(&a, &back, (0, 0), (0, 0));
+    lightcuts_ok(&["assemble", s(&frame), s(&back), s(&b), s(&c)]);
+}
+
 #[test]
 fn no_overwrite_skips_existing_and_claimed_outputs_and_releases_its_claim() {
     let dir = TempDir::new("farm-claim");

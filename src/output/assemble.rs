@@ -45,6 +45,7 @@ pub fn assemble(output: &Path, tiles: &[PathBuf]) -> Result<Assembled, OutputErr
         .map(|i| {
             let image = &images[owner[i].expect("every pixel is covered")];
             let (x, y) = (i % width, i / width);
+            // Inside the frame (coverage checked it): x0, y0 >= 0.
             (image, (y - image.y0 as usize) * image.width + (x - image.x0 as usize))
         })
         .collect();
@@ -140,9 +141,24 @@ fn coverage(
     let (width, height) = (images[0].display_width, images[0].display_height);
     let mut owner: Vec<Option<usize>> = vec![None; width * height];
     for (t, image) in images.iter().enumerate() {
-        let (x0, y0) = (image.x0.max(0) as usize, image.y0.max(0) as usize);
-        for y in y0..(y0 + image.height).min(height) {
-            for x in x0..(x0 + image.width).min(width) {
+        if (image.display_x0, image.display_y0) != (0, 0) {
+            let (x, y) = (image.display_x0, image.display_y0);
+            return Err(OutputError::DisplayWindowOrigin { path: tiles[t].clone(), x, y });
+        }
+        // The tile's data window must lie inside the frame (its display
+        // window, the same for every tile: check_same_render).
+        let (x0, y0) = (i64::from(image.x0), i64::from(image.y0));
+        let (x1, y1) = (x0 + image.width as i64, y0 + image.height as i64);
+        if x0 < 0 || y0 < 0 || x1 > width as i64 || y1 > height as i64 {
+            return Err(OutputError::TileOutsideFrame {
+                path: tiles[t].clone(),
+                window: [x0, x1, y0, y1],
+                display: [0, width as i64, 0, height as i64],
+            });
+        }
+        let (x0, y0) = (x0 as usize, y0 as usize);
+        for y in y0..y0 + image.height {
+            for x in x0..x0 + image.width {
                 if let Some(other) = owner[y * width + x].replace(t) {
                     let window = |i: &ExrImage| {
                         [i.x0 as u32, i.x0 as u32 + i.width as u32, i.y0 as u32, i.y0 as u32 + i.height as u32]

@@ -75,6 +75,18 @@ pub enum OutputError {
     /// A tile to assemble disagrees with the first tile.
     #[error("{}: {what} is '{found}', but {} has '{expected}': tiles of different renders", path.display(), reference.display())]
     TileMismatch { path: PathBuf, reference: PathBuf, what: String, found: String, expected: String },
+    /// A tile's data window reaches outside its display window (a file
+    /// another tool wrote: ours are bands of the frame).
+    #[error(
+        "{}: its data window x {}..{}, y {}..{} is not inside its display window x {}..{}, y {}..{}: a tile must be \
+         a part of the frame",
+        path.display(), window[0], window[1], window[2], window[3], display[0], display[1], display[2], display[3]
+    )]
+    TileOutsideFrame { path: PathBuf, window: [i64; 4], display: [i64; 4] },
+    /// A tile's display window does not start at (0, 0), where every frame
+    /// lightcuts renders starts (and where `assemble` writes the frame).
+    #[error("{}: its display window starts at ({x}, {y}): tiles of a lightcuts frame start at (0, 0)", path.display())]
+    DisplayWindowOrigin { path: PathBuf, x: i32, y: i32 },
     /// Two tiles cover the same pixels.
     #[error(
         "{}: overlaps {} on x {}..{}, y {}..{}",

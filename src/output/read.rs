@@ -15,7 +15,9 @@ pub struct ExrImage {
     pub y0: i32,
     pub width: usize,
     pub height: usize,
-    /// Display window size.
+    /// Display window origin and size.
+    pub display_x0: i32,
+    pub display_y0: i32,
     pub display_width: usize,
     pub display_height: usize,
     pub channels: BTreeMap<String, Vec<f32>>,
@@ -79,6 +81,8 @@ pub fn read_exr(path: &Path) -> std::result::Result<ExrImage, OutputError> {
         y0: layer.attributes.layer_position.y(),
         width: layer.size.width(),
         height: layer.size.height(),
+        display_x0: display.position.x(),
+        display_y0: display.position.y(),
         display_width: display.size.width(),
         display_height: display.size.height(),
         channels,
