@@ -488,6 +488,50 @@ fn vertex_colours_multiply_the_base_colour() {
     assert!(green_over_red < 0.6, "G / R = {green_over_red}: the vertex colours were not applied");
 }
 
+/// Values beyond glTF's schema that the BRDF cannot take: float vertex
+/// colours above 1 (they multiply the base colour, a reflectance) and
+/// KHR_materials_specular's factor above 1 (the schema's maximum) are
+/// clamped to 1, with one warning naming each field; the render is the
+/// same, bit for bit, as the file with 1 written in their place. (Before,
+/// a base colour of 3 left the metal's Fresnel falling as it should rise
+/// and the cut's bound below the true term, and a factor of 1.5 made the
+/// diffuse weight negative.)
+#[test]
+fn vertex_colours_and_a_specular_factor_above_1_are_clamped_with_a_warning() {
+    let dir = TempDir::new("gltf-beyond");
+    let file = |colour: f32, specular: f32| {
+        let mut g = floor_and_point_light();
+        g.json["materials"][0] = json!({
+            "pbrMetallicRoughness": { "baseColorFactor": [0.9, 0.9, 0.9, 1.0], "metallicFactor": 0.5, "roughnessFactor": 0.3 },
+            "extensions": { "KHR_materials_specular": { "specularFactor": specular } }
+        });
+        let colours = g.floats(&[colour, 0.5, 0.25].repeat(4), "VEC3", 3);
+        g.json["meshes"][0]["primitives"][0]["attributes"]["COLOR_0"] = json!(colours);
+        g
+    };
+    let render = |g: &GltfBuilder, name: &str| {
+        let (scene, out) = (dir.write(&format!("{name}.gltf"), &g.embedded()), dir.path(&format!("{name}.exr")));
+        let output = lightcuts(&["render", s(&scene), "-o", s(&out), "--quiet", "--resolution", "48x32"]);
+        assert!(output.status.success());
+        (read_exr(&out).unwrap(), String::from_utf8_lossy(&output.stderr).into_owned())
+    };
+    let (beyond, warnings) = render(&file(3.0, 1.5), "beyond");
+    let (within, quiet) = render(&file(1.0, 1.0), "within");
+    assert!(
+        warnings.contains("meshes[0].primitives[0].attributes.COLOR_0: colours above 1 (up to 3) clamped to 1"),
+        "{warnings}"
+    );
+    assert!(
+        warnings.contains("materials[0].extensions.KHR_materials_specular.specularFactor: 1.5 clamped to 1"),
+        "{warnings}"
+    );
+    assert!(!quiet.contains("clamped"), "{quiet}");
+    for (name, values) in &within.channels {
+        let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+        assert_eq!(bits(values), bits(&beyond.channels[name]), "{name}");
+    }
+}
+
 #[test]
 fn a_toml_scene_imports_a_gltf_file_and_adds_to_it() {
     let dir = TempDir::new("gltf-toml");

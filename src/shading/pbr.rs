@@ -50,8 +50,13 @@ pub struct Pbr {
 impl Pbr {
     /// The parameters of a base colour, metallic, roughness and
     /// KHR_materials_specular's factor and colour (1 and white without it).
+    /// The base colour and the specular factor are reflectances: each is
+    /// taken within [0, 1], where the Fresnel terms grow with Schlick's
+    /// weight and the diffuse weight stays >= 0, as the cut's bound needs
+    /// (the importers clamp them there already, with a warning).
     #[must_use]
     pub fn new(base: Vec3, metallic: f32, roughness: f32, specular: f32, specular_colour: Vec3) -> Self {
+        let (base, specular) = (base.clamp(Vec3::ZERO, Vec3::ONE), specular.clamp(0.0, 1.0));
         Self {
             base,
             metallic,

@@ -79,18 +79,27 @@ fn material(rng: &mut Rng) -> Material {
     }
 }
 
-/// A metallic-roughness material: metallic 0, 1 or between, roughness
-/// from 0 (clamped to the lobe's smallest alpha) through 0.02 to 1,
-/// KHR_materials_specular's factor and colour sometimes.
+/// 0, `top` or a value between, each a third of the time.
+fn edge(rng: &mut Rng, top: f32) -> f32 {
+    [0.0, top, top * rng.next_f32()][rng.below(3) as usize]
+}
+
+/// A metallic-roughness material over every value the importers accept:
+/// metallic 0, 1 or between, roughness from 0 (clamped to the lobe's
+/// smallest alpha) through 0.02 to 1, a base colour with channels at 0, at
+/// 1 or between, KHR_materials_specular's factor (0 to 1, its ends too) and
+/// colour (unbounded: 0.04 x colour reaches 1 from 25 on) sometimes.
 fn pbr_material(rng: &mut Rng) -> Material {
     let roughness = [0.0, 0.02, 0.05, 0.2, 0.5, 1.0, rng.next_f32()][rng.below(7) as usize];
     let metallic = [0.0, 1.0, rng.next_f32()][rng.below(3) as usize];
-    let (specular, specular_colour) = if rng.next_f32() < 0.7 {
+    let (specular, specular_colour) = if rng.next_f32() < 0.6 {
         (1.0, Vec3::ONE)
     } else {
-        (rng.next_f32(), 3.0 * Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()))
+        let factor = edge(rng, 1.0);
+        let top = [1.0, 3.0, 100.0][rng.below(3) as usize];
+        (factor, Vec3::new(edge(rng, top), edge(rng, top), edge(rng, top)))
     };
-    let albedo = Albedo::Constant(Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()));
+    let albedo = Albedo::Constant(Vec3::new(edge(rng, 1.0), edge(rng, 1.0), edge(rng, 1.0)));
     Material {
         pbr: Some(crate::scene::material::PbrMaterial {
             metallic,

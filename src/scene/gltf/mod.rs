@@ -980,6 +980,14 @@ impl Importer<'_, '_> {
             return Err(self.error(format!("{location}.extensions.KHR_materials_specular"), "must be finite and >= 0"));
         }
         let at = format!("{location}.extensions.KHR_materials_specular");
+        // The extension's schema caps the factor at 1: above it the
+        // diffuse weight 1 - max(F) would be negative.
+        let specular = if specular > 1.0 {
+            self.warn(&format!("{at}.specularFactor"), &format!("{specular} clamped to 1, the extension's maximum"));
+            1.0
+        } else {
+            specular
+        };
         let specular_texture = match m.specular().and_then(|s| s.specular_texture()) {
             None => None,
             // The factor is the texture's alpha channel (linear).
@@ -1402,6 +1410,19 @@ impl Importer<'_, '_> {
         }
         if colors.iter().any(|c| !c.is_finite() || c.min_element() < 0.0) {
             return Err(self.error(at, "has colours that are not finite and >= 0"));
+        }
+        // A float colour may exceed 1, but it multiplies the base colour, a
+        // reflectance the BRDF (and its bound: docs/design.md §8.3) needs
+        // within [0, 1].
+        let brightest = colors.iter().map(|c| c.max_element()).fold(0.0, f32::max);
+        if brightest > 1.0 {
+            self.warn(
+                &at,
+                &format!(
+                    "colours above 1 (up to {brightest}) clamped to 1: they multiply the base colour, a reflectance"
+                ),
+            );
+            return Ok(Some(colors.iter().map(|c| c.min(Vec3::ONE)).collect()));
         }
         Ok(Some(colors))
     }
