@@ -384,3 +384,73 @@ fn nothing_in_the_repository_points_outside_it() {
     }
     assert!(found.is_empty(), "references to files outside the repository:\n{}", found.join("\n"));
 }
+
+/// The section numbers of docs/design.md's headings ("## 5. ...", "### 5.1 ...").
+fn design_sections(root: &Path) -> BTreeSet<String> {
+    let design = std::fs::read_to_string(root.join("docs/design.md")).unwrap();
+    design
+        .lines()
+        .filter_map(|line| {
+            let rest = line.strip_prefix('#')?.trim_start_matches('#').trim_start();
+            let number: String = rest.chars().take_while(|c| c.is_ascii_digit() || *c == '.').collect();
+            let number = number.trim_end_matches('.');
+            (!number.is_empty()).then(|| number.to_string())
+        })
+        .collect()
+}
+
+/// Every "design §N.M" the source cites (`docs/design.md §5.3`, a citation
+/// wrapped over two comment lines too), with the file and line it is on.
+/// In `src/` every section sign is the design's (the glTF specification's
+/// sections are written "section 3.11"), which the test also checks.
+fn design_citations(root: &Path) -> Vec<(String, usize, String)> {
+    let mut files = Vec::new();
+    for dir in ["src", "tests", "benches"] {
+        rust_files(&root.join(dir), &mut files);
+    }
+    let mut citations = Vec::new();
+    for file in files {
+        let text = std::fs::read_to_string(&file).unwrap();
+        let lines: Vec<&str> = text.lines().collect();
+        for (i, line) in lines.iter().enumerate() {
+            for (at, _) in line.match_indices('§') {
+                let number: String =
+                    line[at + '§'.len_utf8()..].chars().take_while(|c| c.is_ascii_digit() || *c == '.').collect();
+                let number = number.trim_end_matches('.').to_string();
+                if number.is_empty() {
+                    continue; // Not a citation ("§N.M" in prose about them).
+                }
+                // What precedes it on this line (its comment marker taken
+                // off), or at the end of the one before.
+                let here = line[..at].trim_start().trim_start_matches('/').trim_start_matches('!').trim();
+                let before = if here.is_empty() && i > 0 { lines[i - 1].trim_end() } else { here };
+                let cites_design = before.ends_with("design.md") || before.ends_with("design");
+                let in_src = file.starts_with(root.join("src"));
+                let place = format!("{}:{}", file.strip_prefix(root).unwrap().display(), i + 1);
+                assert!(
+                    cites_design || !in_src,
+                    "{place}: a section sign that is not docs/design.md's ({line}): write another document's sections as \"section N\""
+                );
+                if cites_design {
+                    citations.push((place, i + 1, number));
+                }
+            }
+        }
+    }
+    citations
+}
+
+#[test]
+fn every_design_section_the_code_cites_exists() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let sections = design_sections(root);
+    assert!(sections.contains("5.3") && sections.contains("13.6"), "{sections:?}");
+    let citations = design_citations(root);
+    assert!(citations.len() > 40, "the source cites the design often: found {}", citations.len());
+    let missing: Vec<String> = citations
+        .iter()
+        .filter(|(_, _, number)| !sections.contains(number))
+        .map(|(place, _, number)| format!("{place}: §{number}"))
+        .collect();
+    assert!(missing.is_empty(), "sections cited that docs/design.md does not have: {missing:?}");
+}

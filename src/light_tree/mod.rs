@@ -1,7 +1,8 @@
 //! The light tree ([LC05]; docs/design.md §7): a binary tree per light type whose leaves
 //! are lights and whose internal nodes are clusters with summed intensity,
 //! bounds, and a representative light chosen with probability proportional
-//! to intensity. Stored as flat arrays; a node stores only what its type needs.
+//! to intensity. Built as flat arrays of leaves and nodes (a node stores only
+//! what its type needs), then laid out for the cut (`layout`).
 //!
 //! Built by locally-ordered agglomerative clustering ([FAC08], in the parallel
 //! form of [PLOC18]: `ploc`), or by the exact greedy algorithm (`greedy`, for
@@ -66,8 +67,9 @@ pub struct Leaf {
     pub intensity: Vec3,
 }
 
-/// An internal node, 48 bytes: what one cut step reads sits in one or two
-/// cache lines instead of five arrays.
+/// An internal node as the builders make it, 48 bytes. The cut does not
+/// read these: it reads the tree laid out for it (`layout`: one block per
+/// node holding both children's data).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Node {
     /// Box of positions (omni, oriented) or of directions (directional).

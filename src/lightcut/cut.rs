@@ -147,7 +147,7 @@ impl Cut<'_, '_> {
     /// Adds both children of the node whose block is `b` (the roots: slot 0
     /// of block 0). `parent` is the refined node's representative and its
     /// M * G * V, which the child that shares the representative reuses; the
-    /// other child waits in `fresh` for its representative's evaluation.
+    /// other child waits in `pending` for its representative's evaluation.
     #[inline(always)]
     fn add_children(&mut self, tree: u8, b: usize, parent: Option<(u32, DVec3)>) {
         let t = &self.trees[tree as usize];

@@ -4,9 +4,11 @@
 //! `bounds` holds the provable upper bounds of the material and geometric
 //! terms over a cluster; `cut` the refinement with representatives fixed
 //! when the tree is built ([LC05], "bounded"); `stochastic` the cut whose
-//! lights are drawn per sample ([SLC19]). What both modes share is here:
-//! their settings and result, the policy of which trees are too small for
-//! a cut, their exact part, and the dispatch by light group.
+//! lights are drawn per sample ([SLC19]); `multidimensional` the cut per
+//! pixel through (gather cluster, light cluster) pairs ([MDLC06]). What the
+//! three share is here: their settings and result, the policy of which
+//! trees are too small for a cut, their exact part, and the dispatch by
+//! light group.
 
 pub mod bounds;
 pub mod cut;
@@ -25,7 +27,8 @@ use crate::light_tree::LightTrees;
 use crate::shading::{BatchBuffers, BatchResult, LightBatch, SurfacePoint};
 
 /// A tree with at most this many lights is evaluated light by light, with
-/// the exact renderer's code, in both cut modes: below it, the bounds cost
+/// the exact renderer's code, in the bounded and stochastic cuts (the
+/// multidimensional one builds every tree as a tree): below it, the bounds cost
 /// more than the shadow rays they save (docs/measurements.md, "The
 /// exhaustive switch", measures the break-even).
 pub const EXHAUSTIVE_LIGHTS: usize = 200;
@@ -149,7 +152,7 @@ impl CutResult {
 }
 
 /// Every light of the trees too small for a cut, one by one with the exact
-/// renderer's code (the same for both cut modes).
+/// renderer's code (the same for every cut mode).
 #[inline(always)]
 pub(crate) fn exhaustive(
     trees: &[CutTree],

@@ -9,9 +9,9 @@
 //! `error` times the pixel's total estimate. A pair's estimate is the
 //! representative pair's M G V (one shadow ray) times the gather cluster's
 //! summed strength times the light cluster's summed intensity, the pair
-//! drawn per pair (§13.4); its bound is the same product with M, G and V
-//! replaced by their upper bounds over the two clusters
-//! (`bounds::GatherBounds`, §13.3).
+//! drawn per pair (docs/design.md §13.4); its bound is the same product
+//! with M, G and V replaced by their upper bounds over the two clusters
+//! (`bounds::GatherBounds`, docs/design.md §13.3).
 
 use std::collections::BinaryHeap;
 
@@ -371,7 +371,7 @@ impl ProductCut<'_, '_> {
     /// The representative pair of (gather node `g`, slot `k` of block `b`
     /// of tree `t`), drawn per pair so that a coarse pair's error is
     /// independent of its neighbours' in both dimensions (docs/design.md
-    /// §11.4): the gather point by a descent from `g` that takes each child
+    /// §13.4, "Representatives"): the gather point by a descent from `g` that takes each child
     /// in proportion to its strength, keyed by the light cluster; the light
     /// by a descent from the slot that takes each child in proportion to
     /// its intensity's luminance, keyed by that gather point. One draw

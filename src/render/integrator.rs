@@ -195,7 +195,8 @@ impl<'a> Integrator<'a> {
                 result.first_hit = Some(FirstHit { albedo: sp.kd, normal: sp.n, distance: sp.distance });
                 result.first_ids = Some((self.geometry.object_of(&hit), material));
             }
-            // Emitters are seen with their radiance (they reflect nothing).
+            // Emitters are seen with their radiance; they reflect light too,
+            // as their material says (a TOML area light's is black).
             if sp.emitted != Vec3::ZERO {
                 let seen = throughput * sp.emitted.as_dvec3();
                 result.radiance += seen;

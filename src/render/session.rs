@@ -27,7 +27,8 @@ pub enum Mode {
 }
 
 impl Mode {
-    /// The cut's settings, for the two lightcut modes.
+    /// The cut's settings, for the three cut modes (bounded, stochastic,
+    /// multidimensional).
     #[must_use]
     pub fn cut(&self) -> Option<CutSettings> {
         match self {

@@ -1,7 +1,7 @@
 //! Materials: diffuse (constant or textured albedo) plus Phong specular, plus
 //! a perfect mirror layer: [LC05]'s model; or glTF's metallic-roughness
 //! material (`shading::pbr`), whose base colour is the albedo
-//! (docs/design.md §5.3; their bounds over a cluster, §8.3).
+//! (docs/design.md §5.3; their bounds over a cluster, docs/design.md §8.3).
 
 use std::f32::consts::PI;
 

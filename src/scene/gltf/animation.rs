@@ -1,6 +1,6 @@
 //! A glTF animation's node transforms, sampled at the times of a shutter
 //! (docs/design.md §13.6): each channel's keyframes interpolated as glTF
-//! 2.0 defines (§3.11 "Animations": STEP, LINEAR with spherical linear
+//! 2.0 defines (section 3.11 "Animations": STEP, LINEAR with spherical linear
 //! interpolation of rotations, CUBICSPLINE's Hermite spline with its in-
 //! and out-tangents), before the first key its first value and after the
 //! last its last. Morph-target weight channels are not played.

@@ -250,7 +250,7 @@ impl<'a> Data<'a> {
 
     /// An accessor's `count` elements of `size` bytes, each read by `read`:
     /// the dense ones (zeros without a buffer view), then the sparse
-    /// substitution the specification defines (§3.6.2.3: `sparse.count`
+    /// substitution the specification defines (section 3.6.2.3: `sparse.count`
     /// strictly increasing indices, each element at one replaced by the
     /// next tightly packed value).
     fn read_elements<T: Clone>(
@@ -339,7 +339,7 @@ impl<'a> Data<'a> {
             return Err(self.error(location, "a FLOAT accessor cannot be normalized"));
         }
         let component = kind.size();
-        // The specification's decoding of normalized integers (§3.11).
+        // The specification's decoding of normalized integers (section 3.11).
         let read = move |b: &[u8]| -> f32 {
             match (kind, normalized) {
                 (DataType::F32, _) => f32::from_le_bytes([b[0], b[1], b[2], b[3]]),
@@ -355,7 +355,7 @@ impl<'a> Data<'a> {
                 (DataType::U32, false) => u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as f32,
             }
         };
-        // Column-major; a MAT4's columns need no padding (§3.6.2.4).
+        // Column-major; a MAT4's columns need no padding (section 3.6.2.4).
         self.read_elements(a, location, (N * component, [0.0; N]), |b| {
             std::array::from_fn(|c| read(&b[c * component..]))
         })

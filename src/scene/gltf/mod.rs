@@ -1108,7 +1108,7 @@ impl Importer<'_, '_> {
 
     /// glTF's morph targets at `weights` (the node's, else the mesh's; 0
     /// where none is given): POSITION and NORMAL displaced by the weighted
-    /// sum of the targets' (the specification's §3.7.2.2), in the mesh's
+    /// sum of the targets' (the specification's section 3.7.2.2), in the mesh's
     /// own space.
     fn morph(
         &mut self,
@@ -1158,7 +1158,7 @@ impl Importer<'_, '_> {
 
     /// The transforms that place a primitive's vertices: the node's, or
     /// for a skin each vertex's JOINTS_0 matrices blended by its WEIGHTS_0
-    /// (the specification's §3.7.3: the skinned node's own transform is
+    /// (the specification's section 3.7.3: the skinned node's own transform is
     /// not applied).
     fn vertex_transforms(
         &mut self,
@@ -1321,7 +1321,7 @@ impl Importer<'_, '_> {
         else {
             return Ok(mikktspace_tangents(positions, normals, uvs, triangles));
         };
-        // Morph targets displace the tangent's xyz (§3.7.2.2); w stays.
+        // Morph targets displace the tangent's xyz (glTF section 3.7.2.2); w stays.
         let mut xyz: Vec<[f32; 3]> = tangents.iter().map(|t| [t[0], t[1], t[2]]).collect();
         for (k, target) in primitive.morph_targets().enumerate() {
             let weight = frame.weights.get(k).copied().unwrap_or(0.0);
