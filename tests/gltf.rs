@@ -406,6 +406,80 @@ fn specular_textures_scale_the_dielectric_reflectance_texel_by_texel() {
     assert!((right.f90 - 0.8 * alpha).abs() < 1e-6, "right f90 {}", right.f90);
 }
 
+/// KHR_texture_transform's rotation and scale, each with a known answer on
+/// a 4 x 4 texture of distinct texels (nearest filter, repeat): the
+/// extension's own example (offset [0, 1], rotation pi/2, scale 0.5: "only
+/// the lower left quadrant of the source image, rotated clockwise 90
+/// degrees", so the image's top left shows the quadrant's bottom left and
+/// its top right the quadrant's top left), a rotation alone, and scales
+/// alone (glTF's uv (0, 0) is the image's top left).
+#[test]
+fn texture_transform_rotation_and_scale_follow_the_extension() {
+    let dir = TempDir::new("gltf-texture-transform");
+    // Texel (column c, row r) has red c / 4 and green r / 4, linear
+    // (the texture is a base colour, sRGB: the values are chosen so that
+    // they decode to distinct levels).
+    let levels = [0u8, 96, 176, 255];
+    let mut texels = Vec::new();
+    for r in 0..4 {
+        for c in 0..4 {
+            texels.extend_from_slice(&[levels[c], levels[r], 0]);
+        }
+    }
+    let texel_at = |scene: &Scene, u: f32, v: f32| {
+        let rgb = scene.materials[scene.meshes[0].material].albedo_at(&[glam::Vec2::new(u, v); 2], &scene.textures);
+        let level = |x: f32| {
+            levels.iter().position(|&l| (lightcuts::util::color::srgb_to_linear(f32::from(l) / 255.0) - x).abs() < 1e-4)
+        };
+        (level(rgb.x).expect("a texel's red"), level(rgb.y).expect("a texel's green"))
+    };
+    let scene_with = |name: &str, transform: serde_json::Value| {
+        let mut g = floor_and_point_light();
+        let texture = g.png_texture(4, 4, &texels);
+        g.json["samplers"] = json!([{ "magFilter": 9728 }]);
+        g.json["textures"][texture]["sampler"] = json!(0);
+        g.use_extension("KHR_texture_transform");
+        g.json["materials"][0]["pbrMetallicRoughness"]["baseColorFactor"] = json!([1.0, 1.0, 1.0, 1.0]);
+        g.json["materials"][0]["pbrMetallicRoughness"]["baseColorTexture"] =
+            json!({ "index": texture, "extensions": { "KHR_texture_transform": transform } });
+        load(&dir, name, &g.embedded())
+    };
+    // (name, transform, [(u, v) on the surface, (column, row) of the texel shown]).
+    let quarter = std::f32::consts::FRAC_PI_2;
+    type Shown = [((f32, f32), (usize, usize)); 4];
+    let cases: [(&str, serde_json::Value, Shown); 4] = [
+        (
+            "example",
+            json!({ "offset": [0.0, 1.0], "rotation": quarter, "scale": [0.5, 0.5] }),
+            [((0.1, 0.1), (0, 3)), ((0.9, 0.1), (0, 2)), ((0.1, 0.9), (1, 3)), ((0.9, 0.9), (1, 2))],
+        ),
+        // A quarter turn alone about the origin, back into [0, 1] by the offset:
+        // (u, v) -> (v, 1 - u).
+        (
+            "rotation",
+            json!({ "offset": [0.0, 1.0], "rotation": quarter }),
+            [((0.1, 0.1), (0, 3)), ((0.9, 0.1), (0, 0)), ((0.1, 0.9), (3, 3)), ((0.6, 0.3), (1, 1))],
+        ),
+        (
+            "half",
+            json!({ "scale": [0.5, 0.5] }),
+            [((0.1, 0.1), (0, 0)), ((0.9, 0.9), (1, 1)), ((0.9, 0.1), (1, 0)), ((0.3, 0.7), (0, 1))],
+        ),
+        // Twice as many repeats across u: u = 0.6 reads 1.2, which repeats to 0.2.
+        (
+            "double",
+            json!({ "scale": [2.0, 1.0] }),
+            [((0.6, 0.1), (0, 0)), ((0.4, 0.1), (3, 0)), ((0.1, 0.9), (0, 3)), ((0.9, 0.6), (3, 2))],
+        ),
+    ];
+    for (name, transform, expected) in cases {
+        let scene = scene_with(&format!("{name}.gltf"), transform);
+        for ((u, v), texel) in expected {
+            assert_eq!(texel_at(&scene, u, v), texel, "{name}: the texel at uv ({u}, {v})");
+        }
+    }
+}
+
 /// A normal texture's KHR_texture_transform (which the `gltf` crate does
 /// not model on normal textures) is read as on every other texture; a
 /// malformed one is an error that names it.

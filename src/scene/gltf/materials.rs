@@ -1,0 +1,323 @@
+//! A glTF material as the renderer's: the metallic-roughness BRDF's
+//! factors and textures (base colour, metallic-roughness, normal),
+//! KHR_materials_specular, emission (KHR_materials_emissive_strength), alpha
+//! modes, and each texture's sampler and KHR_texture_transform
+//! (docs/design.md §5.3; docs/scene-format.md tabulates the mapping).
+
+use glam::{Affine2, Mat2, Vec2, Vec3, Vec4};
+use gltf::texture::{MagFilter, WrappingMode};
+
+use super::Importer;
+use crate::scene::image::{Encoding, RgbImage};
+use crate::scene::material::{Albedo, Cutout, Material, NormalMap, PbrMaterial, TextureRef};
+use crate::scene::texture::{Filter, Texture, Wrap};
+use crate::scene::SceneError;
+
+/// KHR_materials_specular's factor and colour, and the textures that
+/// multiply them.
+struct Specular {
+    factor: f32,
+    colour: Vec3,
+    texture: Option<TextureRef>,
+    colour_texture: Option<TextureRef>,
+}
+
+impl Importer<'_, '_> {
+    /// The scene's material for a glTF material, made once.
+    pub(super) fn material(&mut self, m: gltf::Material<'_>) -> Result<usize, SceneError> {
+        if let Some(&index) = self.materials.get(&m.index()) {
+            return Ok(index);
+        }
+        let location = m.index().map_or("materials (default)".to_string(), |i| format!("materials[{i}]"));
+        let pbr = m.pbr_metallic_roughness();
+        let base = Vec4::from_array(pbr.base_color_factor());
+        let metallic = pbr.metallic_factor();
+        let roughness = pbr.roughness_factor();
+        for (name, value) in
+            [("baseColorFactor", base.min_element()), ("metallicFactor", metallic), ("roughnessFactor", roughness)]
+        {
+            let max = if name == "baseColorFactor" { base.max_element() } else { value };
+            if !(value.is_finite() && max.is_finite() && value >= 0.0 && max <= 1.0) {
+                return Err(self.error(format!("{location}.pbrMetallicRoughness.{name}"), "must be between 0 and 1"));
+            }
+        }
+        let base_rgb = base.truncate();
+        let Specular {
+            factor: specular,
+            colour: specular_colour,
+            texture: specular_texture,
+            colour_texture: specular_colour_texture,
+        } = self.specular(&m, &location)?;
+        let mut coverage = None;
+        let albedo = match pbr.base_color_texture() {
+            None => Albedo::Constant(base_rgb),
+            Some(info) => {
+                let at = format!("{location}.pbrMetallicRoughness.baseColorTexture");
+                let (texture, image) = self.texture(Slot::of(&info), &at, Encoding::Srgb, |t, _| t * base_rgb)?;
+                coverage = image.alpha.as_ref().map(|a| {
+                    (a.iter().map(|x| x * base.w).collect::<Vec<f32>>(), image.width, image.height, texture.transform)
+                });
+                Albedo::Texture(texture)
+            }
+        };
+        let metallic_roughness = match pbr.metallic_roughness_texture() {
+            None => None,
+            Some(info) => {
+                let at = format!("{location}.pbrMetallicRoughness.metallicRoughnessTexture");
+                Some(self.texture(Slot::of(&info), &at, Encoding::Linear, |t, _| t)?.0)
+            }
+        };
+        let normal_map = match m.normal_texture() {
+            None => None,
+            Some(info) => {
+                let at = format!("{location}.normalTexture");
+                if !info.scale().is_finite() {
+                    return Err(self.error(format!("{at}.scale"), "must be finite"));
+                }
+                let slot =
+                    Slot::of_normal(&info).map_err(|e| self.error(format!("{at}.extensions.{e}"), "is malformed"))?;
+                let (t, _) = self.texture(slot, &at, Encoding::Linear, |t, _| t)?;
+                Some(NormalMap { texture: t.texture, transform: t.transform, scale: info.scale(), set: t.set })
+            }
+        };
+        let cutoff = match m.alpha_mode() {
+            gltf::material::AlphaMode::Opaque => None,
+            gltf::material::AlphaMode::Mask => Some(m.alpha_cutoff().unwrap_or(0.5)),
+            gltf::material::AlphaMode::Blend => {
+                self.warn(&location, "alphaMode BLEND rendered as MASK with a cutoff of 0.5 (no partial transparency)");
+                Some(0.5)
+            }
+        };
+        if cutoff.is_some_and(|c| !c.is_finite()) {
+            return Err(self.error(format!("{location}.alphaCutoff"), "must be finite"));
+        }
+        // Only a mask that removes something costs Embree a filter call.
+        let cutout = cutoff.and_then(|cutoff| {
+            let (alpha, width, height, transform) = coverage.unwrap_or_else(|| (vec![base.w], 1, 1, Affine2::IDENTITY));
+            alpha.iter().any(|&a| a < cutoff).then_some(Cutout {
+                alpha,
+                width: width as u32,
+                height: height as u32,
+                transform,
+                cutoff,
+            })
+        });
+        let (emission, emissive_texture) = self.emission(&m, &location)?;
+        let index = self.parts.materials.len();
+        let name = m.name().map_or_else(|| location.clone(), str::to_string);
+        self.parts.materials.push(Material {
+            emission,
+            emissive_texture,
+            emits_both_sides: m.double_sided(),
+            cutout,
+            pbr: Some(PbrMaterial {
+                metallic,
+                roughness,
+                specular,
+                specular_colour,
+                metallic_roughness,
+                specular_texture,
+                specular_colour_texture,
+                normal_map,
+            }),
+            unlit: m.unlit(),
+            culls_back_faces: !m.double_sided(),
+            ..Material::diffuse(name, albedo)
+        });
+        self.materials.insert(m.index(), index);
+        Ok(index)
+    }
+
+    /// KHR_materials_specular's factor, colour and their textures (1,
+    /// white and none without the extension): the dielectric's reflectance
+    /// at normal incidence is 0.04 (IOR 1.5) times the colour, times the
+    /// factor.
+    fn specular(&mut self, m: &gltf::Material<'_>, location: &str) -> Result<Specular, SceneError> {
+        let (specular, specular_colour) = m
+            .specular()
+            .map_or((1.0, Vec3::ONE), |s| (s.specular_factor(), Vec3::from_array(s.specular_color_factor())));
+        if !(specular.is_finite()
+            && specular_colour.is_finite()
+            && specular >= 0.0
+            && specular_colour.min_element() >= 0.0)
+        {
+            return Err(self.error(format!("{location}.extensions.KHR_materials_specular"), "must be finite and >= 0"));
+        }
+        let at = format!("{location}.extensions.KHR_materials_specular");
+        // The extension's schema caps the factor at 1: above it the
+        // diffuse weight 1 - max(F) would be negative.
+        let specular = if specular > 1.0 {
+            self.warn(&format!("{at}.specularFactor"), &format!("{specular} clamped to 1, the extension's maximum"));
+            1.0
+        } else {
+            specular
+        };
+        let specular_texture = match m.specular().and_then(|s| s.specular_texture()) {
+            None => None,
+            // The factor is the texture's alpha channel (linear).
+            Some(info) => Some(
+                self.texture(Slot::of(&info), &format!("{at}.specularTexture"), Encoding::Linear, |_, a| {
+                    Vec3::splat(a)
+                })?
+                .0,
+            ),
+        };
+        let specular_colour_texture = match m.specular().and_then(|s| s.specular_color_texture()) {
+            None => None,
+            Some(info) => {
+                Some(self.texture(Slot::of(&info), &format!("{at}.specularColorTexture"), Encoding::Srgb, |t, _| t)?.0)
+            }
+        };
+        Ok(Specular {
+            factor: specular,
+            colour: specular_colour,
+            texture: specular_texture,
+            colour_texture: specular_colour_texture,
+        })
+    }
+
+    /// The emitted radiance (emissiveFactor x KHR_materials_emissive_strength,
+    /// W/(m^2 sr)) and the emissive texture multiplying it.
+    pub(super) fn emission(
+        &mut self,
+        m: &gltf::Material<'_>,
+        location: &str,
+    ) -> Result<(Vec3, Option<TextureRef>), SceneError> {
+        let strength = m.emissive_strength().unwrap_or(1.0);
+        let emission = Vec3::from_array(m.emissive_factor()) * strength;
+        if !emission.is_finite() || emission.min_element() < 0.0 {
+            return Err(self.error(
+                format!("{location}.emissiveFactor"),
+                format!("emission must be finite and >= 0, got {emission}"),
+            ));
+        }
+        let emissive_texture = match m.emissive_texture() {
+            Some(info) if emission != Vec3::ZERO => {
+                let at = format!("{location}.emissiveTexture");
+                Some(self.texture(Slot::of(&info), &at, Encoding::Srgb, |t, _| t)?.0)
+            }
+            // A texture times a zero factor emits nothing: not read.
+            _ => None,
+        };
+        Ok((emission, emissive_texture))
+    }
+    /// A texture of the file as the renderer's: its image decoded as
+    /// `encoding` says and mapped texel by texel through `map` (colour and
+    /// alpha, 1 where the image has none), read with its sampler's wrap
+    /// modes and magnification filter, through the slot's texture
+    /// coordinates and KHR_texture_transform. Returns the reference and the
+    /// decoded image.
+    pub(super) fn texture(
+        &mut self,
+        slot: Slot<'_>,
+        at: &str,
+        encoding: Encoding,
+        map: impl Fn(Vec3, f32) -> Vec3,
+    ) -> Result<(TextureRef, RgbImage), SceneError> {
+        // KHR_texture_transform's texCoord overrides the texture info's.
+        let tex_coord = slot.transform.and_then(|t| t.tex_coord).unwrap_or(slot.tex_coord);
+        let set = if tex_coord <= 1 {
+            tex_coord as usize
+        } else {
+            self.warn(at, &format!("uses TEXCOORD_{tex_coord}: read with TEXCOORD_0 (sets 0 and 1 are read)"));
+            0
+        };
+        let transform = uv_transform(slot.transform);
+        if !(transform.matrix2.is_finite() && transform.translation.is_finite()) {
+            return Err(self.error(format!("{at}.extensions.KHR_texture_transform"), "must be finite"));
+        }
+        let texture = slot.texture;
+        let image = self.data.image(&texture.source(), at, encoding)?;
+        let sampler = texture.sampler();
+        let wrap = |mode: WrappingMode| match mode {
+            WrappingMode::Repeat => Wrap::Repeat,
+            WrappingMode::ClampToEdge => Wrap::ClampToEdge,
+            WrappingMode::MirroredRepeat => Wrap::MirroredRepeat,
+        };
+        let filter = match sampler.mag_filter() {
+            Some(MagFilter::Nearest) => Filter::Nearest,
+            Some(MagFilter::Linear) | None => Filter::Linear,
+        };
+        let texels = match &image.alpha {
+            Some(alpha) => image.texels.iter().zip(alpha).map(|(t, a)| map(*t, *a)).collect(),
+            None => image.texels.iter().map(|t| map(*t, 1.0)).collect(),
+        };
+        let texture = Texture::from_texels(image.width, image.height, texels)
+            .with_sampler([wrap(sampler.wrap_s()), wrap(sampler.wrap_t())], filter);
+        self.parts.textures.push(texture);
+        Ok((TextureRef { texture: self.parts.textures.len() - 1, transform, set }, image))
+    }
+}
+
+/// The map from a mesh's glTF uv to `Texture::lookup`'s: KHR_texture_transform
+/// (translation x rotation x scale, as the extension defines it), then v
+/// flipped (glTF's v = 0 is the image's top row, the lookup's its bottom).
+pub(super) fn uv_transform(transform: Option<KhrTextureTransform>) -> Affine2 {
+    let flip = Affine2::from_mat2_translation(Mat2::from_diagonal(Vec2::new(1.0, -1.0)), Vec2::new(0.0, 1.0));
+    let Some(t) = transform else { return flip };
+    let (sin, cos) = t.rotation.sin_cos();
+    let rotation = Mat2::from_cols(Vec2::new(cos, -sin), Vec2::new(sin, cos));
+    let khr = Affine2::from_mat2_translation(
+        rotation * Mat2::from_diagonal(Vec2::from_array(t.scale)),
+        Vec2::from_array(t.offset),
+    );
+    flip * khr
+}
+
+/// KHR_texture_transform's fields (the extension's defaults where absent).
+#[derive(Debug, Clone, Copy)]
+pub(super) struct KhrTextureTransform {
+    offset: [f32; 2],
+    rotation: f32,
+    scale: [f32; 2],
+    tex_coord: Option<u32>,
+}
+
+impl KhrTextureTransform {
+    #[cfg(test)]
+    pub(super) fn new(offset: [f32; 2], rotation: f32, scale: [f32; 2]) -> Self {
+        Self { offset, rotation, scale, tex_coord: None }
+    }
+}
+
+impl From<&gltf::json::extensions::texture::TextureTransform> for KhrTextureTransform {
+    fn from(t: &gltf::json::extensions::texture::TextureTransform) -> Self {
+        Self { offset: t.offset.0, rotation: t.rotation.0, scale: t.scale.0, tex_coord: t.tex_coord }
+    }
+}
+
+/// Where a material reads a texture: the texture, its `texCoord`, and its
+/// KHR_texture_transform.
+pub(super) struct Slot<'a> {
+    texture: gltf::Texture<'a>,
+    tex_coord: u32,
+    transform: Option<KhrTextureTransform>,
+}
+
+impl<'a> Slot<'a> {
+    fn of(info: &gltf::texture::Info<'a>) -> Self {
+        let transform = info.texture_transform().map(|t| KhrTextureTransform {
+            offset: t.offset(),
+            rotation: t.rotation(),
+            scale: t.scale(),
+            tex_coord: t.tex_coord(),
+        });
+        Self { texture: info.texture(), tex_coord: info.tex_coord(), transform }
+    }
+
+    /// A normal texture's slot: the `gltf` crate models no transform on
+    /// it, so the extension's JSON is read here. Err names the extension
+    /// when its JSON is malformed.
+    fn of_normal(info: &gltf::material::NormalTexture<'a>) -> Result<Self, &'static str> {
+        const KHR: &str = "KHR_texture_transform";
+        let transform = match info.extension_value(KHR) {
+            None => None,
+            Some(value) => {
+                let t: gltf::json::extensions::texture::TextureTransform =
+                    serde_json::from_value(value.clone()).map_err(|_| KHR)?;
+                Some(KhrTextureTransform::from(&t))
+            }
+        };
+        Ok(Self { texture: info.texture(), tex_coord: info.tex_coord(), transform })
+    }
+}
