@@ -59,11 +59,7 @@ fn render(dir: &TempDir, name: &str, extra: &[&str]) -> ExrImage {
     if !scene.exists() {
         dir.write("spheres.toml", &spheres_scene());
     }
-    let out = dir.path(name);
-    let args =
-        [&["render", s(&scene), "-o", s(&out), "-q", "--exact", "--spp", "16", "--cryptomatte"][..], extra].concat();
-    lightcuts_ok(&args);
-    read_exr(&out).unwrap()
+    common::render(&scene, &dir.path(name), &[&["--exact", "--spp", "16", "--cryptomatte"][..], extra].concat())
 }
 
 /// The object matte of `name`: the coverages of the ranks holding its ID
@@ -80,12 +76,6 @@ fn matte(image: &ExrImage, name: &str) -> Vec<f32> {
                 .sum()
         })
         .collect()
-}
-
-/// A point through Imath's row-vector matrix `m` (16 floats row by row, as
-/// the file stores it), divided by w: p' = [x y z 1] M.
-fn channel<'a>(image: &'a ExrImage, name: &str) -> &'a [f32] {
-    &image.channels[name]
 }
 
 fn project(m: &[f32; 16], p: [f32; 3]) -> [f32; 3] {

@@ -5,7 +5,7 @@
 
 mod common;
 
-use common::{lightcuts, lightcuts_fails, lightcuts_ok, read_exr, s, ExrImage, TempDir};
+use common::{channel, lightcuts, lightcuts_fails, lightcuts_ok, read_exr, s, ExrImage, TempDir};
 use lightcuts::render::cryptomatte::{id_of, CryptoType};
 
 /// A floor and a wall under a bright warm key (a point light), a dim cool
@@ -75,15 +75,7 @@ fn render(dir: &TempDir, name: &str, extra: &[&str]) -> ExrImage {
     if !scene.exists() {
         dir.write("groups.toml", SCENE);
     }
-    let out = dir.path(name);
-    let mut args = vec!["render", s(&scene), "-o", s(&out), "-q"];
-    args.extend_from_slice(extra);
-    lightcuts_ok(&args);
-    read_exr(&out).unwrap()
-}
-
-fn channel<'a>(image: &'a ExrImage, name: &str) -> &'a [f32] {
-    image.channels.get(name).unwrap_or_else(|| panic!("no channel {name}"))
+    common::render(&scene, &dir.path(name), extra)
 }
 
 /// Largest |sum of the group layers - beauty| relative to the beauty's

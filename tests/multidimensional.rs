@@ -6,12 +6,6 @@
 mod common;
 use common::*;
 
-fn mean_error(test: &std::path::Path, reference: &std::path::Path) -> f64 {
-    let out = lightcuts_ok(&["compare", s(test), s(reference), "--json"]);
-    let c: serde_json::Value = serde_json::from_str(&out).unwrap();
-    c["mean_relative_error"].as_f64().unwrap()
-}
-
 /// The small scene through a thin lens focused on the front sphere, with a
 /// mirror sphere so that gather points also come from mirror paths.
 fn lens_scene(lights_per_side: u32) -> String {

@@ -52,23 +52,16 @@ fn grid(scale: f64, n: u32, intensity: f64) -> String {
     )
 }
 
-fn render(dir: &TempDir, name: &str, text: &str, extra: &[&str]) -> ExrImage {
+fn render_text(dir: &TempDir, name: &str, text: &str, extra: &[&str]) -> ExrImage {
     render_at(dir, name, text, extra).1
 }
 
 /// Renders `text` with `extra` flags; the output's path and image, every
-/// value of which is checked finite.
+/// value of which is checked finite (and counted so by the summary).
 fn render_at(dir: &TempDir, name: &str, text: &str, extra: &[&str]) -> (std::path::PathBuf, ExrImage) {
     let scene = dir.write(&format!("{name}.toml"), text);
     let out = dir.path(&format!("{name}.exr"));
-    let mut args = vec!["render", s(&scene), "-o", s(&out), "--quiet"];
-    args.extend_from_slice(extra);
-    let stdout = lightcuts_ok(&args);
-    assert_no_value_was_non_finite(&stdout);
-    let image = read_exr(&out).unwrap();
-    for (channel, values) in &image.channels {
-        assert!(values.iter().all(|v| v.is_finite()), "{name} {extra:?}: channel {channel} has NaN or Inf");
-    }
+    let image = common::render(&scene, &out, extra);
     (out, image)
 }
 
@@ -96,12 +89,12 @@ fn a_hundred_thousand_lights_at_one_point() {
     let dir = TempDir::new("one-point");
     let lights = "[[lights]]\ntype = \"grid\"\ncorner = [0.5, 2, 0.5]\nu = [0, 0, 0]\nv = [0, 0, 0]\ncount = [400, 250]\nintensity = [1e-5, 1e-5, 1e-5]\n[[lights]]\ntype = \"point\"\nposition = [0.5, 2, 0.5]\nintensity = [0, 0, 0]\n";
     // Exact on a small window (100,000 shadow rays per pixel).
-    let ex = render(&dir, "ex", &scene(1.0, lights), &["--exact", "--pixel-bounds", "18,22,20,24"]);
+    let ex = render_text(&dir, "ex", &scene(1.0, lights), &["--exact", "--pixel-bounds", "18,22,20,24"]);
     // Both cut modes: the coincident cluster is exact (its representative
     // stands for all, drawn with probability 1), so the cut stays tiny and
     // the pixels are the exact ones.
     for mode in ["--bounded", "--stochastic", "--multidimensional"] {
-        let lc = render(&dir, "lc", &scene(1.0, lights), &[mode]);
+        let lc = render_text(&dir, "lc", &scene(1.0, lights), &[mode]);
         assert!(lc.channels["lightcuts.cut_size"].iter().all(|&c| c <= 2.0), "{mode}");
         let lcl = luminance(&lc);
         for (i, l) in luminance(&ex).iter().enumerate() {
@@ -122,10 +115,10 @@ fn a_light_on_a_surface_and_shading_points_at_a_light() {
         "{}[[lights]]\ntype = \"point\"\nposition = [0, 0, 2]\nintensity = [5, 5, 5]\n[[lights]]\ntype = \"point\"\nposition = [0, 1.6, 0]\nintensity = [5, 5, 5]\n",
         grid(1.0, 16, 0.01)
     );
-    let exact = render(&dir, "exact", &scene(1.0, &lights), &["--exact"]);
+    let exact = render_text(&dir, "exact", &scene(1.0, &lights), &["--exact"]);
     assert!(luminance(&exact).iter().any(|&l| l > 0.0));
     for (mode, within) in [("--bounded", 0.02), ("--stochastic", 0.1), ("--multidimensional", 0.02)] {
-        let image = render(&dir, "on", &scene(1.0, &lights), &[mode]);
+        let image = render_text(&dir, "on", &scene(1.0, &lights), &[mode]);
         let error = mean_relative_error(&image, &exact);
         assert!(error < within, "{mode}: mean error {error} against the exact render");
     }
@@ -135,7 +128,7 @@ fn a_light_on_a_surface_and_shading_points_at_a_light() {
 fn no_lights_is_a_black_image_and_one_light_at_the_centre_gives_the_answer() {
     let dir = TempDir::new("few");
     for mode in MODES {
-        let black = render(&dir, "none", &scene(1.0, ""), mode);
+        let black = render_text(&dir, "none", &scene(1.0, ""), mode);
         assert!(luminance(&black).iter().all(|&l| l == 0.0));
         assert!(black.channels["A"].contains(&1.0), "geometry is still there");
         let one = "[[lights]]\ntype = \"point\"\nposition = [0, 0, 0]\nintensity = [1, 2, 3]\n";
@@ -148,10 +141,10 @@ fn no_lights_is_a_black_image_and_one_light_at_the_centre_gives_the_answer() {
 fn scaling_intensities_by_k_scales_the_image_by_k() {
     let dir = TempDir::new("scale-k");
     for mode in MODES {
-        let a = luminance(&render(&dir, "a", &scene(1.0, &grid(1.0, 16, 0.01)), mode));
+        let a = luminance(&render_text(&dir, "a", &scene(1.0, &grid(1.0, 16, 0.01)), mode));
         // A power of two: every product scales exactly, and the cut (which
         // compares ratios) is the same.
-        let b = luminance(&render(&dir, "b", &scene(1.0, &grid(1.0, 16, 0.01 * 1024.0)), mode));
+        let b = luminance(&render_text(&dir, "b", &scene(1.0, &grid(1.0, 16, 0.01 * 1024.0)), mode));
         for (x, y) in a.iter().zip(&b) {
             assert!((x * 1024.0 - y).abs() <= 1e-5 * y.abs(), "{mode:?}: {x} * 1024 vs {y}");
         }
@@ -162,13 +155,13 @@ fn scaling_intensities_by_k_scales_the_image_by_k() {
 fn scaling_the_scene_and_intensities_together_leaves_the_image_unchanged() {
     let dir = TempDir::new("scale-scene");
     for mode in MODES {
-        let reference = luminance(&render(&dir, "one", &scene(1.0, &grid(1.0, 16, 0.01)), mode));
+        let reference = luminance(&render_text(&dir, "one", &scene(1.0, &grid(1.0, 16, 0.01)), mode));
         // Radiance from a point light goes as I / d^2: scale lengths by s and
         // intensities by s^2. Scales of about 1e-4 and 1e6 metres, as powers
         // of two (2^-13, 2^20) so that every coordinate scales exactly and
         // both modes see the same numbers up to exponent.
         for s in [2f64.powi(-13), 2f64.powi(20)] {
-            let image = luminance(&render(&dir, "scaled", &scene(s, &grid(s, 16, 0.01 * s * s)), mode));
+            let image = luminance(&render_text(&dir, "scaled", &scene(s, &grid(s, 16, 0.01 * s * s)), mode));
             let mean: f64 = reference.iter().sum::<f64>() / reference.len() as f64;
             let mut worst = 0.0f64;
             for (a, b) in reference.iter().zip(&image) {
@@ -192,7 +185,7 @@ fn degenerate_and_zero_area_triangles_render() {
         scene(1.0, &grid(1.0, 16, 0.01))
     );
     for mode in MODES {
-        render(&dir, "deg", &text, mode);
+        render_text(&dir, "deg", &text, mode);
     }
 }
 
@@ -200,10 +193,10 @@ fn degenerate_and_zero_area_triangles_render() {
 fn error_and_cut_extremes_terminate_with_finite_images() {
     let dir = TempDir::new("cut-extremes");
     let text = scene(1.0, &grid(1.0, 16, 0.01));
-    let exact = render(&dir, "exact", &text, &["--exact"]);
+    let exact = render_text(&dir, "exact", &text, &["--exact"]);
     for mode in ["--bounded", "--stochastic", "--multidimensional"] {
         for args in [&["--error", "0"][..], &["--error", "1"], &["--max-cut", "1"], &["--error", "1e9"]] {
-            let image = render(&dir, "cut", &text, &[&[mode][..], args].concat());
+            let image = render_text(&dir, "cut", &text, &[&[mode][..], args].concat());
             assert!(luminance(&image).iter().any(|&l| l > 0.0), "{mode} {args:?}");
             if args == ["--error", "0"] && mode != "--stochastic" {
                 // Every cluster split: the exact render.
@@ -218,7 +211,7 @@ fn a_camera_inside_geometry() {
     let dir = TempDir::new("inside");
     let text = scene_seen_from([0.1, 0.6, 0.2], 1.0, &grid(1.0, 16, 0.01));
     for mode in MODES {
-        let image = render(&dir, "inside", &text, mode);
+        let image = render_text(&dir, "inside", &text, mode);
         assert!(image.channels["A"].iter().all(|&a| a == 1.0), "every ray hits the inside of the sphere");
     }
 }

@@ -5,12 +5,6 @@
 mod common;
 use common::*;
 
-fn mean_error(test: &std::path::Path, reference: &std::path::Path) -> f64 {
-    let out = lightcuts_ok(&["compare", s(test), s(reference), "--json"]);
-    let c: serde_json::Value = serde_json::from_str(&out).unwrap();
-    c["mean_relative_error"].as_f64().unwrap()
-}
-
 #[test]
 fn stochastic_images_are_identical_for_any_thread_count_and_window() {
     let dir = TempDir::new("st-threads");

@@ -69,6 +69,32 @@ pub fn assert_no_value_was_non_finite(stdout: &str) {
     assert!(line.split_whitespace().nth(1) == Some("0"), "NaN or Inf reached the film: {line}");
 }
 
+/// Renders `scene` to `out` with `flags` (on top of `--quiet`), asserts
+/// that it succeeded, that its summary counts no value that was NaN or
+/// infinite and that every value of the EXR is finite, and reads it.
+pub fn render(scene: &Path, out: &Path, flags: &[&str]) -> ExrImage {
+    let stdout = lightcuts_ok(&[&["render", s(scene), "-o", s(out), "--quiet"][..], flags].concat());
+    assert_no_value_was_non_finite(&stdout);
+    let image = read_exr(out).unwrap();
+    for (channel, values) in &image.channels {
+        assert!(values.iter().all(|v| v.is_finite()), "{} {flags:?}: channel {channel} has NaN or Inf", out.display());
+    }
+    image
+}
+
+/// The named channel of `image`; a panic naming it when there is none.
+pub fn channel<'a>(image: &'a ExrImage, name: &str) -> &'a [f32] {
+    image.channels.get(name).unwrap_or_else(|| panic!("no channel {name}: {:?}", image.channels.keys()))
+}
+
+/// The mean relative error of `test` against `reference`, by `lightcuts
+/// compare` (the figure the README's tables give).
+pub fn mean_error(test: &Path, reference: &Path) -> f64 {
+    let out = lightcuts_ok(&["compare", s(test), s(reference), "--json"]);
+    let c: serde_json::Value = serde_json::from_str(&out).unwrap();
+    c["mean_relative_error"].as_f64().unwrap()
+}
+
 pub fn s(path: &Path) -> &str {
     path.to_str().unwrap()
 }
