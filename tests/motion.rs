@@ -275,6 +275,51 @@ fn a_gltf_animation_blurs_over_the_shutter_the_command_line_opens() {
     assert!(!bad.exists());
 }
 
+/// An instant (`--shutter T,T`) renders the animation's pose at T, sharp:
+/// the quad 3 T / 2 m along; the summary names the animation and the
+/// instant (or the interval it blurs over). A shutter beyond the
+/// animation's keys (frames typed as seconds) is warned about with their
+/// range; an animation the file lacks is an error with or without a
+/// shutter, and one named without a shutter is not played, with a warning.
+#[test]
+fn a_gltf_animation_at_an_instant_is_its_pose_then() {
+    let dir = TempDir::new("gltf-instant");
+    let file = dir.write("anim.gltf", &animated_quad().embedded());
+    let out = dir.path("a.exr");
+    let render = |more: &[&str]| {
+        let args = [&["render", s(&file), "-o", s(&out), "--exact", "--resolution", "96x8", "--spp", "9"][..], more];
+        let output = lightcuts(&args.concat());
+        assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
+        let text = |b: &[u8]| String::from_utf8_lossy(b).into_owned();
+        (column_means(&read_exr(&out).unwrap().channels["A"], 96), text(&output.stdout), text(&output.stderr))
+    };
+    for (time, offset) in [("0.5", 0.75), ("1", 1.5), ("2", 3.0)] {
+        let (alpha, stdout, stderr) = render(&["--shutter", &format!("{time},{time}")]);
+        // Sharp at the pose: 1 where the quad is, 0 elsewhere (columns
+        // near an edge left out: a pixel there is partly covered).
+        for (column, &a) in alpha.iter().enumerate() {
+            let x = column_x(column, 96) - offset;
+            if (x + 3.0).abs() > 0.2 && (x + 2.0).abs() > 0.2 {
+                assert_eq!(a, if (-3.0..-2.0).contains(&x) { 1.0 } else { 0.0 }, "at {time} s, column {column}");
+            }
+        }
+        assert!(stdout.contains(&format!("animation        'slide' posed at {time} s")), "{stdout}");
+        assert!(!stderr.contains("not within"), "{stderr}");
+    }
+    let (_, stdout, _) = render(&["--shutter", "0.5,1"]);
+    assert!(stdout.contains("animation        'slide' over 0.5 to 1 s"), "{stdout}");
+    // Frames typed as seconds: the animation's keys end at 2 s.
+    let (_, _, stderr) = render(&["--shutter", "6,8"]);
+    assert!(stderr.contains("the shutter 6,8 s is not within animation 'slide''s keys, 0 to 2 s"), "{stderr}");
+    let (_, stdout, stderr) = render(&["--animation", "slide"]);
+    assert!(stderr.contains("'slide' is not played: give a shutter"), "{stderr}");
+    assert!(!stdout.contains("animation "), "{stdout}");
+    let bad = dir.path("bad.exr");
+    let stderr = lightcuts_fails(&["render", s(&file), "-o", s(&bad), "--animation", "NoSuchName"]);
+    assert!(stderr.contains("no animation named 'NoSuchName'") && stderr.contains("slide"), "{stderr}");
+    assert!(!bad.exists());
+}
+
 #[test]
 fn hostile_animations_are_errors_naming_the_field_never_panics() {
     let dir = TempDir::new("gltf-hostile-animation");

@@ -235,11 +235,17 @@ pub struct PassArgs {
     pub lumens_per_watt: Option<f32>,
     /// Open the shutter from OPEN to CLOSE seconds (overrides the scene's
     /// [camera] shutter): what moves blurs, and a glTF file's animation is
-    /// played over it (its node transforms sampled at 33 times).
+    /// played over it (its node transforms sampled at 33 times). OPEN =
+    /// CLOSE renders the animation's pose at that instant, sharp. Times
+    /// are the file's seconds: Blender's glTF exporter writes frame f at f
+    /// / fps seconds, so frame 6 of a 24 fps animation is --shutter
+    /// 0.25,0.25, and the shutter of frame 6 (half a frame, centred) is
+    /// --shutter 0.2396,0.2604.
     #[arg(long, value_name = "OPEN,CLOSE", value_parser = parse_shutter, allow_hyphen_values = true)]
     pub shutter: Option<[f32; 2]>,
     /// The glTF file's animation to play over the shutter, by name (its
-    /// first otherwise).
+    /// first otherwise). A name the file lacks is an error; without a
+    /// shutter the animation is not played (a warning says so).
     #[arg(long, value_name = "NAME")]
     pub animation: Option<String>,
 }

@@ -105,6 +105,11 @@ fn print_summary(scene: &Scene, settings: &PassSettings, mode: Mode, result: &Pa
         settings.spp
     );
     println!("  mode             {}", mode.describe());
+    if let Some(played) = &scene.animation {
+        let [open, close] = played.shutter;
+        let when = if open < close { format!("over {open} to {close} s") } else { format!("posed at {open} s") };
+        println!("  animation        '{}' {when}", played.name);
+    }
     for (group, kind, lights, time) in trees {
         let group = group.as_ref().map_or_else(String::new, |g| format!("{g}: "));
         println!("  tree build       {group}{} {lights} lights in {:.3} s", kind.name(), time.as_secs_f64());

@@ -126,6 +126,8 @@ pub struct Scene {
     /// of the scene's hash, so that a farm's tiles rendered with different
     /// additions are not assembled together.
     pub additions: Vec<String>,
+    /// The glTF animation the scene plays, and over which shutter.
+    pub animation: Option<gltf::PlayedAnimation>,
 }
 
 /// Film width of a glTF file rendered without a TOML, pixels.

@@ -75,6 +75,8 @@ impl Track {
 /// The tracks of one animation, by (node index, part).
 #[derive(Debug, Clone, Default)]
 pub(super) struct Animation {
+    /// Its name in the file (`#i` when it has none).
+    pub(super) name: String,
     tracks: HashMap<(usize, Part), Track>,
     /// Morph-target weight channels, which are not played.
     pub(super) weight_channels: usize,
@@ -128,7 +130,8 @@ impl Animation {
                 return Err(SceneError::new(file, format!("{at}.path"), message));
             }
         }
-        let mut read = Self::default();
+        let name = animation.name().map_or_else(|| format!("#{}", animation.index()), str::to_string);
+        let mut read = Self { name, ..Self::default() };
         for channel in animation.channels() {
             let sampler = channel.sampler();
             let at = format!("animations[{}].samplers[{}]", animation.index(), sampler.index());
@@ -172,6 +175,15 @@ impl Animation {
             );
         }
         Ok(Some(read))
+    }
+
+    /// The first and the last of its transform channels' key times,
+    /// seconds (None when it has none): outside them every channel holds
+    /// its first or last key.
+    pub(super) fn key_range(&self) -> Option<[f32; 2]> {
+        let first = self.tracks.values().map(|t| t.times[0]).reduce(f32::min)?;
+        let last = self.tracks.values().map(|t| t.times[t.times.len() - 1]).reduce(f32::max)?;
+        Some([first, last])
     }
 
     /// Whether the animation drives node `node`'s transform.

@@ -91,6 +91,17 @@ pub struct Parts<'a> {
     pub light_names: &'a mut Vec<GltfLightNames>,
     pub inputs: &'a mut Vec<PathBuf>,
     pub warnings: &'a mut Vec<String>,
+    /// The animation played, and over which shutter, when one is.
+    pub played: &'a mut Option<PlayedAnimation>,
+}
+
+/// The glTF animation a render plays: its name, and the shutter it is
+/// sampled over (seconds of the file's timeline; open = close: the pose
+/// at that instant).
+#[derive(Debug, Clone, PartialEq)]
+pub struct PlayedAnimation {
+    pub name: String,
+    pub shutter: [f32; 2],
 }
 
 /// A perspective camera found in the file.
@@ -102,9 +113,12 @@ pub struct GltfCamera {
 }
 
 /// Imports `spec.file` (relative to `base`) into `parts`; returns the chosen
-/// camera when `want_camera` (the TOML gives none). With a `shutter` (open
-/// before close, seconds), the file's animation (`spec.animation`, else
-/// its first) is sampled over it: what it moves, moves.
+/// camera when `want_camera` (the TOML gives none). With a `shutter`
+/// (seconds, open <= close), the file's animation (`spec.animation`, else
+/// its first) is sampled over it: what it moves, moves; at an instant (open
+/// = close) everything is posed as the animation has it then. An
+/// animation named without a shutter is checked and not played (a warning
+/// says so).
 pub fn import(
     scene_file: &Path,
     base: &Path,
@@ -136,10 +150,35 @@ pub fn import(
         .map_err(|e| SceneError::new(scene_file, "gltf.file", format!("cannot read '{}': {e}", path.display())))?;
     let gltf = io::parse(&path, &bytes)?;
     let data = io::Data::load(&path, &gltf.document, gltf.blob.as_deref())?;
-    let animation = match shutter {
-        Some(_) => animation::Animation::read(&path, &gltf.document, &data, spec.animation.as_deref())?,
-        None => None,
+    let animation = match (shutter, &spec.animation) {
+        (None, None) => None,
+        // A name is checked whether or not it is played.
+        _ => animation::Animation::read(&path, &gltf.document, &data, spec.animation.as_deref())?,
     };
+    let warn = |parts: &mut Parts<'_>, location: &str, message: String| {
+        parts.warnings.push(format!("{}: {location}: {message}", path.display()));
+    };
+    let mut parts = parts;
+    if let (Some(animation), None) = (&animation, shutter) {
+        let message = format!(
+            "'{}' is not played: give a shutter (--shutter OPEN,CLOSE to blur over it, or T,T for the pose at T seconds)",
+            animation.name
+        );
+        warn(&mut parts, "animations", message);
+    }
+    let animation = shutter.zip(animation);
+    if let Some(([open, close], animation)) = &animation {
+        if let Some([first, last]) = animation.key_range().filter(|[first, last]| *open < *first || *close > *last) {
+            let message = format!(
+                "the shutter {open},{close} s is not within animation '{}''s keys, {first} to {last} s (outside them it \
+                 holds its first or last key): frames typed as seconds? Blender's exporter writes frame f at f / fps \
+                 seconds (frame 6 at 24 fps is 0.25 s)",
+                animation.name
+            );
+            warn(&mut parts, "animations", message);
+        }
+        *parts.played = Some(PlayedAnimation { name: animation.name.clone(), shutter: [*open, *close] });
+    }
     let mut importer = Importer {
         file: &path,
         doc: &gltf.document,
@@ -153,7 +192,7 @@ pub fn import(
         placements: Vec::new(),
         prototypes: HashMap::new(),
         punctual: 0,
-        shutter: shutter.zip(animation),
+        shutter: animation,
         still_moving: 0,
     };
     let camera = importer.import_scene(want_camera)?;

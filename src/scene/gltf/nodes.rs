@@ -93,11 +93,16 @@ impl Importer<'_, '_> {
         let mut visits = self.visit(&scene)?;
         // Over an open shutter: each moving node's world transform at every
         // step, and everything posed as at the shutter's open.
-        let moving = self.shutter_worlds(&visits)?;
+        let mut moving = self.shutter_worlds(&visits)?;
         for visit in &mut visits {
             if let Some(steps) = &moving[visit.node.index()] {
                 visit.world = steps[0];
             }
+        }
+        // At an instant (the shutter's open and close the same) everything
+        // is posed as the animation has it then, and nothing moves.
+        if self.shutter.as_ref().is_some_and(|([open, close], _)| open == close) {
+            moving.fill(None);
         }
         // Every node's world transform first: a skin's joints may come
         // after the mesh they pose.
@@ -389,8 +394,10 @@ impl Importer<'_, '_> {
         for Visit { node, world, .. } in visits {
             rest[node.index()] = *world;
         }
+        // One step for an instant.
+        let steps = if open < close { SHUTTER_STEPS } else { 1 };
         let times: Vec<f32> =
-            (0..SHUTTER_STEPS).map(|k| open + (close - open) * k as f32 / (SHUTTER_STEPS - 1) as f32).collect();
+            (0..steps).map(|k| open + (close - open) * k as f32 / (SHUTTER_STEPS - 1) as f32).collect();
         // Parents come before their children in `visits`.
         for Visit { node, location, .. } in visits {
             let driven = animation.drives(node.index());

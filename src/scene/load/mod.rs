@@ -140,6 +140,7 @@ impl Scene {
             lights::lights(&v, base, &spec, &mut meshes, &mut materials, &mut inputs)?;
         let mut warnings = Vec::new();
         let mut instances = Vec::new();
+        let mut animation = None;
         let gltf_camera = match &spec.gltf {
             None => None,
             Some(g) => {
@@ -153,8 +154,11 @@ impl Scene {
                     light_names: &mut light_names,
                     inputs: &mut inputs,
                     warnings: &mut warnings,
+                    played: &mut animation,
                 };
-                let shutter = spec.camera.as_ref().map_or(g.shutter, |c| Some(c.shutter)).filter(|[o, c]| o < c);
+                // A TOML camera's open shutter, else --shutter's (an
+                // instant, open = close, poses the animation then).
+                let shutter = spec.camera.as_ref().filter(|c| c.shutter_open()).map(|c| c.shutter).or(g.shutter);
                 let camera = gltf::import(path, base, g, spec.camera.is_none(), shutter, parts)?;
                 let matched = groups::apply_rules(path, &g.groups, &light_names)?;
                 for (k, group) in matched.into_iter().enumerate() {
@@ -217,6 +221,7 @@ impl Scene {
             inputs,
             warnings,
             additions: Vec::new(),
+            animation,
         })
     }
 }
