@@ -73,12 +73,13 @@ fn print_summary(scene: &Scene, settings: &PassSettings, mode: Mode, result: &Pa
     println!("  scene            {}", scene.path.display());
     let moving = if *moving_lights > 0 { format!(", moving {moving_lights}") } else { String::new() };
     println!(
-        "  lights           {} (omni {}, oriented {}, directional {}, spot {}{moving})",
+        "  lights           {} (omni {}, oriented {}, directional {}, environment {}, spot {}{moving})",
         lights.iter().sum::<usize>() + moving_lights,
         lights[0],
         lights[1],
         lights[2],
-        lights[3]
+        lights[3],
+        lights[4]
     );
     if scene.groups.named() {
         let layers = if settings.aovs.groups { "a layer each" } else { "no layers: --aovs leaves out groups" };

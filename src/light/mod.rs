@@ -1,5 +1,5 @@
 //! Light kinds and the lights of a scene. Every light reduces to a point
-//! light of one of four kinds, and each kind gets its own light tree
+//! light of one of five kinds, and each kind gets its own light tree
 //! ([LC05]; docs/design.md §5.2); a scene builds trees
 //! only for the kinds it has. `Lights::from_scene` turns the scene's light
 //! sources (point lights, grids, area emitters, the sun, the environment)
@@ -11,22 +11,37 @@ pub mod emitters;
 
 use crate::scene::{LightSource, Scene};
 
-/// The light kinds, each with its own tree: [LC05]'s three, and spots.
+/// The light kinds, each with its own tree: [LC05]'s three, spots, and
+/// the environment's directions apart from the sun's.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum LightKind {
     /// Point lights radiating equally in all directions.
     Omni,
     /// Cosine-weighted lights with a normal (area-light samples, virtual point lights).
     Oriented,
-    /// Lights at infinity from one direction (environment map samples, sun).
+    /// Lights at infinity from one direction (the sun).
     Directional,
+    /// The environment's directions: lights at infinity as `Directional`,
+    /// in trees of their own because a shading point whose glossy lobe is
+    /// too sharp for them lights them with its broad lobes alone and the
+    /// rest by sampling the environment (docs/design.md §6.2).
+    Environment,
     /// Spot lights: a point light shining into a cone with a smooth edge.
     Spot,
 }
 
 impl LightKind {
-    /// Every kind, in the order the renderer visits them.
-    pub const ALL: [Self; 4] = [Self::Omni, Self::Oriented, Self::Directional, Self::Spot];
+    /// Every kind, in the order the renderer visits them (the
+    /// environment's directions right after the sun's, as they were
+    /// summed when they shared a kind).
+    pub const ALL: [Self; 5] = [Self::Omni, Self::Oriented, Self::Directional, Self::Environment, Self::Spot];
+
+    /// Whether the kind's lights are at infinity (a direction, not a
+    /// position; G = 1).
+    #[must_use]
+    pub fn at_infinity(self) -> bool {
+        matches!(self, Self::Directional | Self::Environment)
+    }
 
     /// Whether the kind's lights have a direction of emission (oriented
     /// lights' normals, spots' axes), so that their trees carry cones.
@@ -41,6 +56,7 @@ impl LightKind {
             Self::Omni => "omni",
             Self::Oriented => "oriented",
             Self::Directional => "directional",
+            Self::Environment => "environment",
             Self::Spot => "spot",
         }
     }
@@ -127,6 +143,8 @@ pub enum Light {
     Omni(OmniLight),
     Oriented(OrientedLight),
     Directional(DirectionalLight),
+    /// One of the environment's directions.
+    Environment(DirectionalLight),
     Spot(SpotLight),
 }
 
@@ -137,6 +155,7 @@ impl Light {
             Self::Omni(_) => LightKind::Omni,
             Self::Oriented(_) => LightKind::Oriented,
             Self::Directional(_) => LightKind::Directional,
+            Self::Environment(_) => LightKind::Environment,
             Self::Spot(_) => LightKind::Spot,
         }
     }
@@ -166,7 +185,7 @@ impl TreeLight {
             Light::Oriented(l) => {
                 Self { point: l.position, normal: l.normal, intensity: l.intensity, spread: [0.0; 2] }
             }
-            Light::Directional(l) => {
+            Light::Directional(l) | Light::Environment(l) => {
                 Self { point: l.direction, normal: Vec3::ZERO, intensity: l.irradiance, spread: [0.0; 2] }
             }
             Light::Spot(l) => Self {
@@ -189,6 +208,9 @@ impl TreeLight {
             LightKind::Directional => {
                 Light::Directional(DirectionalLight { direction: self.point, irradiance: self.intensity })
             }
+            LightKind::Environment => {
+                Light::Environment(DirectionalLight { direction: self.point, irradiance: self.intensity })
+            }
             LightKind::Spot => Light::Spot(SpotLight {
                 position: self.point,
                 direction: self.normal,
@@ -206,6 +228,8 @@ pub struct Lights {
     pub omni: Vec<OmniLight>,
     pub oriented: Vec<OrientedLight>,
     pub directional: Vec<DirectionalLight>,
+    /// The environment's directions (`LightKind::Environment`).
+    pub environment: Vec<DirectionalLight>,
     pub spot: Vec<SpotLight>,
     /// Lights that move over the shutter: in no tree, and not counted by
     /// [`Lights::len`] or visited by [`Lights::for_each`].
@@ -306,7 +330,7 @@ impl Lights {
             }
         }
         if let Some(environment) = scene.environment.as_ref().filter(|_| wanted(scene.groups.environment)) {
-            lights.directional.extend(emitters::sample_environment(
+            lights.environment.extend(emitters::sample_environment(
                 &environment.map,
                 environment.samples as usize,
                 0xe4f,
@@ -320,13 +344,14 @@ impl Lights {
         self.omni.extend_from_slice(&other.omni);
         self.oriented.extend_from_slice(&other.oriented);
         self.directional.extend_from_slice(&other.directional);
+        self.environment.extend_from_slice(&other.environment);
         self.spot.extend_from_slice(&other.spot);
         self.moving.extend_from_slice(&other.moving);
     }
 
     #[must_use]
     pub fn len(&self) -> usize {
-        self.omni.len() + self.oriented.len() + self.directional.len() + self.spot.len()
+        self.omni.len() + self.oriented.len() + self.directional.len() + self.environment.len() + self.spot.len()
     }
 
     #[must_use]
@@ -341,12 +366,13 @@ impl Lights {
             LightKind::Omni => self.omni.len(),
             LightKind::Oriented => self.oriented.len(),
             LightKind::Directional => self.directional.len(),
+            LightKind::Environment => self.environment.len(),
             LightKind::Spot => self.spot.len(),
         }
     }
 
-    /// Calls `f` for every light, omni, oriented, directional, then spot,
-    /// each in order. Three plain loops: after inlining, each loop's `Light`
+    /// Calls `f` for every light, omni, oriented, directional,
+    /// environment, then spot, each in order. Three plain loops: after inlining, each loop's `Light`
     /// variant is known, so the exact renderer's hot path does not branch
     /// on the kind per light.
     #[inline(always)]
@@ -360,6 +386,9 @@ impl Lights {
         for l in &self.directional {
             f(Light::Directional(*l));
         }
+        for l in &self.environment {
+            f(Light::Environment(*l));
+        }
         for l in &self.spot {
             f(Light::Spot(*l));
         }
@@ -372,6 +401,7 @@ impl Lights {
             LightKind::Omni => self.omni.iter().map(|l| TreeLight::of(&Light::Omni(*l))).collect(),
             LightKind::Oriented => self.oriented.iter().map(|l| TreeLight::of(&Light::Oriented(*l))).collect(),
             LightKind::Directional => self.directional.iter().map(|l| TreeLight::of(&Light::Directional(*l))).collect(),
+            LightKind::Environment => self.environment.iter().map(|l| TreeLight::of(&Light::Environment(*l))).collect(),
             LightKind::Spot => self.spot.iter().map(|l| TreeLight::of(&Light::Spot(*l))).collect(),
         }
     }
@@ -424,12 +454,12 @@ samples = 7
         let first = lights.omni[1].position;
         assert!((first - Vec3::new(-1.0 + 2.0 / 6.0, 3.0, -0.5)).length() < 1e-6, "{first}");
         assert_eq!(lights.oriented.len(), 10);
-        assert_eq!(lights.directional.len(), 1 + 7, "the sun, then the environment");
-        assert_eq!(lights.directional[0], DirectionalLight { direction: Vec3::Y, irradiance: Vec3::splat(3.0) });
+        assert_eq!(lights.directional, vec![DirectionalLight { direction: Vec3::Y, irradiance: Vec3::splat(3.0) }]);
+        assert_eq!(lights.environment.len(), 7, "the environment's lights apart from the sun's");
         let mut kinds = Vec::new();
         lights.for_each(|l| kinds.push(l.kind()));
         assert_eq!(kinds.len(), lights.len());
-        assert!(kinds.windows(2).all(|w| w[0] as u8 <= w[1] as u8), "omni, then oriented, then directional");
+        assert!(kinds.windows(2).all(|w| w[0] as u8 <= w[1] as u8), "omni, oriented, directional, environment");
     }
 
     #[test]

@@ -100,7 +100,7 @@ impl Metric {
                 let angular = 1.0 - f64::from(cone.half_angle.cos());
                 weight * (alpha2 + self.c_squared * angular * angular)
             }
-            LightKind::Omni | LightKind::Directional => weight * alpha2,
+            LightKind::Omni | LightKind::Directional | LightKind::Environment => weight * alpha2,
         }
     }
 

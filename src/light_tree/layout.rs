@@ -360,7 +360,7 @@ mod tests {
             .map(|_| {
                 let p = Vec3::new(rng.range_f32(-5.0, 5.0), rng.range_f32(0.0, 3.0), rng.range_f32(-5.0, 5.0));
                 let normal = Vec3::new(rng.range_f32(-1.0, 1.0), -1.0, rng.range_f32(-1.0, 1.0)).normalize();
-                let point = if kind == LightKind::Directional { -normal } else { p };
+                let point = if kind.at_infinity() { -normal } else { p };
                 let spread = if kind == LightKind::Spot { [0.9, 0.5 + 0.3 * rng.next_f32()] } else { [0.0; 2] };
                 TreeLight { point, normal, intensity: Vec3::new(1.0, rng.next_f32(), 0.5), spread }
             })

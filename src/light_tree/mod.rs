@@ -205,6 +205,16 @@ impl LightTree {
     }
 }
 
+/// A tree's index among a scene's trees, as the cuts store it.
+pub type TreeIndex = u16;
+
+/// Most trees a scene has: one per light group and kind. The bounded cut's
+/// heap key holds a tree's index in 9 bits (`lightcut::cut`), which every
+/// scene the loader accepts fits: 63 groups x 5 kinds = 315.
+pub const MAX_TREES: usize = 1 << 9;
+
+const _: () = assert!(crate::scene::groups::MAX_LIGHT_GROUPS * LightKind::ALL.len() <= MAX_TREES);
+
 /// The light trees of a scene, laid out for the cut: one per light group
 /// and light kind the scene has, no more (clusters never span groups).
 pub struct LightTrees {
@@ -259,6 +269,7 @@ impl LightTrees {
             }
             ranges.push(first..trees.len());
         }
+        assert!(trees.len() <= MAX_TREES, "{} trees: the loader allows at most {MAX_TREES}", trees.len());
         let group_of_tree = ranges.iter().enumerate().flat_map(|(g, r)| r.clone().map(move |_| g)).collect();
         let scale = (1.0 / total) as f32;
         let scale = if scale.is_finite() && scale > 0.0 { scale } else { 1.0 };

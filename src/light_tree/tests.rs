@@ -17,7 +17,7 @@ fn random_lights(seed: u64, n: usize, kind: LightKind, clustered: bool) -> Vec<T
             };
             let normal = Vec3::new(rng.range_f32(-1.0, 1.0), rng.range_f32(-1.0, 1.0), rng.range_f32(-1.0, 1.0))
                 .normalize_or(Vec3::Y);
-            if kind == LightKind::Directional {
+            if kind.at_infinity() {
                 position = normal;
             }
             let intensity = Vec3::new(rng.range_f32(0.0, 2.0), rng.range_f32(0.0, 2.0), rng.range_f32(0.0, 2.0));
@@ -31,7 +31,7 @@ fn random_lights(seed: u64, n: usize, kind: LightKind, clustered: bool) -> Vec<T
         .collect()
 }
 
-const KINDS: [LightKind; 4] = LightKind::ALL;
+const KINDS: [LightKind; 5] = LightKind::ALL;
 
 /// Walks the tree checking every structural property; returns the lights
 /// below each node visited.
@@ -231,7 +231,7 @@ fn intensities_near_f32_max_build_a_tree_and_terminate() {
 }
 
 fn lights_first_position(kind: LightKind) -> Vec3 {
-    if kind == LightKind::Directional {
+    if kind.at_infinity() {
         Vec3::Y
     } else {
         Vec3::ONE

@@ -449,7 +449,7 @@ impl PointBounds {
         estimate: bool,
     ) -> f32x4 {
         let (cos_theta, weighted, geometric) = match kind {
-            LightKind::Directional => {
+            LightKind::Directional | LightKind::Environment => {
                 let (cos_theta, weighted) = self.material(c, h, intensity);
                 (cos_theta, weighted, f32x4::ONE)
             }

@@ -33,7 +33,7 @@ use super::bounds::PointBounds;
 use super::{by_group, exhaustive_part, CutResult, CutSettings};
 use crate::embree::{PacketWidth, Scene as EmbreeScene};
 use crate::light_tree::layout::{Child, CutTree};
-use crate::light_tree::LightTrees;
+use crate::light_tree::{LightTrees, TreeIndex, MAX_TREES};
 use crate::shading::{evaluate_and_trace, BatchBuffers, Choices, Evaluations, LightEvaluator, SurfacePoint};
 use crate::util::color::luminance64;
 
@@ -52,7 +52,7 @@ struct Entry {
     bound: f32,
     child: Child,
     representative: u32,
-    tree: u8,
+    tree: TreeIndex,
     in_cut: bool,
 }
 
@@ -76,29 +76,36 @@ struct Pending {
     slot: u8,
 }
 
+/// Bits of the heap key that hold an entry's index, below the tree's 9
+/// (`light_tree::MAX_TREES`).
+const ENTRY_BITS: u32 = 23;
+const ENTRY_MASK: u32 = (1 << ENTRY_BITS) - 1;
+
 /// Most entries one cut may make: the heap key holds an entry's index in
-/// 24 bits. A cut stops refining before it would exceed it (a cut of 8
+/// 23 bits. A cut stops refining before it would exceed it (a cut of 4
 /// million nodes, where `max_cut` is 1000 by default).
-const MAX_ENTRIES: usize = 1 << 24;
+const MAX_ENTRIES: usize = 1 << ENTRY_BITS;
+
+const _: () = assert!(MAX_TREES << ENTRY_BITS == 1 << 32, "tree and entry fill the key's low 32 bits");
 
 /// The heap key of an entry: its bound's bits (a non-negative f32 orders
 /// like its bits), its tree, and the complement of its index, so the largest
 /// bound comes first, ties go to the earlier entry, and the key alone says
 /// which tree a node is in.
 #[inline]
-fn key(bound: f32, tree: u8, entry: usize) -> u64 {
-    debug_assert!(entry < MAX_ENTRIES);
-    (u64::from(bound.to_bits()) << 32) | (u64::from(tree) << 24) | u64::from(!(entry as u32) & 0x00ff_ffff)
+fn key(bound: f32, tree: TreeIndex, entry: usize) -> u64 {
+    debug_assert!(entry < MAX_ENTRIES && usize::from(tree) < MAX_TREES);
+    (u64::from(bound.to_bits()) << 32) | (u64::from(tree) << ENTRY_BITS) | u64::from(!(entry as u32) & ENTRY_MASK)
 }
 
 #[inline]
 fn key_entry(key: u64) -> usize {
-    (!(key as u32) & 0x00ff_ffff) as usize
+    (!(key as u32) & ENTRY_MASK) as usize
 }
 
 #[inline]
-fn key_tree(key: u64) -> u8 {
-    (key >> 24) as u8
+fn key_tree(key: u64) -> TreeIndex {
+    ((key as u32) >> ENTRY_BITS) as TreeIndex
 }
 
 #[inline]
@@ -149,7 +156,7 @@ impl Cut<'_, '_> {
     /// M * G * V, which the child that shares the representative reuses; the
     /// other child waits in `pending` for its representative's evaluation.
     #[inline(always)]
-    fn add_children(&mut self, tree: u8, b: usize, parent: Option<(u32, DVec3)>) {
+    fn add_children(&mut self, tree: TreeIndex, b: usize, parent: Option<(u32, DVec3)>) {
         let t = &self.trees[tree as usize];
         let bounds = self.bounds.pair(t.kind, &t.blocks[b], t.cones_of(b));
         self.add_slots(tree, b, bounds, parent);
@@ -158,7 +165,7 @@ impl Cut<'_, '_> {
     /// [`Cut::add_children`] of two refined nodes of one tree, their four
     /// children bounded at once.
     #[inline(always)]
-    fn add_children_of_two(&mut self, tree: u8, parents: [&Entry; 2]) {
+    fn add_children_of_two(&mut self, tree: TreeIndex, parents: [&Entry; 2]) {
         let t = &self.trees[tree as usize];
         let [b0, b1] = parents.map(|p| p.child.index());
         let cones = t.cones_of(b0).zip(t.cones_of(b1)).map(|(x, y)| [x, y]);
@@ -171,7 +178,7 @@ impl Cut<'_, '_> {
     /// refined node's representative (`parent`) joins the cut with its M * G
     /// * V; the other waits for its representative's evaluation.
     #[inline(always)]
-    fn add_slots(&mut self, tree: u8, b: usize, bounds: [f32; 2], parent: Option<(u32, DVec3)>) {
+    fn add_slots(&mut self, tree: TreeIndex, b: usize, bounds: [f32; 2], parent: Option<(u32, DVec3)>) {
         let block = &self.trees[tree as usize].blocks[b];
         let (shared, unit) = parent.unwrap_or((u32::MAX, DVec3::ZERO));
         for (k, &bound) in bounds.iter().enumerate() {
@@ -352,7 +359,7 @@ fn cut_through(
     };
     for (i, tree) in trees.iter().enumerate() {
         if !tree.blocks.is_empty() {
-            cut.add_children(i as u8, 0, None);
+            cut.add_children(i as TreeIndex, 0, None);
         }
     }
     cut.flush();

@@ -21,7 +21,7 @@ use super::bounds::{min_distance_squared_f32, GatherBounds, PointBounds};
 use super::{by_group, CutResult, CutSettings};
 use crate::embree::Scene as EmbreeScene;
 use crate::light_tree::layout::{Child, CutTree};
-use crate::light_tree::LightTrees;
+use crate::light_tree::{LightTrees, TreeIndex};
 use crate::shading::{evaluate_into, trace_evaluations, Choices, Evaluations, LightEvaluator, SurfacePoint};
 use crate::util::color::luminance64;
 use crate::util::sampling::{mix64, Rng};
@@ -76,7 +76,7 @@ struct Pair {
     block: u32,
     light_slot: u8,
     slot: u8,
-    tree: u8,
+    tree: TreeIndex,
     in_cut: bool,
 }
 
@@ -322,7 +322,7 @@ struct ProductCut<'a, 'p> {
 }
 
 impl ProductCut<'_, '_> {
-    fn bounds(&self, g: u32, t: u8, b: usize) -> [f32; 2] {
+    fn bounds(&self, g: u32, t: TreeIndex, b: usize) -> [f32; 2] {
         self.scratch.pair_bounds(g, &self.trees[t as usize], b)
     }
 
@@ -330,7 +330,7 @@ impl ProductCut<'_, '_> {
     /// with its bound: it shares its parent's M G V when both
     /// representatives are the parent's (`parent`), else it waits for its
     /// representative pair's evaluation.
-    fn add(&mut self, g: u32, t: u8, b: usize, k: usize, bound: f32, parent: Option<&Pair>) {
+    fn add(&mut self, g: u32, t: TreeIndex, b: usize, k: usize, bound: f32, parent: Option<&Pair>) {
         let block = &self.trees[t as usize].blocks[b];
         let child = block.child[k];
         if child == Child::EMPTY {
@@ -378,7 +378,7 @@ impl ProductCut<'_, '_> {
     /// per pair from S_g I_l / (S_sum I_sum) makes the pair's estimate
     /// unbiased. A gather split's child that holds the parent's gather
     /// point draws the same pair, and reuses the parent's M G V.
-    fn representatives(&self, g: u32, t: u8, b: usize, k: usize) -> (u32, (u32, u8)) {
+    fn representatives(&self, g: u32, t: TreeIndex, b: usize, k: usize) -> (u32, (u32, u8)) {
         let draw = |key: u64| (mix64(self.salt ^ mix64(key)) >> 11) as f64 * (1.0 / 9_007_199_254_740_992.0);
         let cluster = (u64::from(t) << 32) ^ ((b as u64) << 1) ^ k as u64;
         let nodes = &self.scratch.nodes;
@@ -529,8 +529,8 @@ fn product_cut(
     let mut cut =
         ProductCut { trees, salt, points, embree, scratch, total: luminance64(fixed), pairs: 0, shadow_rays: 0 };
     for t in (0..trees.len()).filter(|&t| !trees[t].blocks.is_empty()) {
-        let bound = cut.bounds(root, t as u8, 0)[0];
-        cut.add(root, t as u8, 0, 0, bound, None);
+        let bound = cut.bounds(root, t as TreeIndex, 0)[0];
+        cut.add(root, t as TreeIndex, 0, 0, bound, None);
     }
     cut.flush();
     let max_cut = settings.max_cut.min(MAX_PAIRS);

@@ -23,7 +23,7 @@ use super::bounds::PointBounds;
 use super::{by_group, exhaustive_part, CutResult, CutSettings, GroupError};
 use crate::embree::{PacketWidth, Scene as EmbreeScene};
 use crate::light_tree::layout::{Child, CutTree};
-use crate::light_tree::LightTrees;
+use crate::light_tree::{LightTrees, TreeIndex};
 use crate::shading::{evaluate_and_trace, BatchBuffers, Choices, Evaluations, LightEvaluator, SurfacePoint};
 use crate::util::color::luminance;
 use crate::util::sampling::Rng;
@@ -48,7 +48,7 @@ struct Node {
     importance: f32,
     block: u32,
     slot: u8,
-    tree: u8,
+    tree: TreeIndex,
     in_cut: bool,
 }
 
@@ -60,7 +60,7 @@ struct Drawn {
     weight: DVec3,
     block: u32,
     slot: u8,
-    tree: u8,
+    tree: TreeIndex,
 }
 
 /// Per-thread buffers reused across shading points.
@@ -284,7 +284,7 @@ fn choose_cut(
     let mut size = 0usize;
     for i in range {
         if !trees.trees[i].blocks.is_empty() {
-            (total, size) = add_slots(trees, bounds, scratch, i as u8, 0, &[0], (total, size));
+            (total, size) = add_slots(trees, bounds, scratch, i as TreeIndex, 0, &[0], (total, size));
         }
     }
     while size < settings.max_cut {
@@ -310,7 +310,7 @@ fn add_slots(
     trees: &LightTrees,
     bounds: &PointBounds,
     scratch: &mut StochasticScratch,
-    tree: u8,
+    tree: TreeIndex,
     b: usize,
     slots: &[usize],
     (mut total, mut size): (f64, usize),
@@ -339,7 +339,7 @@ struct Walk {
     /// The probability of the path so far.
     probability: f64,
     stream: Rng,
-    tree: u8,
+    tree: TreeIndex,
 }
 
 enum Step {

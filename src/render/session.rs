@@ -98,8 +98,9 @@ pub struct PassResult {
     /// Virtual point lights traced for indirect light, and the time it took.
     pub vpls: usize,
     pub vpl_time: Duration,
-    /// Lights of the pass, by kind (the scene's plus the VPLs): omni, oriented, directional, spot.
-    pub lights: [usize; 4],
+    /// Lights of the pass, by kind (the scene's plus the VPLs), in
+    /// `LightKind::ALL`'s order: omni, oriented, directional, environment, spot.
+    pub lights: [usize; 5],
     /// Lights that move over the shutter (in no tree; docs/design.md §13.6).
     pub moving_lights: usize,
     /// Rays of the pass that Embree was not given because a component was

@@ -98,7 +98,7 @@ pub fn trace(
             sources.push(match light {
                 Light::Omni(l) => (Source::Omni { position: l.position }, 4.0 * PI * l.intensity),
                 Light::Oriented(l) => (Source::Oriented { position: l.position, normal: l.normal }, PI * l.intensity),
-                Light::Directional(l) => {
+                Light::Directional(l) | Light::Environment(l) => {
                     (Source::Directional { direction: l.direction }, PI * radius * radius * l.irradiance)
                 }
                 // At most I times the outer cone's solid angle (the falloff is at most 1).

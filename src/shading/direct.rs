@@ -157,7 +157,7 @@ impl<'a, 'p> LightEvaluator<'a, 'p> {
         sink: &mut impl FnMut(usize, DVec3, Option<ShadowRay>),
     ) {
         let point = [f32x4::new(lanes.point[0]), f32x4::new(lanes.point[1]), f32x4::new(lanes.point[2])];
-        if kind == LightKind::Directional {
+        if kind.at_infinity() {
             let m = self.material(&point);
             let m = [m[0].to_array(), m[1].to_array(), m[2].to_array()];
             for (k, w) in weights.iter().enumerate().take(lanes.count) {
@@ -243,7 +243,7 @@ pub fn light_intensity(light: &Light) -> Vec3 {
     match light {
         Light::Omni(l) => l.intensity,
         Light::Oriented(l) => l.intensity,
-        Light::Directional(l) => l.irradiance,
+        Light::Directional(l) | Light::Environment(l) => l.irradiance,
         Light::Spot(l) => l.intensity,
     }
 }

@@ -66,7 +66,7 @@ pub fn random_lights(kind: LightKind, n: usize, distribution: Distribution, seed
                     };
                     TreeLight { point: position, normal: direction, intensity, spread }
                 }
-                LightKind::Directional => {
+                LightKind::Directional | LightKind::Environment => {
                     direction.y = direction.y.abs();
                     TreeLight { point: direction, normal: Vec3::ZERO, intensity, spread: [0.0; 2] }
                 }

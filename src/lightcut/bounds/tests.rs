@@ -215,7 +215,9 @@ impl RandomCluster {
         let lights: Vec<(Vec3, Vec3, [f32; 2])> = (0..count)
             .map(|_| {
                 let position = match kind {
-                    LightKind::Directional => (base_normal + spread * unit(rng)).normalize_or(base_normal),
+                    LightKind::Directional | LightKind::Environment => {
+                        (base_normal + spread * unit(rng)).normalize_or(base_normal)
+                    }
                     _ => {
                         centre
                             + spread
@@ -390,6 +392,14 @@ fn directional_bounds_hold_at_random_points() {
     let mut rng = Rng::seeded(12);
     for _ in 0..20_000 {
         check_random_cluster(&mut rng, LightKind::Directional);
+    }
+}
+
+#[test]
+fn environment_bounds_hold_at_random_points() {
+    let mut rng = Rng::seeded(13);
+    for _ in 0..20_000 {
+        check_random_cluster(&mut rng, LightKind::Environment);
     }
 }
 

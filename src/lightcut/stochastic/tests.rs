@@ -237,7 +237,13 @@ fn check_pmf(lights: &str) {
             let mut rng = Rng::seeded(3);
             for _ in 0..DRAWS {
                 scratch.nodes.clear();
-                scratch.nodes.push(Node { importance: 1.0, block: 0, slot: 0, tree: t as u8, in_cut: true });
+                scratch.nodes.push(Node {
+                    importance: 1.0,
+                    block: 0,
+                    slot: 0,
+                    tree: t as crate::light_tree::TreeIndex,
+                    in_cut: true,
+                });
                 draw(trees, &mut rng, &mut scratch, &importance);
                 let Some(d) = scratch.drawn.first() else {
                     *counts.entry((usize::MAX, 0)).or_default() += 1;
