@@ -20,7 +20,7 @@ use crate::light::LightKind;
 use crate::light_tree::layout::{Block, Cones};
 use crate::scene::material::phong_normalisation;
 use crate::shading::pbr::{distribution, schlick_weight, visibility_cos, PbrLanes};
-use crate::shading::SurfacePoint;
+use crate::shading::{Lobes, SurfacePoint};
 use crate::util::simd::{dot3, pow_upper, splat3, V3};
 
 /// Slack of every cosine bound, relative and absolute: a bound takes a few
@@ -182,6 +182,9 @@ pub struct PointBounds {
     /// The distance clamp squared (f32, rounded down: 0 if it underflows,
     /// which makes G's bound infinite, still an upper bound).
     min_distance_squared: f32x4,
+    /// The lobes the environment's lights light the point with
+    /// (`SurfacePoint::environment_lobes`; every lobe for a gather cluster).
+    environment_lobes: Lobes,
     /// 1 / the trees' total luminance: normalises intensities.
     scale: f32x4,
 }
@@ -210,6 +213,7 @@ impl PointBounds {
             lobe: splat3(LUMINANCE * lobe),
             luminance: splat3(LUMINANCE),
             min_distance_squared: f32x4::splat(clamp32),
+            environment_lobes: sp.environment_lobes,
             scale: f32x4::splat(scale),
         }
     }
@@ -239,6 +243,7 @@ impl PointBounds {
             lobe: splat3(Vec3::ZERO),
             luminance: splat3(LUMINANCE),
             min_distance_squared: f32x4::splat(g.min_distance_squared),
+            environment_lobes: Lobes::ALL,
             scale: f32x4::splat(scale),
         }
     }
@@ -254,7 +259,7 @@ impl PointBounds {
         }
         let (c, h) = (splat3(Vec3::ZERO), splat3(Vec3::ONE));
         let peak = |axis: Vec3| {
-            let (cos_theta, weighted) = self.material(&c, &h, &splat3(axis));
+            let (cos_theta, weighted) = self.material(&c, &h, &splat3(axis), Lobes::ALL);
             (cos_theta * weighted).to_array()[0]
         };
         let luminance_weighted = Vec3::new(peak(Vec3::X), peak(Vec3::Y), peak(Vec3::Z));
@@ -263,9 +268,10 @@ impl PointBounds {
 
     /// M's bound against the slots' intensities, luminance-weighted:
     /// cos_theta * (diffuse.I + cos_r^n lobe.I), for directions in the boxes
-    /// (c, h) (vectors from the shading point; any length).
+    /// (c, h) (vectors from the shading point; any length), of the
+    /// material's `lobes` (a gather cluster's bound covers every lobe).
     #[inline(always)]
-    fn material(&self, c: &V3, h: &V3, intensity: &V3) -> (f32x4, f32x4) {
+    fn material(&self, c: &V3, h: &V3, intensity: &V3, lobes: Lobes) -> (f32x4, f32x4) {
         if let Some(cluster) = &self.cluster {
             // cos(n, v) <= cos(max(0, theta_min - beta)) for n in the cone.
             let cos_theta =
@@ -274,11 +280,11 @@ impl PointBounds {
             return (weighted.cmp_gt(f32x4::ZERO).blend(f32x4::ONE, f32x4::ZERO), weighted);
         }
         if let Some(ggx) = &self.ggx {
-            return self.ggx(ggx, c, h, intensity);
+            return self.ggx(ggx, c, h, intensity, lobes);
         }
         let cos_theta = self.normal.cos_bound(c, h);
-        let mut weighted = dot3(&self.diffuse, intensity);
-        if let Some((frame, exponent)) = &self.phong {
+        let mut weighted = if lobes.diffuse { dot3(&self.diffuse, intensity) } else { f32x4::ZERO };
+        if let Some((frame, exponent)) = self.phong.as_ref().filter(|_| lobes.glossy) {
             // cos^n is increasing in cos: the bound of cos_r, raised to n, bounds it.
             let lobe = pow_upper(frame.cos_bound(c, h), *exponent);
             weighted += dot3(&self.lobe, intensity) * lobe;
@@ -296,7 +302,7 @@ impl PointBounds {
     /// Returns (1 where the box is above the surface's plane, else 0; the
     /// luminance-weighted bound, cosine included).
     #[inline(always)]
-    fn ggx(&self, ggx: &GgxBounds, c: &V3, h: &V3, intensity: &V3) -> (f32x4, f32x4) {
+    fn ggx(&self, ggx: &GgxBounds, c: &V3, h: &V3, intensity: &V3, lobes: Lobes) -> (f32x4, f32x4) {
         let (zero, one) = (f32x4::ZERO, f32x4::ONE);
         let slack = |x: f32x4| (x * f32x4::splat(1.0 + COS_SLACK) + f32x4::splat(COS_SLACK)).fast_min(one);
         let cos_theta = self.normal.cos_bound(c, h);
@@ -307,7 +313,9 @@ impl PointBounds {
         let specular = distribution(n_dot_h, lanes.alpha2)
             * visibility_cos(cos_theta, lanes.n_dot_v, lanes.alpha2)
             * f32x4::splat(1.0 + GGX_SLACK);
-        let m = lanes.combine(cos_theta, specular, schlick_weight(v_dot_h), ggx.diffuse_fresnel);
+        let specular = if lobes.glossy && lanes.glossy { specular } else { zero };
+        let diffuse_fresnel = if lobes.diffuse { ggx.diffuse_fresnel } else { zero };
+        let m = lanes.combine(cos_theta, specular, schlick_weight(v_dot_h), diffuse_fresnel);
         let weighted = dot3(&[m[0] * self.luminance[0], m[1] * self.luminance[1], m[2] * self.luminance[2]], intensity);
         (cos_theta.cmp_gt(zero).blend(one, zero), weighted)
     }
@@ -450,14 +458,15 @@ impl PointBounds {
     ) -> f32x4 {
         let (cos_theta, weighted, geometric) = match kind {
             LightKind::Directional | LightKind::Environment => {
-                let (cos_theta, weighted) = self.material(c, h, intensity);
+                let lobes = if kind == LightKind::Environment { self.environment_lobes } else { Lobes::ALL };
+                let (cos_theta, weighted) = self.material(c, h, intensity, lobes);
                 (cos_theta, weighted, f32x4::ONE)
             }
             LightKind::Omni | LightKind::Oriented | LightKind::Spot => {
                 // (A point's extent is 0: h + 0 is h, bit for bit.)
                 let h = &add3(h, &self.extent);
                 let to_box = sub3(c, &self.p);
-                let (cos_theta, weighted) = self.material(&to_box, h, intensity);
+                let (cos_theta, weighted) = self.material(&to_box, h, intensity, Lobes::ALL);
                 let mut geometric = self.geometric(c, h, estimate);
                 if let Some(cone) = cone {
                     geometric *= self.emission(c, h, cone);

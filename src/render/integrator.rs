@@ -214,10 +214,10 @@ impl<'a> Integrator<'a> {
                 result.stats.record_point(direct.nodes, direct.shadow_rays);
                 direct.add_scaled_to(throughput, &mut result.radiance, groups);
             }
-            if !sp.material.has_mirror() || depth == self.max_mirror_depth {
+            if sp.mirror == Vec3::ZERO || depth == self.max_mirror_depth {
                 break;
             }
-            throughput *= sp.material.mirror.as_dvec3();
+            throughput *= sp.mirror.as_dvec3();
             ray = sp.mirror_ray();
         }
         result

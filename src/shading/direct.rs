@@ -13,6 +13,7 @@ use std::f32::consts::PI;
 use glam::{DVec3, Vec3};
 use wide::{f32x4, f64x4, CmpEq, CmpLe};
 
+use super::lobes::Lobes;
 use super::pbr::PbrLanes;
 use super::surface::SurfacePoint;
 use crate::embree::{Ray, ShadowRay};
@@ -70,10 +71,11 @@ pub struct LightTerm {
     pub ray: Option<ShadowRay>,
 }
 
-/// A shading point prepared for evaluating lights four at a time.
-pub struct LightEvaluator<'a, 'p> {
-    sp: &'a SurfacePoint<'p>,
-    p: V3,
+/// A shading point's material term M = f_r(wi, wo) cos(theta_i) in four
+/// lanes ([LC05] eq. 1; docs/design.md §5.3): what every light's
+/// evaluation and the scalar BSDF (`shading::bsdf`) compute it with.
+#[derive(Clone, Copy)]
+pub struct MaterialLanes {
     n: V3,
     ng: V3,
     r: V3,
@@ -82,8 +84,57 @@ pub struct LightEvaluator<'a, 'p> {
     pbr: Option<PbrLanes>,
     /// k_d / pi, per channel.
     diffuse: V3,
-    /// k_s (n + 2) / (2 pi) and n, for a Phong lobe.
-    phong: Option<(Vec3, f32)>,
+    /// k_s (n + 2) / (2 pi), and the exponent n, of a Phong lobe.
+    phong: Option<(Vec3, f32, f32)>,
+}
+
+impl MaterialLanes {
+    #[must_use]
+    #[inline(always)]
+    pub fn new(sp: &SurfacePoint<'_>) -> Self {
+        let m = sp.material;
+        Self {
+            n: splat3(sp.n),
+            ng: splat3(sp.ng),
+            r: splat3(sp.r),
+            wo: splat3(sp.wo),
+            pbr: sp.pbr.map(|p| PbrLanes::new(&p, sp.n.dot(sp.wo))),
+            diffuse: splat3(sp.kd * (1.0 / PI)),
+            phong: m.has_specular().then(|| (m.specular, phong_normalisation(m.exponent), m.exponent)),
+        }
+    }
+
+    /// M = f_r(wi, wo) cos(theta_i) of `lobes` for unit directions wi, per
+    /// channel ([LC05] eq. 1); 0 when wi is below the shading or the
+    /// geometric surface.
+    #[inline(always)]
+    pub fn term(&self, wi: &V3, lobes: Lobes) -> V3 {
+        let zero = f32x4::ZERO;
+        let cos_theta = dot3(&self.n, wi);
+        let below = cos_theta.cmp_le(zero) | dot3(&self.ng, wi).cmp_le(zero);
+        if let Some(pbr) = &self.pbr {
+            let f = pbr.f_cos(&self.n, &self.wo, wi, cos_theta, lobes);
+            return [below.blend(zero, f[0]), below.blend(zero, f[1]), below.blend(zero, f[2])];
+        }
+        let mut f = if lobes.diffuse { self.diffuse } else { [zero; 3] };
+        if let Some((specular, normalisation, exponent)) = self.phong.filter(|_| lobes.glossy) {
+            let cos_alpha = dot3(&self.r, wi).fast_max(zero);
+            let lobe = f32x4::splat(normalisation) * pow(cos_alpha, exponent);
+            f = [
+                f[0] + f32x4::splat(specular.x) * lobe,
+                f[1] + f32x4::splat(specular.y) * lobe,
+                f[2] + f32x4::splat(specular.z) * lobe,
+            ];
+        }
+        [below.blend(zero, f[0] * cos_theta), below.blend(zero, f[1] * cos_theta), below.blend(zero, f[2] * cos_theta)]
+    }
+}
+
+/// A shading point prepared for evaluating lights four at a time.
+pub struct LightEvaluator<'a, 'p> {
+    sp: &'a SurfacePoint<'p>,
+    p: V3,
+    material: MaterialLanes,
     /// Where shadow rays start (lifted off the surface).
     origin: V3,
     origin_point: Vec3,
@@ -93,46 +144,17 @@ impl<'a, 'p> LightEvaluator<'a, 'p> {
     #[must_use]
     #[inline(always)]
     pub fn new(sp: &'a SurfacePoint<'p>) -> Self {
-        let m = sp.material;
         let origin = sp.offset_origin();
-        Self {
-            sp,
-            p: splat3(sp.p),
-            n: splat3(sp.n),
-            ng: splat3(sp.ng),
-            r: splat3(sp.r),
-            wo: splat3(sp.wo),
-            pbr: sp.pbr.map(|p| PbrLanes::new(&p, sp.n.dot(sp.wo))),
-            diffuse: splat3(sp.kd * (1.0 / PI)),
-            phong: m.has_specular().then(|| (m.specular, phong_normalisation(m.exponent))),
-            origin: splat3(origin),
-            origin_point: origin,
-        }
+        Self { sp, p: splat3(sp.p), material: MaterialLanes::new(sp), origin: splat3(origin), origin_point: origin }
     }
 
-    /// The material term M = f_r(wi, wo) cos(theta_i) for unit directions
-    /// wi, per channel ([LC05] eq. 1); 0 when wi is below the shading or the
-    /// geometric surface (SurfacePoint::material_term, lane by lane).
+    /// The material term of a light of `kind` in directions `wi`: every
+    /// lobe, but for the environment's lights the lobes the shading point
+    /// lights them with (`SurfacePoint::environment_lobes`).
     #[inline(always)]
-    fn material(&self, wi: &V3) -> V3 {
-        let zero = f32x4::ZERO;
-        let cos_theta = dot3(&self.n, wi);
-        let below = cos_theta.cmp_le(zero) | dot3(&self.ng, wi).cmp_le(zero);
-        if let Some(pbr) = &self.pbr {
-            let f = pbr.f_cos(&self.n, &self.wo, wi, cos_theta);
-            return [below.blend(zero, f[0]), below.blend(zero, f[1]), below.blend(zero, f[2])];
-        }
-        let mut f = self.diffuse;
-        if let Some((specular, normalisation)) = self.phong {
-            let cos_alpha = dot3(&self.r, wi).fast_max(zero);
-            let lobe = f32x4::splat(normalisation) * pow(cos_alpha, self.sp.material.exponent);
-            f = [
-                f[0] + f32x4::splat(specular.x) * lobe,
-                f[1] + f32x4::splat(specular.y) * lobe,
-                f[2] + f32x4::splat(specular.z) * lobe,
-            ];
-        }
-        [below.blend(zero, f[0] * cos_theta), below.blend(zero, f[1] * cos_theta), below.blend(zero, f[2] * cos_theta)]
+    fn material(&self, kind: LightKind, wi: &V3) -> V3 {
+        let lobes = if kind == LightKind::Environment { self.sp.environment_lobes } else { Lobes::ALL };
+        self.material.term(wi, lobes)
     }
 
     /// M * G per unit intensity of the lanes' lights, and their shadow rays.
@@ -158,7 +180,7 @@ impl<'a, 'p> LightEvaluator<'a, 'p> {
     ) {
         let point = [f32x4::new(lanes.point[0]), f32x4::new(lanes.point[1]), f32x4::new(lanes.point[2])];
         if kind.at_infinity() {
-            let m = self.material(&point);
+            let m = self.material(kind, &point);
             let m = [m[0].to_array(), m[1].to_array(), m[2].to_array()];
             for (k, w) in weights.iter().enumerate().take(lanes.count) {
                 let term = DVec3::new(f64::from(m[0][k]), f64::from(m[1][k]), f64::from(m[2][k]));
@@ -181,7 +203,7 @@ impl<'a, 'p> LightEvaluator<'a, 'p> {
         let d2 = dot3(&d, &d);
         let s = d2.sqrt();
         let wi = [d[0] / s, d[1] / s, d[2] / s];
-        let m = self.material(&wi);
+        let m = self.material(kind, &wi);
         // The cosine at an oriented light: its normal against -wi; a spot's
         // falloff at the cosine between its direction and -wi.
         let emitted = kind.has_cone().then(|| {

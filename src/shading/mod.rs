@@ -3,16 +3,20 @@
 //! with its shadow ray, singly or in batches (`direct`). Both render modes
 //! and the light cuts above evaluate lights only through here.
 
+pub mod bsdf;
 pub mod direct;
 pub mod evaluate;
 pub mod geometry;
+pub mod lobes;
 pub mod pbr;
 pub mod surface;
 
-pub use direct::{light_sample, light_term, Lanes, LightEvaluator, LightTerm};
+pub use bsdf::{Bsdf, BsdfSample};
+pub use direct::{light_sample, light_term, Lanes, LightEvaluator, LightTerm, MaterialLanes};
 pub use evaluate::{
     evaluate_and_trace, evaluate_into, trace_evaluations, BatchBuffers, BatchResult, Choices, Evaluations, LightBatch,
     SHADOW_BATCH, SHADOW_PACKET,
 };
 pub use geometry::{Geometry, GeometryError};
+pub use lobes::Lobes;
 pub use surface::SurfacePoint;

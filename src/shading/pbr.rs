@@ -15,15 +15,19 @@ use std::f32::consts::PI;
 use glam::Vec3;
 use wide::{f32x4, CmpGt};
 
+use super::lobes::Lobes;
 use crate::scene::material::{PbrMaterial, TexCoords};
 use crate::scene::texture::Texture;
 use crate::util::simd::{dot3, splat3, V3};
 
-/// The smallest alpha (roughness^2) the lobe is evaluated with: a smooth
-/// surface (roughness 0, a delta lobe) is rendered as roughness 0.032,
-/// whose peak D = 1 / (pi alpha^2) = 3.2e5 is finite and still wider than
-/// the directions f32 resolves (1 - n.h is resolved to about 6e-8, against
-/// alpha^2 = 1e-6).
+/// The smallest alpha (roughness^2) the lobe is a lobe at: a smoother
+/// surface (roughness below 0.032) is a perfect mirror whose reflectance is
+/// the Fresnel term at n . wo, traced as a mirror bounce and never lit by a
+/// point light (no glint of a delta light), as Cycles treats a roughness
+/// too small to sample (docs/design.md §5.3). At 1e-3 the lobe's peak D = 1
+/// / (pi alpha^2) = 3.2e5 is finite and still wider than the directions f32
+/// resolves (1 - n.h is resolved to about 6e-8, against alpha^2 = 1e-6), and
+/// its visible normals sample stably.
 pub const MIN_ALPHA: f32 = 1e-3;
 
 /// The smallest n . wo the visibility term is evaluated with (grazing
@@ -37,7 +41,8 @@ pub struct Pbr {
     pub base: Vec3,
     /// 0 (dielectric) to 1 (metal).
     pub metallic: f32,
-    /// Roughness^2, at least [`MIN_ALPHA`].
+    /// Roughness^2; below [`MIN_ALPHA`] the specular lobe is a perfect
+    /// mirror ([`Pbr::is_smooth`]).
     pub alpha: f32,
     /// The dielectric's reflectance at normal incidence: min(0.04 x
     /// specular colour, 1) x specular factor (KHR_materials_specular; 0.04
@@ -60,7 +65,7 @@ impl Pbr {
         Self {
             base,
             metallic,
-            alpha: (roughness * roughness).max(MIN_ALPHA),
+            alpha: roughness * roughness,
             f0: (0.04 * specular_colour).min(Vec3::ONE) * specular,
             f90: specular,
         }
@@ -86,6 +91,26 @@ impl Pbr {
             specular_colour *= t.lookup(uvs, textures);
         }
         Self::new(base, metallic, roughness, specular, specular_colour)
+    }
+
+    /// Whether the specular lobe is a perfect mirror (alpha below
+    /// [`MIN_ALPHA`]): traced as a mirror bounce, lit by no light.
+    #[must_use]
+    pub fn is_smooth(&self) -> bool {
+        self.alpha < MIN_ALPHA
+    }
+
+    /// The specular layer's reflectance towards the mirror direction of a
+    /// view at `n_dot_v`: the Fresnel term with Schlick's weight (1 -
+    /// n.v)^5, the dielectric's and the metal's mixed by `metallic` (glTF's
+    /// BRDF as the half-vector meets the normal). A smooth surface's mirror.
+    #[must_use]
+    pub fn mirror_reflectance(&self, n_dot_v: f32) -> Vec3 {
+        let x = (1.0 - n_dot_v.clamp(0.0, 1.0)).max(0.0);
+        let w = x * x * x * x * x;
+        let dielectric = self.f0 + (Vec3::splat(self.f90) - self.f0) * w;
+        let metal = self.base + (Vec3::ONE - self.base) * w;
+        dielectric * (1.0 - self.metallic) + metal * self.metallic
     }
 
     /// The diffuse reflectance: what a bounce of indirect light and the
@@ -145,6 +170,9 @@ pub struct PbrLanes {
     pub diffuse: V3,
     /// n . wo, at least [`MIN_COS_VIEW`].
     pub n_dot_v: f32,
+    /// Whether the specular lobe is a lobe (false: a perfect mirror, which
+    /// no light lights: its part of f is 0).
+    pub glossy: bool,
 }
 
 impl PbrLanes {
@@ -154,11 +182,14 @@ impl PbrLanes {
         Self {
             base: splat3(pbr.base),
             metallic: f32x4::splat(pbr.metallic),
-            alpha2: f32x4::splat(pbr.alpha * pbr.alpha),
+            // A smooth surface's lobe is never evaluated (`glossy`); its
+            // alpha is kept where D and V stay finite.
+            alpha2: f32x4::splat(pbr.alpha.max(MIN_ALPHA) * pbr.alpha.max(MIN_ALPHA)),
             f0: splat3(pbr.f0),
             f90: f32x4::splat(pbr.f90),
             diffuse: splat3(pbr.base * ((1.0 - pbr.metallic) / PI)),
             n_dot_v: n_dot_v.max(MIN_COS_VIEW),
+            glossy: !pbr.is_smooth(),
         }
     }
 
@@ -184,11 +215,12 @@ impl PbrLanes {
         [channel(0), channel(1), channel(2)]
     }
 
-    /// f_r cos(theta_i) for unit directions `wi` (lanes), unit `n` and `wo`
-    /// splat; `cos_theta` = n . wi, > 0 where it is used.
+    /// f_r cos(theta_i) of `lobes` (the diffuse part, the specular part or
+    /// both) for unit directions `wi` (lanes), unit `n` and `wo` splat;
+    /// `cos_theta` = n . wi, > 0 where it is used.
     #[inline(always)]
     #[must_use]
-    pub fn f_cos(&self, n: &V3, wo: &V3, wi: &V3, cos_theta: f32x4) -> V3 {
+    pub fn f_cos(&self, n: &V3, wo: &V3, wi: &V3, cos_theta: f32x4, lobes: Lobes) -> V3 {
         let zero = f32x4::ZERO;
         let h = [wo[0] + wi[0], wo[1] + wi[1], wo[2] + wi[2]];
         let length = dot3(&h, &h).sqrt();
@@ -201,10 +233,12 @@ impl PbrLanes {
         let v_dot_h = dot3(wo, &h).fast_max(zero).fast_min(f32x4::ONE);
         let l = cos_theta.fast_max(zero);
         let specular = distribution(n_dot_h, self.alpha2) * visibility_cos(l, self.n_dot_v, self.alpha2);
+        let specular = if lobes.glossy && self.glossy { specular } else { zero };
         let weight = schlick_weight(v_dot_h);
         let f_d = [0, 1, 2].map(|k| self.f0[k] + (self.f90 - self.f0[k]) * weight);
         let max_f = f_d[0].fast_max(f_d[1]).fast_max(f_d[2]);
-        self.combine(l, specular, weight, f32x4::ONE - max_f)
+        let diffuse_fresnel = if lobes.diffuse { f32x4::ONE - max_f } else { zero };
+        self.combine(l, specular, weight, diffuse_fresnel)
     }
 }
 
@@ -263,7 +297,7 @@ mod tests {
                 wi = -wi;
             }
             let lanes = PbrLanes::new(&p, n.dot(wo));
-            let f = lanes.f_cos(&splat3(n), &splat3(wo), &splat3(wi), f32x4::splat(n.dot(wi)));
+            let f = lanes.f_cos(&splat3(n), &splat3(wo), &splat3(wi), f32x4::splat(n.dot(wi)), Lobes::ALL);
             let expected = reference(&p, n, wo, wi);
             for k in 0..3 {
                 let got = f64::from(f[k].to_array()[0]);
@@ -297,7 +331,7 @@ mod tests {
                 for j in 0..steps {
                     let phi = (j as f32 + 0.5) / steps as f32 * 2.0 * PI;
                     let wi = Vec3::new(s * phi.cos(), s * phi.sin(), c);
-                    let f = lanes.f_cos(&splat3(n), &splat3(wo), &splat3(wi), f32x4::splat(c));
+                    let f = lanes.f_cos(&splat3(n), &splat3(wo), &splat3(wi), f32x4::splat(c), Lobes::ALL);
                     sum += f64::from(f[1].to_array()[0]);
                 }
             }

@@ -3,6 +3,7 @@
 
 use glam::Vec3;
 
+use super::lobes::Lobes;
 use super::pbr::Pbr;
 use crate::embree::{Ray, ShadowRay};
 use crate::scene::material::Material;
@@ -33,11 +34,21 @@ pub struct SurfacePoint<'s> {
     pub time: f32,
     /// Radiance the surface emits towards the viewer (area-light emitters).
     pub emitted: Vec3,
+    /// The reflectance of its perfect mirror towards `r` (traced as a
+    /// mirror bounce): a material's mirror layer, or a smooth metallic-
+    /// roughness surface's Fresnel term at n . wo (`Pbr::is_smooth`); 0
+    /// for none.
+    pub mirror: Vec3,
     /// The ray offset, metres (see `Geometry::ray_epsilon`).
     pub(crate) epsilon: f32,
     /// The distance below which 1/d^2 is clamped: the ray offset, or the
     /// scene's `render.distance_clamp` when larger.
     pub(crate) min_distance: f32,
+    /// The lobes the environment's lights light this point with: every
+    /// lobe, unless its glossy lobe is too sharp for them, which the
+    /// environment's sampling then lights (set by the integrator;
+    /// docs/design.md §6.2).
+    pub environment_lobes: Lobes,
 }
 
 impl SurfacePoint<'_> {

@@ -165,8 +165,10 @@ fn shading_points(material: &Material, count: usize) -> Vec<SurfacePoint<'_>> {
                 distance: 1.0,
                 time: 0.0,
                 emitted: Vec3::ZERO,
+                mirror: Vec3::ZERO,
                 epsilon: 1e-4,
                 min_distance: 1e-4,
+                environment_lobes: crate::shading::Lobes::ALL,
             }
         })
         .collect()

@@ -142,8 +142,16 @@ fn surface<'m>(rng: &mut Rng, material: &'m Material) -> SurfacePoint<'m> {
         distance: 1.0,
         time: 0.0,
         emitted: Vec3::ZERO,
+        mirror: Vec3::ZERO,
         epsilon: 1e-4,
         min_distance: 1e-4,
+        // Half the time the environment's lights see the diffuse lobe alone
+        // (a glossy lobe too sharp for them), which the bounds must follow.
+        environment_lobes: if rng.next_f32() < 0.5 {
+            crate::shading::Lobes::DIFFUSE
+        } else {
+            crate::shading::Lobes::ALL
+        },
     }
 }
 
