@@ -6,6 +6,7 @@ use std::f32::consts::PI;
 
 use glam::{Vec2, Vec3};
 
+use super::environment::{pixel_solid_angle, EnvironmentLight};
 use super::{DirectionalLight, OrientedLight};
 use crate::scene::EnvironmentMap;
 use crate::util::color::luminance;
@@ -296,41 +297,22 @@ pub fn sample_environment(map: &EnvironmentMap, samples: usize, seed: u64) -> Ve
         }
         EnvironmentMap::LatLong { width, height, texels, scale } => {
             let (w, h) = (*width, *height);
-            // Solid angle of a pixel in row y: (2 pi / w) (cos theta_0 - cos theta_1).
-            let solid_angle = |y: usize| {
-                let (t0, t1) = (PI * y as f32 / h as f32, PI * (y + 1) as f32 / h as f32);
-                2.0 * PI / w as f32 * (t0.cos() - t1.cos())
-            };
-            // Pixel weights: luminance x solid angle.
-            let weights: Vec<f64> = (0..w * h).map(|i| f64::from(luminance(texels[i]) * solid_angle(i / w))).collect();
-            let total: f64 = weights.iter().sum();
-            if total <= 0.0 {
-                return Vec::new();
-            }
-            let mut cdf = Vec::with_capacity(w * h);
-            let mut running = 0.0;
-            for weight in &weights {
-                running += weight / total;
-                cdf.push(running);
-            }
+            // The continuous light's distribution: luminance x solid angle.
+            let Some(light) = EnvironmentLight::new(map) else { return Vec::new() };
             let mut lights = Vec::with_capacity(samples);
             for k in 0..samples {
                 // Stratified in the CDF: sample k in [k, k+1) / samples.
                 // The position inside the pixel is independent of k (a
                 // jitter correlated with k biases it, as the CDF runs down
                 // the rows).
-                let jitter = Vec2::new(rng.next_f32(), rng.next_f32());
+                let jitter = [rng.next_f32(), rng.next_f32()];
                 let u = (k as f64 + f64::from(rng.next_f32())) / samples as f64;
-                let pixel = cdf.partition_point(|&c| c < u).min(w * h - 1);
+                let Some((pixel, probability)) = light.pixel(u) else { break };
                 let (x, y) = (pixel % w, pixel / w);
                 // Uniform in solid angle within the pixel: uniform in
                 // phi and in cos(theta), so the pdf is constant there.
-                let (c0, c1) = ((PI * y as f32 / h as f32).cos(), (PI * (y + 1) as f32 / h as f32).cos());
-                let cos_theta = c0 + (c1 - c0) * jitter.y;
-                let sin_theta = (1.0 - cos_theta * cos_theta).max(0.0).sqrt();
-                let phi = 2.0 * PI * ((x as f32 + jitter.x) / w as f32 - 0.5);
-                let direction = Vec3::new(sin_theta * phi.sin(), cos_theta, -sin_theta * phi.cos());
-                let pdf = (weights[pixel] / total) as f32 / solid_angle(y);
+                let direction = EnvironmentLight::in_pixel(x, y, w, h, jitter);
+                let pdf = probability as f32 / pixel_solid_angle(y, w, h);
                 let radiance = texels[pixel] * *scale;
                 lights.push(DirectionalLight { direction, irradiance: radiance / (samples as f32 * pdf) });
             }

@@ -8,6 +8,7 @@
 use glam::Vec3;
 
 pub mod emitters;
+pub mod environment;
 
 use crate::scene::{LightSource, Scene};
 
