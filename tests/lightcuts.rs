@@ -30,6 +30,10 @@ fn error_zero_reproduces_the_exact_image() {
     // 16 x 16 = 256 lights: above the exhaustive limit, so the cut runs.
     error_zero_reproduces_the_exact_image_of(&small_scene(16), "error-zero");
     error_zero_reproduces_the_exact_image_of(&small_pbr_scene(16), "error-zero-pbr");
+    // The chrome sphere's lobe (roughness 0.05) is sharp for the
+    // environment's lights: its part is sampled, the same in both.
+    let environment = "\n[environment]\nradiance = [0.4, 0.5, 0.6]\nsamples = 256\n";
+    error_zero_reproduces_the_exact_image_of(&(small_pbr_scene(16) + environment), "error-zero-environment");
 }
 
 fn error_zero_reproduces_the_exact_image_of(text: &str, name: &str) {

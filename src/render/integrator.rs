@@ -10,11 +10,12 @@ use std::time::Instant;
 
 use glam::{DVec3, Vec3};
 
+use crate::light::environment::EnvironmentLight;
 use crate::light::Lights;
 use crate::light_tree::LightTrees;
 use crate::lightcut::multidimensional::{GatherPoint, GatherScratch};
 use crate::lightcut::{self, CutResult, CutScratch, CutSettings, StochasticScratch};
-use crate::shading::{BatchBuffers, Geometry, LightBatch, SurfacePoint};
+use crate::shading::{BatchBuffers, Bsdf, Geometry, LightBatch, Lobes, SurfacePoint};
 use crate::util::sampling::Rng;
 
 /// How direct light is computed at each shading point.
@@ -39,6 +40,49 @@ pub type SampleKey = [u64; 4];
 /// Keeps the stochastic cut's stream apart from the camera's jitter, which
 /// is keyed by the same sample.
 const STOCHASTIC_STREAM: u64 = 0x5107_c4a5;
+
+/// Keeps the environment's sampling apart from the other streams of a
+/// sample's shading point.
+const ENVIRONMENT_STREAM: u64 = 0xe4f1_5a3b;
+
+/// The fewest of the environment's lights a glossy lobe must see for them
+/// to light it: a lobe that sees fewer (its solid angle times their
+/// density towards its mirror direction) shows them as specks, and its
+/// light from the environment is sampled instead (docs/design.md §6.2;
+/// measured in docs/measurements.md, "Shiny surfaces under an
+/// environment").
+pub const LIGHTS_PER_LOBE: f32 = 128.0;
+
+/// The environment as the integrator samples it: the continuous light, how
+/// many directional lights it became (their density towards a direction
+/// is that times the light's), and its light group.
+pub struct EnvironmentSampling<'a> {
+    pub light: EnvironmentLight<'a>,
+    pub lights: u32,
+    pub group: usize,
+}
+
+impl<'a> EnvironmentSampling<'a> {
+    /// The scene's environment, when it has one that emits.
+    #[must_use]
+    pub fn of(scene: &'a crate::scene::Scene) -> Option<Self> {
+        let environment = scene.environment.as_ref()?;
+        let light = EnvironmentLight::new(&environment.map)?;
+        Some(Self { light, lights: environment.samples, group: scene.groups.environment })
+    }
+
+    /// The BSDF at `sp` when its glossy lobe is too sharp for the
+    /// environment's lights (it sees fewer than [`LIGHTS_PER_LOBE`] of
+    /// them about its mirror direction): that lobe's light from the
+    /// environment is then sampled, and the lights light the rest.
+    #[must_use]
+    pub fn sharp_lobe(&self, sp: &SurfacePoint<'_>) -> Option<Bsdf> {
+        let bsdf = Bsdf::new(sp);
+        let solid_angle = bsdf.glossy_solid_angle()?;
+        let density = self.lights as f32 * self.light.pdf(sp.r);
+        (solid_angle * density < LIGHTS_PER_LOBE).then_some(bsdf)
+    }
+}
 
 /// Most culled back faces a camera or mirror ray passes through before it
 /// is taken to see nothing (a bound on a hostile stack of coplanar faces).
@@ -133,6 +177,8 @@ pub struct Integrator<'a> {
     pub split_groups: bool,
     /// The light group of each mesh's emission (`Scene::emission_groups`).
     pub emission_group: &'a [usize],
+    /// The environment as a light to sample, when the scene has one.
+    pub environment: Option<&'a EnvironmentSampling<'a>>,
 }
 
 impl<'a> Integrator<'a> {
@@ -187,7 +233,14 @@ impl<'a> Integrator<'a> {
                 }
                 break;
             };
-            let sp = self.geometry.surface(&ray, &hit);
+            let mut sp = self.geometry.surface(&ray, &hit);
+            // A glossy lobe too sharp for the environment's lights: they
+            // light the diffuse lobe, and the glossy one's light from the
+            // environment is sampled (in every mode alike).
+            let sharp = self.environment.and_then(|e| e.sharp_lobe(&sp).map(|bsdf| (e, bsdf)));
+            if sharp.is_some() {
+                sp.environment_lobes = Lobes::DIFFUSE;
+            }
             let mesh = self.geometry.mesh_of(&hit);
             let material = scene.meshes[mesh].material;
             if depth == 0 {
@@ -214,6 +267,22 @@ impl<'a> Integrator<'a> {
                 result.stats.record_point(direct.nodes, direct.shadow_rays);
                 direct.add_scaled_to(throughput, &mut result.radiance, groups);
             }
+            if let Some((environment, bsdf)) = &sharp {
+                // The pixel's samples take consecutive points of one
+                // rotated Kronecker sequence (`kronecker6`): stratified
+                // across them, so the sampled lobe's noise falls faster.
+                let [seed, x, y, s] = sample;
+                let mut rng = Rng::from_key(&[seed, x, y, u64::from(depth), ENVIRONMENT_STREAM]);
+                let shift: [f32; 6] = std::array::from_fn(|_| rng.next_f32());
+                let u = crate::util::sampling::kronecker6(s as u32, shift);
+                let (found, rays) = self.sampled_environment(environment, &sp, bsdf, u);
+                result.stats.shadow_rays += rays;
+                let seen = throughput * found;
+                result.radiance += seen;
+                if let Some(slot) = groups.get_mut(environment.group) {
+                    *slot += seen;
+                }
+            }
             if sp.mirror == Vec3::ZERO || depth == self.max_mirror_depth {
                 break;
             }
@@ -221,6 +290,43 @@ impl<'a> Integrator<'a> {
             ray = sp.mirror_ray();
         }
         result
+    }
+
+    /// The environment's light at `sp` through the glossy lobe of `bsdf`,
+    /// the lobe its lights leave alone (docs/design.md §6.2): one direction
+    /// drawn from the environment and one from the lobe, each weighted by
+    /// the power heuristic against the other's density for the same
+    /// direction (Veach and Guibas 1995), each with a shadow ray to
+    /// infinity. Returns the estimate and the rays cast.
+    fn sampled_environment(
+        &self,
+        environment: &EnvironmentSampling<'_>,
+        sp: &SurfacePoint<'_>,
+        bsdf: &Bsdf,
+        u: [f32; 6],
+    ) -> (DVec3, u64) {
+        let lobes = Lobes::GLOSSY;
+        let embree = &self.geometry.embree;
+        let mut radiance = DVec3::ZERO;
+        let mut rays = 0;
+        let mut add = |f_cos: Vec3, light: Vec3, pdf: f32, other: f32, wi: Vec3| {
+            if f_cos == Vec3::ZERO || light == Vec3::ZERO {
+                return;
+            }
+            rays += 1;
+            if !embree.occluded(&sp.shadow_ray_towards(wi).to_ray()) {
+                let weight = power_heuristic(pdf, other);
+                radiance += (f_cos * light).as_dvec3() * (weight / f64::from(pdf));
+            }
+        };
+        if let Some(s) = environment.light.sample([u[0], u[1], u[2]]) {
+            add(bsdf.eval(s.wi, lobes), s.radiance, s.pdf, bsdf.pdf(s.wi, lobes), s.wi);
+        }
+        if let Some(s) = bsdf.sample([u[3], u[4], u[5]], lobes) {
+            let light = environment.light.radiance(s.wi);
+            add(s.f_cos, light, s.pdf, environment.light.pdf(s.wi), s.wi);
+        }
+        (radiance, rays)
     }
 
     /// The first surface `ray` sees: back faces that cull are passed
@@ -367,4 +473,13 @@ impl<'a> Integrator<'a> {
         }
         radiance
     }
+}
+
+/// The power heuristic's weight (Veach and Guibas 1995, exponent 2) of a
+/// direction drawn with density `pdf` by one strategy, against `other`'s
+/// density for it by the other: pdf^2 / (pdf^2 + other^2).
+#[must_use]
+pub fn power_heuristic(pdf: f32, other: f32) -> f64 {
+    let (a, b) = (f64::from(pdf), f64::from(other));
+    a * a / (a * a + b * b)
 }

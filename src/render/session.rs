@@ -209,6 +209,7 @@ impl<'s> Session<'s> {
             _ => DirectLighting::Exact,
         };
         let emission_group = self.scene.emission_groups();
+        let environment = super::integrator::EnvironmentSampling::of(self.scene);
         let integrator = Integrator {
             geometry: &self.geometry,
             lights: &lights,
@@ -216,6 +217,7 @@ impl<'s> Session<'s> {
             max_mirror_depth: self.scene.max_mirror_depth,
             split_groups,
             emission_group: &emission_group,
+            environment: environment.as_ref(),
         };
         let camera = self.scene.camera(settings.width, settings.height);
         let (film, stats) = self.pool.install(|| render(&integrator, &camera, settings, progress))?;

@@ -133,6 +133,20 @@ pub fn distribution(n_dot_h: f32x4, alpha2: f32x4) -> f32x4 {
     alpha2 / (f32x4::splat(PI) * d * d)
 }
 
+/// The same D from sin^2(theta_h) = |n x h|^2, the form the evaluation
+/// uses: near the lobe's peak 1 - (n.h)^2 in f32 resolves nothing below
+/// 6e-8 (n.h's last digit), where a lobe of roughness 0.05 has alpha^2 =
+/// 6e-6 and D would be percents off (a furnace at that roughness read
+/// 1.3% bright); the cross product keeps the sine's digits. The bound
+/// keeps [`distribution`] of an upper bound on n.h, whose slack covers
+/// the difference (docs/design.md §5.6).
+#[inline(always)]
+#[must_use]
+pub fn distribution_of_sine(sin2_h: f32x4, alpha2: f32x4) -> f32x4 {
+    let d = sin2_h + (f32x4::ONE - sin2_h) * alpha2;
+    alpha2 / (f32x4::splat(PI) * d * d)
+}
+
 /// The height-correlated Smith visibility V = G / (4 |n.l| |n.v|) times
 /// n.l: 0.5 n.l / (n.l sqrt((n.v)^2 (1 - alpha^2) + alpha^2) + n.v
 /// sqrt((n.l)^2 (1 - alpha^2) + alpha^2)). Increasing in n.l (divide
@@ -229,10 +243,14 @@ impl PbrLanes {
         let safe = length.cmp_gt(zero);
         let inverse = safe.blend(f32x4::ONE / length, zero);
         let h = [h[0] * inverse, h[1] * inverse, h[2] * inverse];
-        let n_dot_h = dot3(n, &h).fast_max(zero).fast_min(f32x4::ONE);
+        // sin^2 from the cross product (`distribution_of_sine`); 1 where h
+        // is below the normal, as D at the clamped n.h = 0 was.
+        let cross = [n[1] * h[2] - n[2] * h[1], n[2] * h[0] - n[0] * h[2], n[0] * h[1] - n[1] * h[0]];
+        let above = dot3(n, &h).cmp_gt(zero);
+        let sin2_h = above.blend(dot3(&cross, &cross).fast_min(f32x4::ONE), f32x4::ONE);
         let v_dot_h = dot3(wo, &h).fast_max(zero).fast_min(f32x4::ONE);
         let l = cos_theta.fast_max(zero);
-        let specular = distribution(n_dot_h, self.alpha2) * visibility_cos(l, self.n_dot_v, self.alpha2);
+        let specular = distribution_of_sine(sin2_h, self.alpha2) * visibility_cos(l, self.n_dot_v, self.alpha2);
         let specular = if lobes.glossy && self.glossy { specular } else { zero };
         let weight = schlick_weight(v_dot_h);
         let f_d = [0, 1, 2].map(|k| self.f0[k] + (self.f90 - self.f0[k]) * weight);

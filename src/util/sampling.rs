@@ -84,6 +84,38 @@ pub fn hammersley(i: u32, n: u32, shift: [f32; 2]) -> [f32; 2] {
     [wrap(u, shift[0]), wrap(v, shift[1])]
 }
 
+/// Roberts' R_6 generators: alpha_j = phi^-(j+1), phi the positive root of
+/// x^7 = x + 1 (Roberts 2018, "The unreasonable effectiveness of
+/// quasirandom sequences").
+const R6: [f64; 6] = [
+    0.898_653_712_628_699_2,
+    0.807_578_495_221_344_7,
+    0.725_733_412_969_759_6,
+    0.652_183_025_943_971_5,
+    0.586_086_697_577_969_2,
+    0.526_688_986_700_735_6,
+];
+
+/// Point `i` of a Kronecker sequence in [0, 1)^6, (shift + i alpha) modulo
+/// 1 with Roberts' R_6 generators: any n consecutive indices spread over
+/// the cube with low discrepancy in every dimension and pair of them, so
+/// that the n samples of a pixel, each taking point i = its index, cover
+/// a shading point's directions evenly; the pixel's own random `shift`
+/// (a Cranley-Patterson rotation) keeps every point uniform, the
+/// estimate unbiased, and no pattern repeating across pixels.
+#[must_use]
+pub fn kronecker6(i: u32, shift: [f32; 6]) -> [f32; 6] {
+    std::array::from_fn(|j| {
+        let x = (f64::from(shift[j]) + f64::from(i) * R6[j]).fract() as f32;
+        // f64 -> f32 may round up to 1.0.
+        if x >= 1.0 {
+            0.0
+        } else {
+            x
+        }
+    })
+}
+
 /// Time `i` of a pixel's camera samples in the shutter: the base-3 radical
 /// inverse of i (Halton's second dimension, so that it does not line up
 /// with the lens's base-2 Hammersley points of the same index), shifted by
