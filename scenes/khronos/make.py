@@ -41,6 +41,12 @@ MODELS = {
     "avocado": ("Avocado/glTF/Avocado.gltf", 25.0, 20.0, 1.0),
     "water_bottle": ("WaterBottle/glTF/WaterBottle.gltf", 40.0, 15.0, 8.0),
 }
+# Built only when ONLY names them, into OUT (never into the repository):
+# DamagedHelmet is CC BY-NC (docs/measurements.md, "DamagedHelmet against
+# Cycles").
+MEASURED_ONLY = {
+    "damaged_helmet": ("DamagedHelmet/glTF/DamagedHelmet.gltf", 25.0, 20.0, 1.0),
+}
 
 
 def prepare_materials(emission_strength):
@@ -151,8 +157,10 @@ def build(name, path, azimuth, elevation, emission_strength):
 def main():
     root = sys.argv[-1]
     only = os.environ.get("ONLY")
-    for name, (path, azimuth, elevation, emission_strength) in MODELS.items():
-        if only and name != only:
+    if only in MEASURED_ONLY and "OUT" not in os.environ:
+        sys.exit(f"{only} is not for the repository: give OUT=DIR")
+    for name, (path, azimuth, elevation, emission_strength) in (MODELS | MEASURED_ONLY).items():
+        if (only and name != only) or (not only and name in MEASURED_ONLY):
             continue
         build(name, os.path.join(root, path), azimuth, elevation, emission_strength)
 

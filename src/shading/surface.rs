@@ -90,10 +90,19 @@ impl SurfacePoint<'_> {
         })
     }
 
-    /// The mirror-reflected ray.
+    /// The mirror-reflected ray. A shading normal tilted far from the
+    /// geometric one (a normal map's steep slope) can reflect the view
+    /// below the surface, where the ray would see the surface's own back
+    /// and the mirror would show a black ring; the direction is then lifted
+    /// just above the surface, as Cycles' `ensure_valid_specular_reflection`
+    /// does (docs/design.md §5.6).
     #[must_use]
     pub fn mirror_ray(&self) -> Ray {
-        Ray { origin: self.offset_origin(), direction: self.r, t_near: 0.0, t_far: f32::INFINITY, time: self.time }
+        let ng = if self.ng.dot(self.wo) < 0.0 { -self.ng } else { self.ng };
+        let lowest = (0.9 * ng.dot(self.wo)).min(0.01);
+        let height = self.r.dot(ng);
+        let direction = if height < lowest { (self.r + (lowest - height) * ng).normalize_or(self.r) } else { self.r };
+        Ray { origin: self.offset_origin(), direction, t_near: 0.0, t_far: f32::INFINITY, time: self.time }
     }
 
     /// The distance clamp for point-light singularities: squared distances
@@ -105,5 +114,55 @@ impl SurfacePoint<'_> {
     pub fn min_distance_squared(&self) -> f64 {
         // f64: the offset may be as small as 1e-30, whose square underflows f32.
         f64::from(self.min_distance) * f64::from(self.min_distance)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use glam::Vec3;
+
+    use super::*;
+    use crate::scene::material::{reflect, Albedo, Material};
+
+    /// On the plane z = 0 (geometric normal +z), seen from `wo`, with the
+    /// shading normal `n`.
+    fn point(material: &Material, n: Vec3, wo: Vec3) -> SurfacePoint<'_> {
+        SurfacePoint {
+            p: Vec3::ZERO,
+            n,
+            ng: Vec3::Z,
+            wo,
+            r: reflect(wo, n),
+            kd: Vec3::ZERO,
+            material,
+            pbr: None,
+            distance: 1.0,
+            time: 0.0,
+            emitted: Vec3::ZERO,
+            mirror: Vec3::ONE,
+            epsilon: 1e-4,
+            min_distance: 1e-4,
+            environment_lobes: Lobes::ALL,
+        }
+    }
+
+    #[test]
+    fn a_mirror_ray_below_the_surface_is_lifted_above_it() {
+        let material = Material::diffuse("mirror", Albedo::Constant(Vec3::ZERO));
+        // Seen 70 degrees from the normal, the shading normal tilted 15
+        // degrees away from the viewer: r = reflect(wo, n) points below the
+        // plane.
+        let (view, tilt) = (70f32.to_radians(), 15f32.to_radians());
+        let wo = Vec3::new(view.sin(), 0.0, view.cos());
+        let n = Vec3::new(-tilt.sin(), 0.0, tilt.cos());
+        let sp = point(&material, n, wo);
+        assert!(sp.r.z < 0.0, "the case needs a mirror direction below the surface: {}", sp.r);
+        let d = sp.mirror_ray().direction;
+        assert!((d.length() - 1.0).abs() < 1e-5);
+        assert!((d.z - 0.01).abs() < 1e-3, "lifted to just above the surface: {d}");
+        assert!(d.x < 0.0, "still away from the viewer's side: {d}");
+        // A direction above the surface is left as it is.
+        let sp = point(&material, Vec3::Z, wo);
+        assert_eq!(sp.mirror_ray().direction, sp.r);
     }
 }
