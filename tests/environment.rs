@@ -331,10 +331,10 @@ fn matches_peer(name: &str, scene: &str, reference: &str, flags: &[&[&str]]) {
 /// 0.25, 0.45) and a diffuse floor under a real HDR environment (Blender's
 /// courtyard, CC0): scenes/environment/, with the script that rendered the
 /// reference and how the two scenes correspond; at 64 spp in the default
-/// mode and in the bounded one.
+/// mode and 128 in the bounded one.
 #[test]
 fn glossy_spheres_under_an_hdr_environment_match_mitsuba() {
-    let flags: &[&[&str]] = &[&["--spp", "64"], &["--spp", "64", "--bounded"]];
+    let flags: &[&[&str]] = &[&["--spp", "64"], &["--spp", "128", "--bounded"]];
     matches_peer("mitsuba", "spheres.toml", "mitsuba-16384.exr", flags);
 }
 

@@ -283,7 +283,7 @@ fn render_lit(scene: &Scene, lights: &[Lights]) -> Outcome {
     let whole_trees =
         lightcut::build_trees_with(lights, 1, &CutSettings { exhaustive_lights: 0, ..MULTIDIMENSIONAL_DEFAULTS });
     let emission_group = scene.emission_groups();
-    let environment = lightcuts::render::integrator::EnvironmentSampling::of(scene);
+    let environment = lightcuts::render::integrator::EnvironmentSampling::of(scene, settings.spp);
     for direct in [
         DirectLighting::Exact,
         DirectLighting::Lightcuts { trees: &trees, settings: CutSettings::default() },

@@ -53,22 +53,37 @@ const ENVIRONMENT_STREAM: u64 = 0xe4f1_5a3b;
 /// environment").
 pub const LIGHTS_PER_LOBE: f32 = 128.0;
 
+/// The fewest pairs of draws (one from the environment, one from the
+/// lobe) a pixel's samples give a sharp lobe together: below this many
+/// samples per pixel each sample draws several pairs (docs/design.md §6.2).
+pub const DRAWS_PER_PIXEL: u32 = 64;
+
+/// The most pairs one sample draws at a shading point.
+const MOST_DRAWS_PER_POINT: u32 = 16;
+
 /// The environment as the integrator samples it: the continuous light, how
 /// many directional lights it became (their density towards a direction
-/// is that times the light's), and its light group.
+/// is that times the light's), its light group, and how many pairs of
+/// draws a sharp lobe gets per shading point.
 pub struct EnvironmentSampling<'a> {
     pub light: EnvironmentLight<'a>,
     pub lights: u32,
     pub group: usize,
+    pub draws: u32,
 }
 
 impl<'a> EnvironmentSampling<'a> {
-    /// The scene's environment, when it has one that emits.
+    /// The scene's environment, when it has one that emits, for a render
+    /// of `spp` samples per pixel: each sample draws enough pairs that the
+    /// pixel gets at least [`DRAWS_PER_PIXEL`] (at most 16 per sample), so
+    /// that a few samples per pixel, the bounded mode's usual setting, do
+    /// not leave a sharp lobe's reflection grainy.
     #[must_use]
-    pub fn of(scene: &'a crate::scene::Scene) -> Option<Self> {
+    pub fn of(scene: &'a crate::scene::Scene, spp: u32) -> Option<Self> {
         let environment = scene.environment.as_ref()?;
         let light = EnvironmentLight::new(&environment.map)?;
-        Some(Self { light, lights: environment.samples, group: scene.groups.environment })
+        let draws = DRAWS_PER_PIXEL.div_ceil(spp.max(1)).clamp(1, MOST_DRAWS_PER_POINT);
+        Some(Self { light, lights: environment.samples, group: scene.groups.environment, draws })
     }
 
     /// The BSDF at `sp` when its glossy lobe is too sharp for the
@@ -268,16 +283,23 @@ impl<'a> Integrator<'a> {
                 direct.add_scaled_to(throughput, &mut result.radiance, groups);
             }
             if let Some((environment, bsdf)) = &sharp {
-                // The pixel's samples take consecutive points of one
-                // rotated Kronecker sequence (`kronecker6`): stratified
-                // across them, so the sampled lobe's noise falls faster.
+                // The pixel's samples (and each sample's draws) take
+                // consecutive points of one rotated Kronecker sequence
+                // (`kronecker6`): stratified across them, so the sampled
+                // lobe's noise falls faster.
                 let [seed, x, y, s] = sample;
                 let mut rng = Rng::from_key(&[seed, x, y, u64::from(depth), ENVIRONMENT_STREAM]);
                 let shift: [f32; 6] = std::array::from_fn(|_| rng.next_f32());
-                let u = crate::util::sampling::kronecker6(s as u32, shift);
-                let (found, rays) = self.sampled_environment(environment, &sp, bsdf, u);
-                result.stats.shadow_rays += rays;
-                let seen = throughput * found;
+                let draws = environment.draws;
+                let mut found = DVec3::ZERO;
+                for j in 0..draws {
+                    let index = (s as u32).wrapping_mul(draws).wrapping_add(j);
+                    let u = crate::util::sampling::kronecker6(index, shift);
+                    let (value, rays) = self.sampled_environment(environment, &sp, bsdf, u);
+                    found += value;
+                    result.stats.shadow_rays += rays;
+                }
+                let seen = throughput * found / f64::from(draws);
                 result.radiance += seen;
                 if let Some(slot) = groups.get_mut(environment.group) {
                     *slot += seen;

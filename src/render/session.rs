@@ -209,7 +209,7 @@ impl<'s> Session<'s> {
             _ => DirectLighting::Exact,
         };
         let emission_group = self.scene.emission_groups();
-        let environment = super::integrator::EnvironmentSampling::of(self.scene);
+        let environment = super::integrator::EnvironmentSampling::of(self.scene, settings.spp);
         let integrator = Integrator {
             geometry: &self.geometry,
             lights: &lights,
