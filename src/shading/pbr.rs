@@ -139,7 +139,7 @@ pub fn distribution(n_dot_h: f32x4, alpha2: f32x4) -> f32x4 {
 /// 6e-6 and D would be percents off (a furnace at that roughness read
 /// 1.3% bright); the cross product keeps the sine's digits. The bound
 /// keeps [`distribution`] of an upper bound on n.h, whose slack covers
-/// the difference (docs/design.md §5.6).
+/// the difference (docs/design.md §5.3).
 #[inline(always)]
 #[must_use]
 pub fn distribution_of_sine(sin2_h: f32x4, alpha2: f32x4) -> f32x4 {
