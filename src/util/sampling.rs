@@ -72,16 +72,19 @@ impl Rng {
 pub fn hammersley(i: u32, n: u32, shift: [f32; 2]) -> [f32; 2] {
     let u = (f64::from(i) + 0.5) / f64::from(n.max(1));
     let v = f64::from(i.reverse_bits()) * (1.0 / 4_294_967_296.0);
-    let wrap = |x: f64, s: f32| {
-        let y = (x + f64::from(s)).fract() as f32;
-        // f64 -> f32 may round up to 1.0.
-        if y >= 1.0 {
-            0.0
-        } else {
-            y
-        }
-    };
-    [wrap(u, shift[0]), wrap(v, shift[1])]
+    [rotated(u, shift[0]), rotated(v, shift[1])]
+}
+
+/// `x + shift` modulo 1 (a Cranley-Patterson rotation of `x`), in [0, 1)
+/// as f32.
+fn rotated(x: f64, shift: f32) -> f32 {
+    let y = (x + f64::from(shift)).fract() as f32;
+    // f64 -> f32 may round up to 1.0.
+    if y >= 1.0 {
+        0.0
+    } else {
+        y
+    }
 }
 
 /// Roberts' R_6 generators: alpha_j = phi^-(j+1), phi the positive root of
@@ -105,15 +108,7 @@ const R6: [f64; 6] = [
 /// estimate unbiased, and no pattern repeating across pixels.
 #[must_use]
 pub fn kronecker6(i: u32, shift: [f32; 6]) -> [f32; 6] {
-    std::array::from_fn(|j| {
-        let x = (f64::from(shift[j]) + f64::from(i) * R6[j]).fract() as f32;
-        // f64 -> f32 may round up to 1.0.
-        if x >= 1.0 {
-            0.0
-        } else {
-            x
-        }
-    })
+    std::array::from_fn(|j| rotated(f64::from(i) * R6[j], shift[j]))
 }
 
 /// Time `i` of a pixel's camera samples in the shutter: the base-3 radical
@@ -129,13 +124,7 @@ pub fn shutter_time(i: u32, shift: f32) -> f32 {
         i /= 3;
         scale /= 3.0;
     }
-    let t = (inverse + f64::from(shift)).fract() as f32;
-    // f64 -> f32 may round up to 1.0.
-    if t >= 1.0 {
-        0.0
-    } else {
-        t
-    }
+    rotated(inverse, shift)
 }
 
 /// Shirley and Chiu's concentric map of the unit square onto the unit disc
