@@ -283,7 +283,7 @@ fn render_lit(scene: &Scene, lights: &[Lights]) -> Outcome {
     let whole_trees =
         lightcut::build_trees_with(lights, 1, &CutSettings { exhaustive_lights: 0, ..MULTIDIMENSIONAL_DEFAULTS });
     let emission_group = scene.emission_groups();
-    let environment = lightcuts::render::integrator::EnvironmentSampling::of(scene, settings.spp);
+    let emitters = lightcuts::render::emitter_sampling::EmitterSampling::of(scene, settings.spp);
     for direct in [
         DirectLighting::Exact,
         DirectLighting::Lightcuts { trees: &trees, settings: CutSettings::default() },
@@ -297,7 +297,7 @@ fn render_lit(scene: &Scene, lights: &[Lights]) -> Outcome {
             max_mirror_depth: scene.max_mirror_depth,
             split_groups: scene.groups.named(),
             emission_group: &emission_group,
-            environment: environment.as_ref(),
+            emitters: emitters.as_ref(),
         };
         let (film, _) = render::render(&integrator, &camera, &settings, &|_| {}).unwrap();
         assert!(film.non_finite().is_empty(), "NaN or Inf reached the film: {:?}", film.non_finite());

@@ -221,7 +221,7 @@ fn an_emissive_quad_lights_the_floor_with_its_irradiance_and_is_seen_from_both_s
     let toml = "[gltf]\nfile = \"panel.gltf\"\nemitter_samples = 4096\n";
     let scene = load(&dir, "s.toml", toml);
     let lights = Lights::from_scene(&scene);
-    assert_eq!(lights.oriented.len(), 2 * 4096, "both sides");
+    assert_eq!(lights.area.len(), 2 * 4096, "both sides");
     let (below, _) = radiance_seen(&scene, Vec3::new(0.0, 1.0, 0.01), Vec3::new(0.0, 0.0, 0.0));
     let expected = 0.5 / PI * square_irradiance(1.0, 1.5, 4.0);
     assert_close(below.x, expected, 0.01, "floor under the panel (red)");
@@ -235,7 +235,7 @@ fn an_emissive_quad_lights_the_floor_with_its_irradiance_and_is_seen_from_both_s
     g.json["materials"][1]["doubleSided"] = json!(false);
     g.write_separate(&dir.path(""), "panel");
     let scene = load(&dir, "s.toml", toml);
-    assert_eq!(Lights::from_scene(&scene).oriented.len(), 4096);
+    assert_eq!(Lights::from_scene(&scene).area.len(), 4096);
     let (_, emitted) = radiance_seen(&scene, Vec3::new(0.1, 3.0, 0.1), Vec3::new(0.1, 1.5, 0.1));
     assert_eq!(emitted, Vec3::ZERO, "the back of a one-sided emitter is dark");
 }
@@ -279,16 +279,16 @@ fn an_emissive_texture_emits_and_shows_its_texels() {
     assert!(!scene.warnings.iter().any(|w| w.contains("emissiveTexture")), "{:?}", scene.warnings);
     let texel = Vec3::new(1.0, lightcuts::util::color::srgb_to_linear(128.0 / 255.0), 0.0) * 4.0;
     let lights = Lights::from_scene(&scene);
-    let n = lights.oriented.len();
+    let n = lights.area.len();
     assert!((240..=256).contains(&n), "{n} lights (256 drawn, a repeat merged)");
-    for l in &lights.oriented {
+    for l in &lights.area {
         assert!(l.position.x >= -1e-6 && l.position.x <= 0.5 + 1e-6, "a light on the dark half: {}", l.position);
         let chroma = l.intensity / l.intensity.x;
         assert!((chroma - texel / texel.x).abs().max_element() < 1e-5, "its texel's colour: {}", l.intensity);
     }
     // Each oriented light radiates pi I: the right half's power, pi L A
     // (within 0.5%: the candidates measure the half on its two triangles).
-    let power: Vec3 = lights.oriented.iter().map(|l| std::f32::consts::PI * l.intensity).sum();
+    let power: Vec3 = lights.area.iter().map(|l| std::f32::consts::PI * l.intensity).sum();
     let expected = std::f32::consts::PI * texel * 0.5;
     assert!((power - expected).abs().max_element() <= 5e-3 * expected.max_element(), "{power} vs {expected}");
     // The floor (albedo 0.5): below the bright half's centre, four corner

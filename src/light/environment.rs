@@ -78,6 +78,20 @@ impl<'s> EnvironmentLight<'s> {
         Some(Self { map, distribution })
     }
 
+    /// The luminance of the radiance averaged over the sphere of
+    /// directions, W/(m^2 sr): pi times it is the irradiance a surface
+    /// would get from a uniform environment of the same power.
+    #[must_use]
+    pub fn mean_luminance(&self) -> f32 {
+        match (&self.distribution, self.map) {
+            (Distribution::Pixels { total, .. }, EnvironmentMap::LatLong { scale, .. }) => {
+                (*total / (4.0 * std::f64::consts::PI)) as f32 * scale
+            }
+            (Distribution::Uniform, EnvironmentMap::Constant(c)) => luminance(*c),
+            _ => 0.0,
+        }
+    }
+
     /// The radiance arriving from unit direction `wi`, W/(m^2 sr): what a
     /// ray that escapes the scene reads.
     #[must_use]

@@ -1,5 +1,5 @@
 //! Light kinds and the lights of a scene. Every light reduces to a point
-//! light of one of five kinds, and each kind gets its own light tree
+//! light of one of six kinds, and each kind gets its own light tree
 //! ([LC05]; docs/design.md §5.2); a scene builds trees
 //! only for the kinds it has. `Lights::from_scene` turns the scene's light
 //! sources (point lights, grids, area emitters, the sun, the environment)
@@ -7,17 +7,25 @@
 
 use glam::Vec3;
 
+pub mod area;
 pub mod emitters;
 pub mod environment;
 
 use crate::scene::{LightSource, Scene};
 
 /// The light kinds, each with its own tree: [LC05]'s three, spots, and
-/// the environment's directions apart from the sun's.
+/// the stand-ins of continuous emitters (area lights' points, the
+/// environment's directions) apart from the other oriented and
+/// directional lights.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum LightKind {
     /// Point lights radiating equally in all directions.
     Omni,
+    /// An area light's points: oriented lights as `Oriented`, in trees of
+    /// their own because a shading point whose glossy lobe is too sharp
+    /// for them lights them with its broad lobes alone and samples the
+    /// emitter's surface for the rest (docs/design.md §6.1).
+    Area,
     /// Cosine-weighted lights with a normal (area-light samples, virtual point lights).
     Oriented,
     /// Lights at infinity from one direction (the sun).
@@ -35,7 +43,10 @@ impl LightKind {
     /// Every kind, in the order the renderer visits them (the
     /// environment's directions right after the sun's, as they were
     /// summed when they shared a kind).
-    pub const ALL: [Self; 5] = [Self::Omni, Self::Oriented, Self::Directional, Self::Environment, Self::Spot];
+    /// (Area lights before the other oriented ones, where they were summed
+    /// when they shared a kind.)
+    pub const ALL: [Self; 6] =
+        [Self::Omni, Self::Area, Self::Oriented, Self::Directional, Self::Environment, Self::Spot];
 
     /// Whether the kind's lights are at infinity (a direction, not a
     /// position; G = 1).
@@ -48,13 +59,22 @@ impl LightKind {
     /// lights' normals, spots' axes), so that their trees carry cones.
     #[must_use]
     pub fn has_cone(self) -> bool {
-        matches!(self, Self::Oriented | Self::Spot)
+        matches!(self, Self::Area | Self::Oriented | Self::Spot)
+    }
+
+    /// Whether the kind's lights stand in for a continuous emitter (an
+    /// area light's surface, the environment) that a sharp glossy lobe
+    /// samples instead (docs/design.md §6.1 and design.md §6.2).
+    #[must_use]
+    pub fn stands_in_for_emitter(self) -> bool {
+        matches!(self, Self::Area | Self::Environment)
     }
 
     #[must_use]
     pub fn name(self) -> &'static str {
         match self {
             Self::Omni => "omni",
+            Self::Area => "area",
             Self::Oriented => "oriented",
             Self::Directional => "directional",
             Self::Environment => "environment",
@@ -142,6 +162,8 @@ impl SpotLight {
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Light {
     Omni(OmniLight),
+    /// One of an area light's points.
+    Area(OrientedLight),
     Oriented(OrientedLight),
     Directional(DirectionalLight),
     /// One of the environment's directions.
@@ -154,6 +176,7 @@ impl Light {
     pub fn kind(&self) -> LightKind {
         match self {
             Self::Omni(_) => LightKind::Omni,
+            Self::Area(_) => LightKind::Area,
             Self::Oriented(_) => LightKind::Oriented,
             Self::Directional(_) => LightKind::Directional,
             Self::Environment(_) => LightKind::Environment,
@@ -183,7 +206,7 @@ impl TreeLight {
     pub fn of(light: &Light) -> Self {
         match *light {
             Light::Omni(l) => Self { point: l.position, normal: Vec3::ZERO, intensity: l.intensity, spread: [0.0; 2] },
-            Light::Oriented(l) => {
+            Light::Area(l) | Light::Oriented(l) => {
                 Self { point: l.position, normal: l.normal, intensity: l.intensity, spread: [0.0; 2] }
             }
             Light::Directional(l) | Light::Environment(l) => {
@@ -203,6 +226,9 @@ impl TreeLight {
     pub fn light(&self, kind: LightKind) -> Light {
         match kind {
             LightKind::Omni => Light::Omni(OmniLight { position: self.point, intensity: self.intensity }),
+            LightKind::Area => {
+                Light::Area(OrientedLight { position: self.point, normal: self.normal, intensity: self.intensity })
+            }
             LightKind::Oriented => {
                 Light::Oriented(OrientedLight { position: self.point, normal: self.normal, intensity: self.intensity })
             }
@@ -227,6 +253,8 @@ impl TreeLight {
 #[derive(Debug, Clone, Default)]
 pub struct Lights {
     pub omni: Vec<OmniLight>,
+    /// Area lights' points (`LightKind::Area`).
+    pub area: Vec<OrientedLight>,
     pub oriented: Vec<OrientedLight>,
     pub directional: Vec<DirectionalLight>,
     /// The environment's directions (`LightKind::Environment`).
@@ -316,8 +344,8 @@ impl Lights {
                     } else {
                         Vec::new()
                     };
-                    lights.oriented.extend(front);
-                    lights.oriented.extend(back);
+                    lights.area.extend(front);
+                    lights.area.extend(back);
                 }
                 LightSource::Sun { direction, irradiance, angular_radius_degrees, samples, seed } => {
                     lights.directional.extend(emitters::sample_sun(
@@ -343,6 +371,7 @@ impl Lights {
     /// Adds `other`'s lights after these, kind by kind.
     pub fn append(&mut self, other: &Self) {
         self.omni.extend_from_slice(&other.omni);
+        self.area.extend_from_slice(&other.area);
         self.oriented.extend_from_slice(&other.oriented);
         self.directional.extend_from_slice(&other.directional);
         self.environment.extend_from_slice(&other.environment);
@@ -352,7 +381,12 @@ impl Lights {
 
     #[must_use]
     pub fn len(&self) -> usize {
-        self.omni.len() + self.oriented.len() + self.directional.len() + self.environment.len() + self.spot.len()
+        self.omni.len()
+            + self.area.len()
+            + self.oriented.len()
+            + self.directional.len()
+            + self.environment.len()
+            + self.spot.len()
     }
 
     #[must_use]
@@ -365,6 +399,7 @@ impl Lights {
     pub fn count(&self, kind: LightKind) -> usize {
         match kind {
             LightKind::Omni => self.omni.len(),
+            LightKind::Area => self.area.len(),
             LightKind::Oriented => self.oriented.len(),
             LightKind::Directional => self.directional.len(),
             LightKind::Environment => self.environment.len(),
@@ -372,14 +407,17 @@ impl Lights {
         }
     }
 
-    /// Calls `f` for every light, omni, oriented, directional,
-    /// environment, then spot, each in order. Three plain loops: after inlining, each loop's `Light`
+    /// Calls `f` for every light, omni, area, oriented, directional,
+    /// environment, then spot, each in order. Plain loops: after inlining, each loop's `Light`
     /// variant is known, so the exact renderer's hot path does not branch
     /// on the kind per light.
     #[inline(always)]
     pub fn for_each(&self, mut f: impl FnMut(Light)) {
         for l in &self.omni {
             f(Light::Omni(*l));
+        }
+        for l in &self.area {
+            f(Light::Area(*l));
         }
         for l in &self.oriented {
             f(Light::Oriented(*l));
@@ -400,6 +438,7 @@ impl Lights {
     pub fn tree_lights(&self, kind: LightKind) -> Vec<TreeLight> {
         match kind {
             LightKind::Omni => self.omni.iter().map(|l| TreeLight::of(&Light::Omni(*l))).collect(),
+            LightKind::Area => self.area.iter().map(|l| TreeLight::of(&Light::Area(*l))).collect(),
             LightKind::Oriented => self.oriented.iter().map(|l| TreeLight::of(&Light::Oriented(*l))).collect(),
             LightKind::Directional => self.directional.iter().map(|l| TreeLight::of(&Light::Directional(*l))).collect(),
             LightKind::Environment => self.environment.iter().map(|l| TreeLight::of(&Light::Environment(*l))).collect(),
@@ -454,7 +493,7 @@ samples = 7
         // Grid lights sit at cell centres, row by row.
         let first = lights.omni[1].position;
         assert!((first - Vec3::new(-1.0 + 2.0 / 6.0, 3.0, -0.5)).length() < 1e-6, "{first}");
-        assert_eq!(lights.oriented.len(), 10);
+        assert_eq!(lights.area.len(), 10);
         assert_eq!(lights.directional, vec![DirectionalLight { direction: Vec3::Y, irradiance: Vec3::splat(3.0) }]);
         assert_eq!(lights.environment.len(), 7, "the environment's lights apart from the sun's");
         let mut kinds = Vec::new();
@@ -468,6 +507,7 @@ samples = 7
         let lights = [
             Light::Omni(OmniLight { position: Vec3::X, intensity: Vec3::ONE }),
             Light::Oriented(OrientedLight { position: Vec3::Y, normal: Vec3::Z, intensity: Vec3::ONE }),
+            Light::Area(OrientedLight { position: Vec3::Y, normal: Vec3::Z, intensity: Vec3::ONE }),
             Light::Directional(DirectionalLight { direction: Vec3::Z, irradiance: Vec3::ONE }),
             Light::Spot(SpotLight {
                 position: Vec3::X,

@@ -95,7 +95,7 @@ impl Metric {
         let alpha2 = diagonal.as_dvec3().length_squared();
         let weight = f64::from(a.weight) + f64::from(b.weight);
         match self.kind {
-            LightKind::Oriented | LightKind::Spot => {
+            LightKind::Area | LightKind::Oriented | LightKind::Spot => {
                 let cone = a.cone.union(b.cone);
                 let angular = 1.0 - f64::from(cone.half_angle.cos());
                 weight * (alpha2 + self.c_squared * angular * angular)

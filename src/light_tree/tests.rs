@@ -31,7 +31,7 @@ fn random_lights(seed: u64, n: usize, kind: LightKind, clustered: bool) -> Vec<T
         .collect()
 }
 
-const KINDS: [LightKind; 5] = LightKind::ALL;
+const KINDS: [LightKind; 6] = LightKind::ALL;
 
 /// Walks the tree checking every structural property; returns the lights
 /// below each node visited.

@@ -182,9 +182,10 @@ pub struct PointBounds {
     /// The distance clamp squared (f32, rounded down: 0 if it underflows,
     /// which makes G's bound infinite, still an upper bound).
     min_distance_squared: f32x4,
-    /// The lobes the environment's lights light the point with
-    /// (`SurfacePoint::environment_lobes`; every lobe for a gather cluster).
-    environment_lobes: Lobes,
+    /// The lobes the stand-ins of continuous emitters (area lights'
+    /// points, the environment's directions) light the point with
+    /// (`SurfacePoint::emitter_lobes`; every lobe for a gather cluster).
+    emitter_lobes: Lobes,
     /// 1 / the trees' total luminance: normalises intensities.
     scale: f32x4,
 }
@@ -213,7 +214,7 @@ impl PointBounds {
             lobe: splat3(LUMINANCE * lobe),
             luminance: splat3(LUMINANCE),
             min_distance_squared: f32x4::splat(clamp32),
-            environment_lobes: sp.environment_lobes,
+            emitter_lobes: sp.emitter_lobes,
             scale: f32x4::splat(scale),
         }
     }
@@ -243,7 +244,7 @@ impl PointBounds {
             lobe: splat3(Vec3::ZERO),
             luminance: splat3(LUMINANCE),
             min_distance_squared: f32x4::splat(g.min_distance_squared),
-            environment_lobes: Lobes::ALL,
+            emitter_lobes: Lobes::ALL,
             scale: f32x4::splat(scale),
         }
     }
@@ -458,15 +459,16 @@ impl PointBounds {
     ) -> f32x4 {
         let (cos_theta, weighted, geometric) = match kind {
             LightKind::Directional | LightKind::Environment => {
-                let lobes = if kind == LightKind::Environment { self.environment_lobes } else { Lobes::ALL };
+                let lobes = if kind == LightKind::Environment { self.emitter_lobes } else { Lobes::ALL };
                 let (cos_theta, weighted) = self.material(c, h, intensity, lobes);
                 (cos_theta, weighted, f32x4::ONE)
             }
-            LightKind::Omni | LightKind::Oriented | LightKind::Spot => {
+            LightKind::Omni | LightKind::Area | LightKind::Oriented | LightKind::Spot => {
                 // (A point's extent is 0: h + 0 is h, bit for bit.)
                 let h = &add3(h, &self.extent);
                 let to_box = sub3(c, &self.p);
-                let (cos_theta, weighted) = self.material(&to_box, h, intensity, Lobes::ALL);
+                let lobes = if kind == LightKind::Area { self.emitter_lobes } else { Lobes::ALL };
+                let (cos_theta, weighted) = self.material(&to_box, h, intensity, lobes);
                 let mut geometric = self.geometric(c, h, estimate);
                 if let Some(cone) = cone {
                     geometric *= self.emission(c, h, cone);

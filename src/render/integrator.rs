@@ -10,7 +10,7 @@ use std::time::Instant;
 
 use glam::{DVec3, Vec3};
 
-use crate::light::environment::EnvironmentLight;
+use super::emitter_sampling::{EmitterChoice, EmitterDraw, EmitterSampling};
 use crate::light::Lights;
 use crate::light_tree::LightTrees;
 use crate::lightcut::multidimensional::{GatherPoint, GatherScratch};
@@ -41,63 +41,9 @@ pub type SampleKey = [u64; 4];
 /// is keyed by the same sample.
 const STOCHASTIC_STREAM: u64 = 0x5107_c4a5;
 
-/// Keeps the environment's sampling apart from the other streams of a
+/// Keeps the emitters' sampling apart from the other streams of a
 /// sample's shading point.
-const ENVIRONMENT_STREAM: u64 = 0xe4f1_5a3b;
-
-/// The fewest of the environment's lights a glossy lobe must see for them
-/// to light it: a lobe that sees fewer (its solid angle times their
-/// density towards its mirror direction) shows them as specks, and its
-/// light from the environment is sampled instead (docs/design.md §6.2;
-/// measured in docs/measurements.md, "Shiny surfaces under an
-/// environment").
-pub const LIGHTS_PER_LOBE: f32 = 128.0;
-
-/// The fewest pairs of draws (one from the environment, one from the
-/// lobe) a pixel's samples give a sharp lobe together: below this many
-/// samples per pixel each sample draws several pairs (docs/design.md §6.2).
-pub const DRAWS_PER_PIXEL: u32 = 64;
-
-/// The most pairs one sample draws at a shading point.
-const MOST_DRAWS_PER_POINT: u32 = 16;
-
-/// The environment as the integrator samples it: the continuous light, how
-/// many directional lights it became (their density towards a direction
-/// is that times the light's), its light group, and how many pairs of
-/// draws a sharp lobe gets per shading point.
-pub struct EnvironmentSampling<'a> {
-    pub light: EnvironmentLight<'a>,
-    pub lights: u32,
-    pub group: usize,
-    pub draws: u32,
-}
-
-impl<'a> EnvironmentSampling<'a> {
-    /// The scene's environment, when it has one that emits, for a render
-    /// of `spp` samples per pixel: each sample draws enough pairs that the
-    /// pixel gets at least [`DRAWS_PER_PIXEL`] (at most 16 per sample), so
-    /// that a few samples per pixel, the bounded mode's usual setting, do
-    /// not leave a sharp lobe's reflection grainy.
-    #[must_use]
-    pub fn of(scene: &'a crate::scene::Scene, spp: u32) -> Option<Self> {
-        let environment = scene.environment.as_ref()?;
-        let light = EnvironmentLight::new(&environment.map)?;
-        let draws = DRAWS_PER_PIXEL.div_ceil(spp.max(1)).clamp(1, MOST_DRAWS_PER_POINT);
-        Some(Self { light, lights: environment.samples, group: scene.groups.environment, draws })
-    }
-
-    /// The BSDF at `sp` when its glossy lobe is too sharp for the
-    /// environment's lights (it sees fewer than [`LIGHTS_PER_LOBE`] of
-    /// them about its mirror direction): that lobe's light from the
-    /// environment is then sampled, and the lights light the rest.
-    #[must_use]
-    pub fn sharp_lobe(&self, sp: &SurfacePoint<'_>) -> Option<Bsdf> {
-        let bsdf = Bsdf::new(sp);
-        let solid_angle = bsdf.glossy_solid_angle()?;
-        let density = self.lights as f32 * self.light.pdf(sp.r);
-        (solid_angle * density < LIGHTS_PER_LOBE).then_some(bsdf)
-    }
-}
+const EMITTER_STREAM: u64 = 0xe4f1_5a3b;
 
 /// Most culled back faces a camera or mirror ray passes through before it
 /// is taken to see nothing (a bound on a hostile stack of coplanar faces).
@@ -110,6 +56,7 @@ pub struct Scratch {
     cut: CutScratch,
     stochastic: StochasticScratch,
     gather: GatherScratch,
+    choice: EmitterChoice,
 }
 
 /// Buckets of the cut-size histogram: bucket k counts cuts of 2^k to
@@ -192,8 +139,9 @@ pub struct Integrator<'a> {
     pub split_groups: bool,
     /// The light group of each mesh's emission (`Scene::emission_groups`).
     pub emission_group: &'a [usize],
-    /// The environment as a light to sample, when the scene has one.
-    pub environment: Option<&'a EnvironmentSampling<'a>>,
+    /// The continuous emitters (environment, area lights) as sharp lobes
+    /// sample them, when the scene has any.
+    pub emitters: Option<&'a EmitterSampling<'a>>,
 }
 
 impl<'a> Integrator<'a> {
@@ -249,12 +197,12 @@ impl<'a> Integrator<'a> {
                 break;
             };
             let mut sp = self.geometry.surface(&ray, &hit);
-            // A glossy lobe too sharp for the environment's lights: they
-            // light the diffuse lobe, and the glossy one's light from the
-            // environment is sampled (in every mode alike).
-            let sharp = self.environment.and_then(|e| e.sharp_lobe(&sp).map(|bsdf| (e, bsdf)));
+            // A glossy lobe too sharp for some emitter's stand-in lights:
+            // they light the diffuse lobe, and the glossy one's light from
+            // the continuous emitters is sampled (in every mode alike).
+            let sharp = self.emitters.and_then(|e| e.sharp_lobe(&sp).map(|bsdf| (e, bsdf)));
             if sharp.is_some() {
-                sp.environment_lobes = Lobes::DIFFUSE;
+                sp.emitter_lobes = Lobes::DIFFUSE;
             }
             let mesh = self.geometry.mesh_of(&hit);
             let material = scene.meshes[mesh].material;
@@ -282,27 +230,29 @@ impl<'a> Integrator<'a> {
                 result.stats.record_point(direct.nodes, direct.shadow_rays);
                 direct.add_scaled_to(throughput, &mut result.radiance, groups);
             }
-            if let Some((environment, bsdf)) = &sharp {
+            if let Some((emitters, bsdf)) = &sharp {
                 // The pixel's samples (and each sample's draws) take
                 // consecutive points of one rotated Kronecker sequence
                 // (`kronecker6`): stratified across them, so the sampled
                 // lobe's noise falls faster.
                 let [seed, x, y, s] = sample;
-                let mut rng = Rng::from_key(&[seed, x, y, u64::from(depth), ENVIRONMENT_STREAM]);
+                let mut rng = Rng::from_key(&[seed, x, y, u64::from(depth), EMITTER_STREAM]);
                 let shift: [f32; 6] = std::array::from_fn(|_| rng.next_f32());
-                let draws = environment.draws;
-                let mut found = DVec3::ZERO;
+                let draws = emitters.draws;
+                emitters.weigh(&sp, &mut scratch.choice);
+                let scale = throughput / f64::from(draws);
+                let mut credit = |group: usize, value: DVec3| {
+                    let seen = scale * value;
+                    result.radiance += seen;
+                    if let Some(slot) = groups.get_mut(group) {
+                        *slot += seen;
+                    }
+                };
                 for j in 0..draws {
                     let index = (s as u32).wrapping_mul(draws).wrapping_add(j);
                     let u = crate::util::sampling::kronecker6(index, shift);
-                    let (value, rays) = self.sampled_environment(environment, &sp, bsdf, u);
-                    found += value;
-                    result.stats.shadow_rays += rays;
-                }
-                let seen = throughput * found / f64::from(draws);
-                result.radiance += seen;
-                if let Some(slot) = groups.get_mut(environment.group) {
-                    *slot += seen;
+                    result.stats.shadow_rays +=
+                        self.sampled_emitters(emitters, &scratch.choice, &sp, bsdf, u, &mut credit);
                 }
             }
             if sp.mirror == Vec3::ZERO || depth == self.max_mirror_depth {
@@ -314,41 +264,93 @@ impl<'a> Integrator<'a> {
         result
     }
 
-    /// The environment's light at `sp` through the glossy lobe of `bsdf`,
-    /// the lobe its lights leave alone (docs/design.md §6.2): one direction
-    /// drawn from the environment and one from the lobe, each weighted by
-    /// the power heuristic against the other's density for the same
-    /// direction (Veach and Guibas 1995), each with a shadow ray to
-    /// infinity. Returns the estimate and the rays cast.
-    fn sampled_environment(
+    /// The continuous emitters' light at `sp` through the glossy lobe of
+    /// `bsdf`, the lobe their stand-in lights leave alone
+    /// (docs/design.md §6.1 and design.md §6.2): one draw from the emitters (by `choice`: a direction
+    /// from the environment or a point on an area light) and one direction
+    /// from the lobe, each weighted by the power heuristic against the
+    /// other's density for the same path (Veach and Guibas 1995). The
+    /// emitters' draw gets a shadow ray; the lobe's a ray that finds what
+    /// it sees (an area light, or the environment past everything). Each
+    /// emitter's share goes to `credit` with its light group; returns the
+    /// rays cast.
+    fn sampled_emitters(
         &self,
-        environment: &EnvironmentSampling<'_>,
+        emitters: &EmitterSampling<'_>,
+        choice: &EmitterChoice,
         sp: &SurfacePoint<'_>,
         bsdf: &Bsdf,
         u: [f32; 6],
-    ) -> (DVec3, u64) {
+        credit: &mut impl FnMut(usize, DVec3),
+    ) -> u64 {
         let lobes = Lobes::GLOSSY;
         let embree = &self.geometry.embree;
-        let mut radiance = DVec3::ZERO;
         let mut rays = 0;
-        let mut add = |f_cos: Vec3, light: Vec3, pdf: f32, other: f32, wi: Vec3| {
-            if f_cos == Vec3::ZERO || light == Vec3::ZERO {
-                return;
-            }
-            rays += 1;
-            if !embree.occluded(&sp.shadow_ray_towards(wi).to_ray()) {
-                let weight = power_heuristic(pdf, other);
-                radiance += (f_cos * light).as_dvec3() * (weight / f64::from(pdf));
-            }
+        // f cos * L * weight / pdf, for a path found unblocked.
+        let value = |f_cos: Vec3, light: Vec3, pdf: f32, other: f32| {
+            (f_cos * light).as_dvec3() * (power_heuristic(pdf, other) / f64::from(pdf))
         };
-        if let Some(s) = environment.light.sample([u[0], u[1], u[2]]) {
-            add(bsdf.eval(s.wi, lobes), s.radiance, s.pdf, bsdf.pdf(s.wi, lobes), s.wi);
+        match emitters.draw(choice, [u[0], u[1], u[2]]) {
+            Some((EmitterDraw::Environment(s), probability)) => {
+                let f_cos = bsdf.eval(s.wi, lobes);
+                if f_cos != Vec3::ZERO && s.radiance != Vec3::ZERO {
+                    rays += 1;
+                    if !embree.occluded(&sp.shadow_ray_towards(s.wi).to_ray()) {
+                        let group = emitters.environment.as_ref().map_or(0, |e| e.group);
+                        credit(group, value(f_cos, s.radiance, probability * s.pdf, bsdf.pdf(s.wi, lobes)));
+                    }
+                }
+            }
+            Some((EmitterDraw::Area { emitter, sample }, _)) => {
+                let to = sample.point - sp.p;
+                let d2 = to.length_squared();
+                let wi = to.normalize_or_zero();
+                let f_cos = bsdf.eval(wi, lobes);
+                let e = &emitters.area.emitters[emitter];
+                let light = e.radiance(emitters.scene, sample.triangle, sample.ab, sp.p);
+                let pdf = emitters.area_pdf(choice, emitter, d2, sample.normal.dot(wi));
+                if f_cos != Vec3::ZERO && light != Vec3::ZERO && pdf > 0.0 && pdf.is_finite() {
+                    if let Some(ray) = sp.shadow_ray_to(sample.point) {
+                        rays += 1;
+                        if !embree.occluded(&ray.to_ray()) {
+                            credit(e.group, value(f_cos, light, pdf, bsdf.pdf(wi, lobes)));
+                        }
+                    }
+                }
+            }
+            None => {}
         }
         if let Some(s) = bsdf.sample([u[3], u[4], u[5]], lobes) {
-            let light = environment.light.radiance(s.wi);
-            add(s.f_cos, light, s.pdf, environment.light.pdf(s.wi), s.wi);
+            rays += 1;
+            let mut ray = crate::embree::Ray {
+                origin: sp.offset_origin(),
+                direction: s.wi,
+                t_near: 0.0,
+                t_far: f32::INFINITY,
+                time: sp.time,
+            };
+            match self.first_hit(&mut ray) {
+                None => {
+                    if let Some((light, pdf, group)) = emitters.escaped(choice, s.wi) {
+                        if light != Vec3::ZERO {
+                            credit(group, value(s.f_cos, light, s.pdf, pdf));
+                        }
+                    }
+                }
+                Some(hit) => {
+                    if let Some(emitter) = emitters.area.of_mesh(self.geometry.mesh_of(&hit)) {
+                        let seen = self.geometry.surface(&ray, &hit);
+                        if seen.emitted != Vec3::ZERO {
+                            let d2 = seen.distance * seen.distance;
+                            let pdf = emitters.area_pdf(choice, emitter, d2, seen.ng.dot(s.wi));
+                            let group = emitters.area.emitters[emitter].group;
+                            credit(group, value(s.f_cos, seen.emitted, s.pdf, pdf));
+                        }
+                    }
+                }
+            }
         }
-        (radiance, rays)
+        rays
     }
 
     /// The first surface `ray` sees: back faces that cull are passed

@@ -7,6 +7,7 @@
 //! thread count, tile order and pixel window.
 
 pub mod cryptomatte;
+pub mod emitter_sampling;
 pub mod film;
 pub mod integrator;
 pub mod session;

@@ -99,8 +99,9 @@ pub struct PassResult {
     pub vpls: usize,
     pub vpl_time: Duration,
     /// Lights of the pass, by kind (the scene's plus the VPLs), in
-    /// `LightKind::ALL`'s order: omni, oriented, directional, environment, spot.
-    pub lights: [usize; 5],
+    /// `LightKind::ALL`'s order: omni, area, oriented, directional,
+    /// environment, spot.
+    pub lights: [usize; LightKind::ALL.len()],
     /// Lights that move over the shutter (in no tree; docs/design.md §13.6).
     pub moving_lights: usize,
     /// Rays of the pass that Embree was not given because a component was
@@ -209,7 +210,7 @@ impl<'s> Session<'s> {
             _ => DirectLighting::Exact,
         };
         let emission_group = self.scene.emission_groups();
-        let environment = super::integrator::EnvironmentSampling::of(self.scene, settings.spp);
+        let emitters = super::emitter_sampling::EmitterSampling::of(self.scene, settings.spp);
         let integrator = Integrator {
             geometry: &self.geometry,
             lights: &lights,
@@ -217,7 +218,7 @@ impl<'s> Session<'s> {
             max_mirror_depth: self.scene.max_mirror_depth,
             split_groups,
             emission_group: &emission_group,
-            environment: environment.as_ref(),
+            emitters: emitters.as_ref(),
         };
         let camera = self.scene.camera(settings.width, settings.height);
         let (film, stats) = self.pool.install(|| render(&integrator, &camera, settings, progress))?;

@@ -97,7 +97,9 @@ pub fn trace(
         lights.for_each(|light| {
             sources.push(match light {
                 Light::Omni(l) => (Source::Omni { position: l.position }, 4.0 * PI * l.intensity),
-                Light::Oriented(l) => (Source::Oriented { position: l.position, normal: l.normal }, PI * l.intensity),
+                Light::Area(l) | Light::Oriented(l) => {
+                    (Source::Oriented { position: l.position, normal: l.normal }, PI * l.intensity)
+                }
                 Light::Directional(l) | Light::Environment(l) => {
                     (Source::Directional { direction: l.direction }, PI * radius * radius * l.irradiance)
                 }

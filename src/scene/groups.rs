@@ -13,7 +13,7 @@ use super::SceneError;
 pub const DEFAULT_GROUP: &str = "default";
 
 /// Most groups a scene may have: a light tree per group and light kind, and
-/// the cut numbers its trees in 9 bits (5 kinds x 63 groups = 315 < 512:
+/// the cut numbers its trees in 9 bits (6 kinds x 63 groups = 378 < 512:
 /// `light_tree::MAX_TREES`).
 pub const MAX_LIGHT_GROUPS: usize = 63;
 

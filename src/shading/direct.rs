@@ -149,11 +149,12 @@ impl<'a, 'p> LightEvaluator<'a, 'p> {
     }
 
     /// The material term of a light of `kind` in directions `wi`: every
-    /// lobe, but for the environment's lights the lobes the shading point
-    /// lights them with (`SurfacePoint::environment_lobes`).
+    /// lobe, but for the stand-ins of continuous emitters (area lights'
+    /// points, the environment's directions) the lobes the shading point
+    /// lights them with (`SurfacePoint::emitter_lobes`).
     #[inline(always)]
     fn material(&self, kind: LightKind, wi: &V3) -> V3 {
-        let lobes = if kind == LightKind::Environment { self.sp.environment_lobes } else { Lobes::ALL };
+        let lobes = if kind.stands_in_for_emitter() { self.sp.emitter_lobes } else { Lobes::ALL };
         self.material.term(wi, lobes)
     }
 
@@ -264,7 +265,7 @@ impl<'a, 'p> LightEvaluator<'a, 'p> {
 pub fn light_intensity(light: &Light) -> Vec3 {
     match light {
         Light::Omni(l) => l.intensity,
-        Light::Oriented(l) => l.intensity,
+        Light::Area(l) | Light::Oriented(l) => l.intensity,
         Light::Directional(l) | Light::Environment(l) => l.irradiance,
         Light::Spot(l) => l.intensity,
     }

@@ -200,7 +200,7 @@ impl<'s> Geometry<'s> {
             },
             epsilon: self.ray_epsilon,
             min_distance: self.ray_epsilon.max(self.distance_clamp),
-            environment_lobes: super::Lobes::ALL,
+            emitter_lobes: super::Lobes::ALL,
             mirror: match pbr {
                 Some(p) if p.is_smooth() => p.mirror_reflectance(n.dot(wo)),
                 _ => material.mirror,

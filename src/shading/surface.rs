@@ -48,7 +48,7 @@ pub struct SurfacePoint<'s> {
     /// lobe, unless its glossy lobe is too sharp for them, which the
     /// environment's sampling then lights (set by the integrator;
     /// docs/design.md §6.2).
-    pub environment_lobes: Lobes,
+    pub emitter_lobes: Lobes,
 }
 
 impl SurfacePoint<'_> {
@@ -142,7 +142,7 @@ mod tests {
             mirror: Vec3::ONE,
             epsilon: 1e-4,
             min_distance: 1e-4,
-            environment_lobes: Lobes::ALL,
+            emitter_lobes: Lobes::ALL,
         }
     }
 

@@ -53,7 +53,7 @@ pub fn random_lights(kind: LightKind, n: usize, distribution: Distribution, seed
                 Vec3::splat(rng.range_f32(0.5, 1.5)) * Vec3::new(1.0, rng.range_f32(0.8, 1.0), rng.range_f32(0.6, 1.0));
             match kind {
                 LightKind::Omni => TreeLight { point: position, normal: Vec3::ZERO, intensity, spread: [0.0; 2] },
-                LightKind::Oriented | LightKind::Spot => {
+                LightKind::Area | LightKind::Oriented | LightKind::Spot => {
                     if direction.y > 0.0 {
                         direction.y = -direction.y;
                     }
@@ -168,7 +168,7 @@ fn shading_points(material: &Material, count: usize) -> Vec<SurfacePoint<'_>> {
                 mirror: Vec3::ZERO,
                 epsilon: 1e-4,
                 min_distance: 1e-4,
-                environment_lobes: crate::shading::Lobes::ALL,
+                emitter_lobes: crate::shading::Lobes::ALL,
             }
         })
         .collect()

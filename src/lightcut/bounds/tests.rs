@@ -147,11 +147,7 @@ fn surface<'m>(rng: &mut Rng, material: &'m Material) -> SurfacePoint<'m> {
         min_distance: 1e-4,
         // Half the time the environment's lights see the diffuse lobe alone
         // (a glossy lobe too sharp for them), which the bounds must follow.
-        environment_lobes: if rng.next_f32() < 0.5 {
-            crate::shading::Lobes::DIFFUSE
-        } else {
-            crate::shading::Lobes::ALL
-        },
+        emitter_lobes: if rng.next_f32() < 0.5 { crate::shading::Lobes::DIFFUSE } else { crate::shading::Lobes::ALL },
     }
 }
 

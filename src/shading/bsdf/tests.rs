@@ -37,7 +37,7 @@ fn point(material: &Material, wo: Vec3) -> SurfacePoint<'_> {
         mirror: Vec3::ZERO,
         epsilon: 1e-4,
         min_distance: 1e-4,
-        environment_lobes: Lobes::ALL,
+        emitter_lobes: Lobes::ALL,
     }
 }
 
