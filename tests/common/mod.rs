@@ -7,6 +7,7 @@ use std::process::{Command, Output};
 pub use lightcuts::output::read::{read_exr, ExrImage};
 pub use lightcuts::scene::builder::{floor_spheres_grid, SceneText};
 
+pub mod glossy;
 pub mod gltf;
 
 /// A fresh temporary directory (tempfile's), removed on drop, with helpers
@@ -232,4 +233,56 @@ pub fn assert_same_bits_for_any_threads_and_window(dir: &TempDir, scene: &Path, 
             }
         }
     }
+}
+
+/// Renders `scene` with each of `flags` and compares its luminance with
+/// a peer's converged render `reference` (both under scenes/`dir`/):
+/// the mean within 1% and the 8x8 blocks within 2% on average, over the
+/// whole image and again over the objects alone (the blocks they cover
+/// whole, by the render's depth: the background alone is easy to match).
+pub fn matches_peer(name: &str, dir: &str, scene: &str, reference: &str, flags: &[&[&str]]) {
+    let scenes = scenes().join(dir);
+    let dir = TempDir::new(name);
+    let scene = scenes.join(scene);
+    let reference = read_exr(&scenes.join(reference)).unwrap();
+    let luminance = |image: &ExrImage| -> Vec<f64> {
+        let [r, g, b] = ["R", "G", "B"].map(|c| channel(image, c));
+        (0..r.len()).map(|p| 0.2126 * f64::from(r[p]) + 0.7152 * f64::from(g[p]) + 0.0722 * f64::from(b[p])).collect()
+    };
+    let want = luminance(&reference);
+    let (width, height) = (reference.width, reference.height);
+    let blocks = |values: &[f64]| -> Vec<f64> {
+        let mut sums = vec![0.0; (width / 8) * (height / 8)];
+        for y in 0..height / 8 * 8 {
+            for x in 0..width / 8 * 8 {
+                sums[(y / 8) * (width / 8) + x / 8] += values[y * width + x];
+            }
+        }
+        sums
+    };
+    let mut failures = Vec::new();
+    for &flags in flags {
+        let image = render(&scene, &dir.path("render.exr"), flags);
+        assert_eq!((image.width, image.height), (width, height));
+        let got = luminance(&image);
+        let object: Vec<f64> = channel(&image, "Z").iter().map(|&z| f64::from(u8::from(z < 1e9))).collect();
+        let covered: Vec<bool> = blocks(&object).iter().map(|&n| n == 64.0).collect();
+        let on_objects = |values: &[f64]| -> f64 { values.iter().zip(&object).map(|(v, o)| v * o).sum() };
+        let (g, w) = (blocks(&got), blocks(&want));
+        let block_error = |keep: &dyn Fn(usize) -> bool| {
+            let errors: Vec<f64> = (0..w.len()).filter(|&k| keep(k)).map(|k| (g[k] - w[k]).abs() / w[k]).collect();
+            assert!(errors.len() >= 30, "only {} blocks to compare", errors.len());
+            errors.iter().sum::<f64>() / errors.len() as f64
+        };
+        for (part, ratio, blocks) in [
+            ("image", got.iter().sum::<f64>() / want.iter().sum::<f64>(), block_error(&|_| true)),
+            ("objects", on_objects(&got) / on_objects(&want), block_error(&|k| covered[k])),
+        ] {
+            eprintln!("{name} {flags:?}, {part}: mean ratio {ratio:.4}, mean 8x8 block error {:.2}%", 100.0 * blocks);
+            if (ratio - 1.0).abs() > 0.01 || blocks > 0.02 {
+                failures.push(format!("{flags:?}, {part}: ratio {ratio:.4}, blocks {:.2}%", 100.0 * blocks));
+            }
+        }
+    }
+    assert!(failures.is_empty(), "{name} is off from its peer: {failures:?}");
 }

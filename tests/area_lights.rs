@@ -1,0 +1,205 @@
+//! Area lights (docs/design.md §6.1) against answers this file computes
+//! itself: the irradiance of a polygon in closed form, and a glossy
+//! sphere's reflection of a rectangle by quadrature of glTF's BRDF.
+
+mod common;
+
+use std::f64::consts::PI;
+
+use common::glossy::{block_error, expected, Material, FOV_Y_DEGREES, SIZE};
+use common::{channel, render, TempDir};
+use glam::DVec3;
+
+/// The irradiance at `p` (normal `n`) from a polygon of uniform radiance
+/// `radiance` wholly above p's tangent plane: Lambert's formula,
+/// E = L/2 |sum_i Theta_i (n . unit(r_i x r_i+1))|, with r_i the unit
+/// vectors to its corners and Theta_i the angle between consecutive ones.
+fn polygon_irradiance(p: DVec3, n: DVec3, corners: &[DVec3], radiance: f64) -> f64 {
+    let r: Vec<DVec3> = corners.iter().map(|c| (*c - p).normalize()).collect();
+    let mut sum = 0.0;
+    for i in 0..r.len() {
+        let (a, b) = (r[i], r[(i + 1) % r.len()]);
+        let angle = a.dot(b).clamp(-1.0, 1.0).acos();
+        sum += angle * n.dot(a.cross(b).normalize());
+    }
+    0.5 * radiance * sum.abs()
+}
+
+/// A rectangle of sides `width` and `height` centred at `centre`, its
+/// emitting side facing `towards`: (corner, u, v) with u x v along the
+/// emitting normal, u horizontal.
+fn facing_rectangle(centre: DVec3, towards: DVec3, width: f64, height: f64) -> (DVec3, DVec3, DVec3) {
+    let w = (towards - centre).normalize();
+    let u = w.cross(DVec3::Y).normalize() * width;
+    let v = w.cross(u).normalize() * height;
+    assert!(u.cross(v).dot(w) > 0.0);
+    (centre - 0.5 * (u + v), u, v)
+}
+
+fn vector(v: DVec3) -> String {
+    format!("[{}, {}, {}]", v.x, v.y, v.z)
+}
+
+/// A white Lambertian floor (z = 0) lit by a rectangle and a triangle
+/// beside the view (neither seen by the camera), of uniform radiance: each
+/// pixel's radiance is the floor's albedo / pi times the sum of their
+/// irradiances in closed form. Every mode within 0.5% of it over 4x4 blocks
+/// and in the mean: the area lights' points are a fine enough quadrature
+/// at these distances (docs/design.md §6.1), and the cut modes' errors
+/// stay under it.
+#[test]
+fn irradiance_under_a_rectangle_and_a_triangle_in_every_mode() {
+    let dir = TempDir::new("area-irradiance");
+    let (rectangle_radiance, triangle_radiance) = (5.0, 8.0);
+    let (corner, u, v) = facing_rectangle(DVec3::new(1.9, 0.2, 1.2), DVec3::ZERO, 1.0, 0.8);
+    let rectangle = [corner, corner + u, corner + u + v, corner + v];
+    // The triangle, wound to face the floor's centre.
+    let mut triangle = [DVec3::new(-1.8, -0.6, 0.9), DVec3::new(-2.0, 0.7, 1.1), DVec3::new(-1.6, 0.1, 1.7)];
+    let centroid = (triangle[0] + triangle[1] + triangle[2]) / 3.0;
+    if (triangle[1] - triangle[0]).cross(triangle[2] - triangle[0]).dot(-centroid) < 0.0 {
+        triangle.swap(1, 2);
+    }
+    let obj: String = triangle.iter().map(|c| format!("v {} {} {}\n", c.x, c.y, c.z)).collect::<String>() + "f 1 2 3\n";
+    dir.write("triangle.obj", &obj);
+    let scene = format!(
+        "[film]\nwidth = {SIZE}\nheight = {SIZE}\nspp = 16\n\
+         [camera]\neye = [0, 0, 4]\nlook_at = [0, 0, 0]\nfov_y = {FOV_Y_DEGREES}\n\
+         [materials.white]\nalbedo = [1, 1, 1]\n\
+         [[shapes]]\ntype = \"quad\"\ncorner = [-3, -3, 0]\nu = [6, 0, 0]\nv = [0, 6, 0]\nmaterial = \"white\"\n\
+         [[lights]]\ntype = \"area\"\ncorner = {}\nu = {}\nv = {}\nradiance = [{rectangle_radiance}, {rectangle_radiance}, {rectangle_radiance}]\n\
+         [[lights]]\ntype = \"area_mesh\"\nfile = \"triangle.obj\"\nradiance = [{triangle_radiance}, {triangle_radiance}, {triangle_radiance}]\n",
+        vector(corner),
+        vector(u),
+        vector(v),
+    );
+    let file = dir.write("floor.toml", &scene);
+    // Each pixel's floor point: the camera ray through it meets z = 0.
+    let half = (FOV_Y_DEGREES.to_radians() / 2.0).tan();
+    let want: Vec<f64> = (0..SIZE * SIZE)
+        .map(|p| {
+            let sub = 4;
+            let mut sum = 0.0;
+            for k in 0..sub * sub {
+                let x = (p % SIZE) as f64 + ((k % sub) as f64 + 0.5) / sub as f64;
+                let y = (p / SIZE) as f64 + ((k / sub) as f64 + 0.5) / sub as f64;
+                let on_floor =
+                    DVec3::new((x / SIZE as f64 * 2.0 - 1.0) * half * 4.0, (1.0 - y / SIZE as f64 * 2.0) * half * 4.0, 0.0);
+                let e = polygon_irradiance(on_floor, DVec3::Z, &rectangle, rectangle_radiance)
+                    + polygon_irradiance(on_floor, DVec3::Z, &triangle, triangle_radiance);
+                sum += e / PI;
+            }
+            sum / (sub * sub) as f64
+        })
+        .collect();
+    let cover = vec![1.0; SIZE * SIZE];
+    let mut failures = Vec::new();
+    for flags in [&["--spp", "16"][..], &["--spp", "64"], &["--exact"], &["--multidimensional"]] {
+        let image = render(&file, &dir.path("floor.exr"), flags);
+        let (error, ratio) = block_error(&image, &want, &cover);
+        eprintln!("{flags:?}: mean block error {:.3}%, ratio {ratio:.5}", 100.0 * error);
+        if error > 0.005 || (ratio - 1.0).abs() > 0.005 {
+            failures.push(format!("{flags:?}: {:.3}%, ratio {ratio:.5}", 100.0 * error));
+        }
+    }
+    assert!(failures.is_empty(), "the floor's irradiance is off: {failures:?}");
+}
+
+/// Where the ray from `p` along unit `l` meets the parallelogram (corner,
+/// u, v) from its emitting side (u x v): the radiance it carries there.
+fn parallelogram_radiance(p: DVec3, l: DVec3, (corner, u, v): (DVec3, DVec3, DVec3), radiance: f64) -> f64 {
+    let normal = u.cross(v);
+    let facing = l.dot(normal);
+    if facing >= 0.0 {
+        return 0.0;
+    }
+    let t = (corner - p).dot(normal) / facing;
+    if t <= 0.0 {
+        return 0.0;
+    }
+    let q = p + t * l - corner;
+    let (s, r) = (q.dot(u) / u.length_squared(), q.dot(v) / v.length_squared());
+    if (0.0..=1.0).contains(&s) && (0.0..=1.0).contains(&r) {
+        radiance
+    } else {
+        0.0
+    }
+}
+
+/// A white metal sphere reflecting a rectangular light above the camera:
+/// its highlight is one continuous patch, the integral of glTF's BRDF over
+/// the rectangle (quadrature), from roughness 0.1 (a small sharp
+/// highlight, sampled through the lobe) to 0.45 (broad, lit by the
+/// light's points). Before the rectangle was sampled as a surface a lobe
+/// of roughness 0.1 saw its 1,024 points as a grid of dots, far from the
+/// quadrature over blocks. Every mode, 64 spp: within 2% over 4x4 blocks
+/// and 1% in the sum.
+#[test]
+fn a_glossy_sphere_reflects_a_rectangle_as_one_highlight() {
+    let dir = TempDir::new("area-highlight");
+    let radiance = 20.0;
+    let light = facing_rectangle(DVec3::new(0.6, 2.0, 2.2), DVec3::ZERO, 2.5, 1.5);
+    let (corner, u, v) = light;
+    let mut failures = Vec::new();
+    for roughness in [0.1, 0.25, 0.45] {
+        let material = Material { roughness, metallic: 1.0, base: 1.0 };
+        let (want, cover) =
+            expected(2, &|n, view| material.reflected(view, n, &|l| parallelogram_radiance(n, l, light, radiance)));
+        let scene = format!(
+            "[film]\nwidth = {SIZE}\nheight = {SIZE}\nspp = 64\n\
+             [camera]\neye = [0, 0, 4]\nlook_at = [0, 0, 0]\nfov_y = {FOV_Y_DEGREES}\n\
+             [materials.m]\ntype = \"pbr\"\nalbedo = [1, 1, 1]\nmetallic = 1\nroughness = {roughness}\n\
+             [[shapes]]\ntype = \"sphere\"\ncenter = [0, 0, 0]\nradius = 1\nsegments = 512\nmaterial = \"m\"\n\
+             [[lights]]\ntype = \"area\"\ncorner = {}\nu = {}\nv = {}\nradiance = [{radiance}, {radiance}, {radiance}]\n",
+            vector(corner),
+            vector(u),
+            vector(v),
+        );
+        let file = dir.write("sphere.toml", &scene);
+        for flags in [&[][..], &["--bounded"], &["--exact"], &["--multidimensional"]] {
+            let image = render(&file, &dir.path("sphere.exr"), flags);
+            let (error, ratio) = highlight_error(&image, &want, &cover);
+            eprintln!("roughness {roughness} {flags:?}: mean block error {:.2}%, ratio {ratio:.4}", 100.0 * error);
+            if error > 0.02 || (ratio - 1.0).abs() > 0.01 {
+                failures.push(format!("roughness {roughness} {flags:?}: {:.2}%, ratio {ratio:.4}", 100.0 * error));
+            }
+        }
+    }
+    assert!(failures.is_empty(), "the highlight is off: {failures:?}");
+}
+
+/// The mean relative error, over the 4x4 blocks the sphere covers whole
+/// that hold a tenth or more of the brightest block's light (the
+/// highlight; the rest is dark), of the image's mean of R, G, B against
+/// `want`; and the ratio of their sums over those blocks.
+fn highlight_error(image: &common::ExrImage, want: &[f64], cover: &[f64]) -> (f64, f64) {
+    let [r, g, b] = ["R", "G", "B"].map(|c| channel(image, c));
+    let got = |p: usize| (f64::from(r[p]) + f64::from(g[p]) + f64::from(b[p])) / 3.0;
+    let blocks: Vec<Vec<usize>> = (0..(SIZE / 4) * (SIZE / 4))
+        .map(|k| (0..16).map(|i| (k / (SIZE / 4) * 4 + i / 4) * SIZE + k % (SIZE / 4) * 4 + i % 4).collect())
+        .filter(|block: &Vec<usize>| block.iter().all(|&p| cover[p] >= 1.0))
+        .collect();
+    let sum = |block: &[usize], f: &dyn Fn(usize) -> f64| block.iter().map(|&p| f(p)).sum::<f64>();
+    let brightest = blocks.iter().map(|b| sum(b, &|p| want[p])).fold(0.0, f64::max);
+    let (mut errors, mut got_sum, mut want_sum) = (Vec::new(), 0.0, 0.0);
+    for block in blocks.iter().filter(|b| sum(b, &|p| want[p]) >= 0.1 * brightest) {
+        let (g, w) = (sum(block, &got), sum(block, &|p| want[p]));
+        errors.push((g - w).abs() / w);
+        got_sum += g;
+        want_sum += w;
+    }
+    assert!(errors.len() >= 4, "only {} blocks in the highlight", errors.len());
+    (errors.iter().sum::<f64>() / errors.len() as f64, got_sum / want_sum)
+}
+
+/// Against a peer: Mitsuba 3's path tracer with max_depth 2 (direct light
+/// only, as here) at 16,384 spp, on three white metals (roughness 0.1,
+/// 0.25, 0.45) and a diffuse floor lit by a rectangular softbox and a dim
+/// sky: scenes/area/, with the script that rendered the reference and how
+/// the two scenes correspond; at 64 spp in the default mode and 128 in the
+/// bounded one. (Over 8x8 blocks the softbox's points matched too, 0.48%:
+/// the dots average out; the highlight test above is the one they fail.)
+#[test]
+fn glossy_spheres_under_a_softbox_match_mitsuba() {
+    let flags: &[&[&str]] = &[&["--spp", "64"], &["--spp", "128", "--bounded"]];
+    common::matches_peer("mitsuba", "area", "softbox.toml", "mitsuba-16384.exr", flags);
+}
