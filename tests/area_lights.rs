@@ -82,8 +82,11 @@ fn irradiance_under_a_rectangle_and_a_triangle_in_every_mode() {
             for k in 0..sub * sub {
                 let x = (p % SIZE) as f64 + ((k % sub) as f64 + 0.5) / sub as f64;
                 let y = (p / SIZE) as f64 + ((k / sub) as f64 + 0.5) / sub as f64;
-                let on_floor =
-                    DVec3::new((x / SIZE as f64 * 2.0 - 1.0) * half * 4.0, (1.0 - y / SIZE as f64 * 2.0) * half * 4.0, 0.0);
+                let on_floor = DVec3::new(
+                    (x / SIZE as f64 * 2.0 - 1.0) * half * 4.0,
+                    (1.0 - y / SIZE as f64 * 2.0) * half * 4.0,
+                    0.0,
+                );
                 let e = polygon_irradiance(on_floor, DVec3::Z, &rectangle, rectangle_radiance)
                     + polygon_irradiance(on_floor, DVec3::Z, &triangle, triangle_radiance);
                 sum += e / PI;

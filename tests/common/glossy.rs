@@ -160,4 +160,3 @@ pub fn block_error(image: &ExrImage, want: &[f64], cover: &[f64]) -> (f64, f64) 
     assert!(errors.len() > 40, "only {} whole blocks", errors.len());
     (errors.iter().sum::<f64>() / errors.len() as f64, got_sum / want_sum)
 }
-
