@@ -298,6 +298,7 @@ fn render_lit(scene: &Scene, lights: &[Lights]) -> Outcome {
             split_groups: scene.groups.named(),
             emission_group: &emission_group,
             emitters: emitters.as_ref(),
+            spp: settings.spp,
         };
         let (film, _) = render::render(&integrator, &camera, &settings, &|_| {}).unwrap();
         assert!(film.non_finite().is_empty(), "NaN or Inf reached the film: {:?}", film.non_finite());

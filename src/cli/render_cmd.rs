@@ -4,6 +4,7 @@ use super::args::RenderArgs;
 use super::farm::Claim;
 use super::progress::Progress;
 use super::CliError;
+use crate::light::LightKind;
 use crate::output::exr::{write_exr, ExrMetadata};
 use crate::output::preview::write_png;
 use crate::render::session::{Mode, PassResult, Session};
@@ -64,7 +65,7 @@ pub fn run(args: &RenderArgs) -> Result<(), CliError> {
 
 /// The statistics block every render ends with.
 fn print_summary(scene: &Scene, settings: &PassSettings, mode: Mode, result: &PassResult) {
-    let PassResult { stats, seconds, trees, vpls, vpl_time, lights, moving_lights, .. } = result;
+    let PassResult { stats, seconds, trees, vpls, vpl_time, lights, moving_lights, sun_discs, .. } = result;
     let rays = stats.shading.shadow_rays;
     let b = settings.bounds;
     let (major, minor, patch) = crate::embree::version();
@@ -72,14 +73,13 @@ fn print_summary(scene: &Scene, settings: &PassSettings, mode: Mode, result: &Pa
     println!("lightcuts {} (Embree {major}.{minor}.{patch})", env!("CARGO_PKG_VERSION"));
     println!("  scene            {}", scene.path.display());
     let moving = if *moving_lights > 0 { format!(", moving {moving_lights}") } else { String::new() };
+    let suns = if *sun_discs > 0 { format!(", sun discs {sun_discs}") } else { String::new() };
+    let kinds: Vec<String> =
+        LightKind::ALL.iter().zip(lights).map(|(kind, n)| format!("{} {n}", kind.name())).collect();
     println!(
-        "  lights           {} (omni {}, oriented {}, directional {}, environment {}, spot {}{moving})",
-        lights.iter().sum::<usize>() + moving_lights,
-        lights[0],
-        lights[1],
-        lights[2],
-        lights[3],
-        lights[4]
+        "  lights           {} ({}{moving}{suns})",
+        lights.iter().sum::<usize>() + moving_lights + sun_discs,
+        kinds.join(", ")
     );
     if scene.groups.named() {
         let layers = if settings.aovs.groups { "a layer each" } else { "no layers: --aovs leaves out groups" };

@@ -133,6 +133,32 @@ pub struct DirectionalLight {
     pub irradiance: Vec3,
 }
 
+/// The sun as a disc of angular radius > 0: irradiance `irradiance` (W/m^2
+/// on a surface facing it) from directions spread uniformly over the cone
+/// of half-angle acos(`cos_max`) about unit `direction`. It is in no tree:
+/// every shading point draws directions from it with a shadow ray each,
+/// `samples` over a pixel (docs/design.md §6.3).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SunDisc {
+    pub direction: Vec3,
+    pub irradiance: Vec3,
+    pub cos_max: f32,
+    pub samples: u32,
+}
+
+impl SunDisc {
+    /// The direction at the numbers `u` in [0, 1)^2: uniform in the
+    /// cone's solid angle (cos theta uniform in [cos_max, 1]).
+    #[must_use]
+    pub fn direction_at(&self, u: [f32; 2]) -> Vec3 {
+        let cos_theta = 1.0 - u[0] * (1.0 - self.cos_max);
+        let sin_theta = (1.0 - cos_theta * cos_theta).max(0.0).sqrt();
+        let phi = 2.0 * std::f32::consts::PI * u[1];
+        let (t, b) = self.direction.any_orthonormal_pair();
+        (self.direction * cos_theta + t * (sin_theta * phi.cos()) + b * (sin_theta * phi.sin())).normalize()
+    }
+}
+
 /// A spot light (KHR_lights_punctual's): intensity `intensity` (W/sr)
 /// along unit `direction`, scaled at angle theta from it by t^2 with
 /// t = clamp((cos theta - cos_outer) / (cos_inner - cos_outer), 0, 1).
@@ -263,6 +289,8 @@ pub struct Lights {
     /// Lights that move over the shutter: in no tree, and not counted by
     /// [`Lights::len`] or visited by [`Lights::for_each`].
     pub moving: Vec<MovingOmniLight>,
+    /// Suns with a disc, sampled per shading point: in no tree either.
+    pub suns: Vec<SunDisc>,
 }
 
 impl Lights {
@@ -347,6 +375,16 @@ impl Lights {
                     lights.area.extend(front);
                     lights.area.extend(back);
                 }
+                LightSource::Sun { direction, irradiance, angular_radius_degrees, samples, .. }
+                    if angular_radius_degrees > 0.0 && samples > 1 =>
+                {
+                    lights.suns.push(SunDisc {
+                        direction: direction.normalize(),
+                        irradiance,
+                        cos_max: angular_radius_degrees.to_radians().cos(),
+                        samples,
+                    });
+                }
                 LightSource::Sun { direction, irradiance, angular_radius_degrees, samples, seed } => {
                     lights.directional.extend(emitters::sample_sun(
                         direction,
@@ -377,6 +415,7 @@ impl Lights {
         self.environment.extend_from_slice(&other.environment);
         self.spot.extend_from_slice(&other.spot);
         self.moving.extend_from_slice(&other.moving);
+        self.suns.extend_from_slice(&other.suns);
     }
 
     #[must_use]

@@ -41,6 +41,14 @@ pub type SampleKey = [u64; 4];
 /// is keyed by the same sample.
 const STOCHASTIC_STREAM: u64 = 0x5107_c4a5;
 
+/// Keeps the suns' directions apart from the other streams of a sample's
+/// shading point.
+const SUN_STREAM: u64 = 0x50d1_5c00;
+
+/// The most directions one camera sample draws from a sun's disc at a
+/// shading point.
+const MOST_SUN_DRAWS: u32 = 16;
+
 /// Keeps the emitters' sampling apart from the other streams of a
 /// sample's shading point.
 const EMITTER_STREAM: u64 = 0xe4f1_5a3b;
@@ -108,6 +116,12 @@ impl ShadingStats {
     }
 }
 
+/// The suns' light at a shading point, by light group, and its shadow rays.
+struct SunLight {
+    radiance: Vec<DVec3>,
+    shadow_rays: u64,
+}
+
 /// What the first hit of a camera sample reports to the AOVs.
 #[derive(Debug, Clone, Copy)]
 pub struct FirstHit {
@@ -142,6 +156,9 @@ pub struct Integrator<'a> {
     /// The continuous emitters (environment, area lights) as sharp lobes
     /// sample them, when the scene has any.
     pub emitters: Option<&'a EmitterSampling<'a>>,
+    /// Samples per pixel (how many directions each sample draws from a
+    /// sun's disc depends on it).
+    pub spp: u32,
 }
 
 impl<'a> Integrator<'a> {
@@ -229,6 +246,17 @@ impl<'a> Integrator<'a> {
                 let direct = self.direct_light(&sp, sample, depth, groups.len(), scratch, &mut result.stats);
                 result.stats.record_point(direct.nodes, direct.shadow_rays);
                 direct.add_scaled_to(throughput, &mut result.radiance, groups);
+            }
+            if self.lights.iter().any(|group| !group.suns.is_empty()) {
+                let found = self.sun_light(&sp, sample, depth, &mut scratch.batch);
+                result.stats.shadow_rays += found.shadow_rays;
+                for (g, radiance) in found.radiance.iter().enumerate() {
+                    let seen = throughput * *radiance;
+                    result.radiance += seen;
+                    if let Some(slot) = groups.get_mut(g) {
+                        *slot += seen;
+                    }
+                }
             }
             if let Some((emitters, bsdf)) = &sharp {
                 // The pixel's samples (and each sample's draws) take
@@ -472,6 +500,40 @@ impl<'a> Integrator<'a> {
                 found
             }
         }
+    }
+
+    /// The light of the suns' discs at `sp` (in no tree: docs/design.md
+    /// §6.3), by group: each sample draws ceil(samples / spp) directions
+    /// (1 to 16) uniformly over each disc's solid angle, consecutive points
+    /// of a Kronecker sequence over the pixel's samples rotated per pixel,
+    /// bounce and sun, each a directional light of the disc's irradiance
+    /// over the draws, evaluated (every lobe) and traced as any light is.
+    fn sun_light(&self, sp: &SurfacePoint<'_>, sample: SampleKey, depth: u32, buffers: &mut BatchBuffers) -> SunLight {
+        let [seed, x, y, s] = sample;
+        let mut found = SunLight { radiance: vec![DVec3::ZERO; self.lights.len()], shadow_rays: 0 };
+        for (g, group) in self.lights.iter().enumerate().filter(|(_, group)| !group.suns.is_empty()) {
+            let mut batch = LightBatch::new(&self.geometry.embree, sp, buffers);
+            for (i, sun) in group.suns.iter().enumerate() {
+                let key = [seed, x, y, u64::from(depth), SUN_STREAM, g as u64, i as u64];
+                let mut rng = Rng::from_key(&key);
+                let shift: [f32; 6] = std::array::from_fn(|_| rng.next_f32());
+                let draws = sun.samples.div_ceil(self.spp.max(1)).clamp(1, MOST_SUN_DRAWS);
+                let irradiance = sun.irradiance / draws as f32;
+                for j in 0..draws {
+                    let index = (s as u32).wrapping_mul(draws).wrapping_add(j);
+                    let u = crate::util::sampling::kronecker6(index, shift);
+                    let direction = sun.direction_at([u[0], u[1]]);
+                    batch.add(&crate::light::Light::Directional(crate::light::DirectionalLight {
+                        direction,
+                        irradiance,
+                    }));
+                }
+            }
+            let batch = batch.finish();
+            found.radiance[g] = batch.radiance;
+            found.shadow_rays += batch.shadow_rays;
+        }
+        found
     }
 
     /// The light of the moving lights (in no tree: docs/design.md §13.6)

@@ -104,6 +104,8 @@ pub struct PassResult {
     pub lights: [usize; LightKind::ALL.len()],
     /// Lights that move over the shutter (in no tree; docs/design.md §13.6).
     pub moving_lights: usize,
+    /// Suns with a disc (in no tree; docs/design.md §6.3).
+    pub sun_discs: usize,
     /// Rays of the pass that Embree was not given because a component was
     /// not finite or out of its range (see [`crate::embree::refused_rays`]):
     /// shadow rays among them counted as blocked. 0 in every scene the
@@ -219,6 +221,7 @@ impl<'s> Session<'s> {
             split_groups,
             emission_group: &emission_group,
             emitters: emitters.as_ref(),
+            spp: settings.spp,
         };
         let camera = self.scene.camera(settings.width, settings.height);
         let (film, stats) = self.pool.install(|| render(&integrator, &camera, settings, progress))?;
@@ -251,6 +254,7 @@ impl<'s> Session<'s> {
             vpl_time,
             lights: counts,
             moving_lights: lights.iter().map(|group| group.moving.len()).sum(),
+            sun_discs: lights.iter().map(|group| group.suns.len()).sum(),
             refused_rays,
         })
     }

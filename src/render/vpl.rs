@@ -93,7 +93,7 @@ pub fn trace(
     let mut sources: Vec<(Source, Vec3)> = Vec::new();
     let mut source_group: Vec<usize> = Vec::new();
     for (g, lights) in groups.iter().enumerate() {
-        source_group.resize(source_group.len() + lights.len() + lights.moving.len(), g);
+        source_group.resize(source_group.len() + lights.len() + lights.moving.len() + lights.suns.len(), g);
         lights.for_each(|light| {
             sources.push(match light {
                 Light::Omni(l) => (Source::Omni { position: l.position }, 4.0 * PI * l.intensity),
@@ -117,6 +117,11 @@ pub fn trace(
         });
         for l in &lights.moving {
             sources.push((Source::MovingOmni { start: l.start, end: l.end }, 4.0 * PI * l.intensity));
+        }
+        // A sun's disc emits from its centre's direction (its few tenths of
+        // a degree do not matter to light that bounces).
+        for l in &lights.suns {
+            sources.push((Source::Directional { direction: l.direction }, PI * radius * radius * l.irradiance));
         }
     }
     let total: f64 = sources.iter().map(|s| f64::from(luminance(s.1))).sum();

@@ -63,17 +63,19 @@ radiance = [1, 2, 4]
 samples = 120
 "#;
 
-const DIRECTIONAL: &str = r#"
-[[lights]]
-type = "sun"
-direction = [0.5, 1, 0.3]
-irradiance = [3, 3, 2.5]
-angular_radius = 8
-samples = 300
-[environment]
-radiance = [0.3, 0.4, 0.6]
-samples = 256
-"#;
+/// 300 suns (a sun's disc is in no tree: point-like ones make a
+/// directional tree) about (0.5, 1, 0.3), and the environment's directions.
+fn directional() -> String {
+    let mut text = String::new();
+    for j in 0..15 {
+        for i in 0..20 {
+            let (x, z) = (0.2 + 0.03 * i as f32, 0.1 + 0.03 * j as f32);
+            text +=
+                &format!("[[lights]]\ntype = \"sun\"\ndirection = [{x}, 1, {z}]\nirradiance = [0.01, 0.01, 0.008]\n");
+        }
+    }
+    text + "[environment]\nradiance = [0.3, 0.4, 0.6]\nsamples = 256\n"
+}
 
 /// 16 x 16 spots over the scene, pointing down and outwards, of different widths.
 fn spots() -> String {
@@ -186,12 +188,12 @@ fn spot_estimates_are_unbiased() {
 
 #[test]
 fn directional_estimates_are_unbiased() {
-    check_unbiased(DIRECTIONAL);
+    check_unbiased(&directional());
 }
 
 #[test]
 fn a_variant_that_never_takes_some_children_is_caught() {
-    for lights in [OMNI, ORIENTED, DIRECTIONAL, &spots()] {
+    for lights in [OMNI, ORIENTED, &directional(), &spots()] {
         let rows = estimates(&scene(lights), true);
         assert!(biased_points(&rows) >= 8, "the bias must show at most points: {rows:?}");
     }
@@ -286,7 +288,7 @@ fn check_pmf(lights: &str) {
 
 #[test]
 fn the_walk_draws_with_its_pmf_for_every_kind() {
-    for lights in [OMNI, ORIENTED, DIRECTIONAL, &spots()] {
+    for lights in [OMNI, ORIENTED, &directional(), &spots()] {
         check_pmf(lights);
     }
 }
