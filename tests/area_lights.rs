@@ -256,7 +256,9 @@ fn a_sun_disc_casts_a_smooth_penumbra() {
     let want: Vec<f64> = (0..SIZE)
         .map(|row| {
             let sub = 8;
-            (0..sub).map(|k| floor((1.0 - (row as f64 + (k as f64 + 0.5) / sub as f64) / SIZE as f64 * 2.0) * half * 4.0)).sum::<f64>()
+            (0..sub)
+                .map(|k| floor((1.0 - (row as f64 + (k as f64 + 0.5) / sub as f64) / SIZE as f64 * 2.0) * half * 4.0))
+                .sum::<f64>()
                 / sub as f64
         })
         .collect();
@@ -270,7 +272,10 @@ fn a_sun_disc_casts_a_smooth_penumbra() {
         let worst = (0..SIZE)
             .map(|row| {
                 let got: f64 = (0..SIZE)
-                    .map(|x| (f64::from(r[row * SIZE + x]) + f64::from(g[row * SIZE + x]) + f64::from(b[row * SIZE + x])) / 3.0)
+                    .map(|x| {
+                        (f64::from(r[row * SIZE + x]) + f64::from(g[row * SIZE + x]) + f64::from(b[row * SIZE + x]))
+                            / 3.0
+                    })
                     .sum::<f64>()
                     / SIZE as f64;
                 (got - want[row]).abs() / brightest

@@ -109,12 +109,17 @@ impl<'a> EmitterSampling<'a> {
     /// ([`crate::light::area::AreaEmitter::weight`]), 0 when its box lies
     /// wholly behind the shading normal's plane.
     pub fn weigh(&self, sp: &SurfacePoint<'_>, choice: &mut EmitterChoice) {
+        self.weigh_at(sp.p, sp.n, choice);
+    }
+
+    /// [`EmitterSampling::weigh`] at point `p` of shading normal `n`.
+    pub fn weigh_at(&self, p: Vec3, n: Vec3, choice: &mut EmitterChoice) {
         choice.weights.clear();
         if let Some(e) = &self.environment {
             choice.weights.push(std::f32::consts::PI * e.light.mean_luminance());
         }
         for e in &self.area.emitters {
-            choice.weights.push(if e.above(sp.p, sp.n) { e.weight(sp.p) } else { 0.0 });
+            choice.weights.push(if e.above(p, n) { e.weight(p) } else { 0.0 });
         }
         choice.total = choice.weights.iter().sum();
     }
@@ -191,5 +196,98 @@ impl<'a> EmitterSampling<'a> {
     pub fn escaped(&self, choice: &EmitterChoice, wi: Vec3) -> Option<(Vec3, f32, usize)> {
         let e = self.environment.as_ref()?;
         Some((e.light.radiance(wi), self.environment_probability(choice) * e.light.pdf(wi), e.group))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::util::sampling::Rng;
+
+    /// A sky and two area lights of different sizes and radiances.
+    fn scene() -> Scene {
+        let text = r#"
+[film]
+width = 4
+height = 4
+[camera]
+eye = [0, 1, 4]
+look_at = [0, 0, 0]
+fov_y = 45
+[[lights]]
+type = "area"
+corner = [-1, 2, -0.5]
+u = [2, 0, 0]
+v = [0, 0, 1]
+radiance = [3, 3, 3]
+[[lights]]
+type = "area"
+corner = [2, 1, -0.25]
+u = [0, 0, 0.5]
+v = [0, 0.5, 0]
+radiance = [20, 10, 5]
+[environment]
+radiance = [0.2, 0.2, 0.2]
+"#;
+        Scene::from_spec(std::path::Path::new("e.toml"), toml::from_str(text).unwrap()).unwrap()
+    }
+
+    /// What MIS weighs a path with must be the density that draws it: the
+    /// emitters' draws at a point fall on each emitter as often as
+    /// `environment_probability` and `area_probability` say (which
+    /// `escaped` and `area_pdf` use), and on an area light's halves as
+    /// their areas (its density 1 / A). A draw that skipped an emitter of
+    /// weight 0, or picked by index, fails this.
+    #[test]
+    fn draws_fall_on_each_emitter_as_its_probability_says() {
+        let scene = scene();
+        let sampling = EmitterSampling::of(&scene, 64).unwrap();
+        assert_eq!(sampling.area.emitters.len(), 2);
+        let choose = |p: Vec3, n: Vec3| -> EmitterChoice {
+            let mut choice = EmitterChoice::default();
+            sampling.weigh_at(p, n, &mut choice);
+            choice
+        };
+        for (p, n) in [(Vec3::ZERO, Vec3::Y), (Vec3::new(1.5, 0.5, 0.0), Vec3::X), (Vec3::new(0.0, 3.0, 0.0), Vec3::Y)]
+        {
+            let choice = choose(p, n);
+            let want = [
+                sampling.environment_probability(&choice),
+                sampling.area_probability(&choice, 0),
+                sampling.area_probability(&choice, 1),
+            ];
+            assert!((want.iter().sum::<f32>() - 1.0).abs() < 1e-5, "{want:?}");
+            let mut rng = Rng::seeded(7);
+            let n_draws = 200_000;
+            let mut counts = [0usize; 3];
+            let mut left_half = 0usize;
+            for _ in 0..n_draws {
+                let u = [rng.next_f32(), rng.next_f32(), rng.next_f32()];
+                match sampling.draw(&choice, u) {
+                    Some((EmitterDraw::Environment(_), probability)) => {
+                        assert_eq!(probability, want[0]);
+                        counts[0] += 1;
+                    }
+                    Some((EmitterDraw::Area { emitter, sample }, probability)) => {
+                        assert_eq!(probability, want[emitter + 1]);
+                        counts[emitter + 1] += 1;
+                        left_half += usize::from(emitter == 0 && sample.point.x < 0.0);
+                    }
+                    None => panic!("no draw"),
+                }
+            }
+            for k in 0..3 {
+                let got = counts[k] as f32 / n_draws as f32;
+                assert!((got - want[k]).abs() < 0.005, "at {p}: emitter {k} drawn {got}, its probability {}", want[k]);
+            }
+            if counts[1] > 10_000 {
+                let half = left_half as f32 / counts[1] as f32;
+                assert!((half - 0.5).abs() < 0.02, "{half}");
+            }
+            // Above the big light, it is behind the plane: weight 0, never drawn.
+            if p.y > 2.0 {
+                assert_eq!((want[1], counts[1]), (0.0, 0));
+            }
+        }
     }
 }
