@@ -116,12 +116,6 @@ impl ShadingStats {
     }
 }
 
-/// The suns' light at a shading point, by light group, and its shadow rays.
-struct SunLight {
-    radiance: Vec<DVec3>,
-    shadow_rays: u64,
-}
-
 /// What the first hit of a camera sample reports to the AOVs.
 #[derive(Debug, Clone, Copy)]
 pub struct FirstHit {
@@ -248,15 +242,14 @@ impl<'a> Integrator<'a> {
                 direct.add_scaled_to(throughput, &mut result.radiance, groups);
             }
             if self.lights.iter().any(|group| !group.suns.is_empty()) {
-                let found = self.sun_light(&sp, sample, depth, &mut scratch.batch);
-                result.stats.shadow_rays += found.shadow_rays;
-                for (g, radiance) in found.radiance.iter().enumerate() {
-                    let seen = throughput * *radiance;
+                let mut credit = |group: usize, radiance: DVec3| {
+                    let seen = throughput * radiance;
                     result.radiance += seen;
-                    if let Some(slot) = groups.get_mut(g) {
+                    if let Some(slot) = groups.get_mut(group) {
                         *slot += seen;
                     }
-                }
+                };
+                result.stats.shadow_rays += self.sun_light(&sp, sample, depth, &mut scratch.batch, &mut credit);
             }
             if let Some((emitters, bsdf)) = &sharp {
                 // The pixel's samples (and each sample's draws) take
@@ -508,9 +501,17 @@ impl<'a> Integrator<'a> {
     /// of a Kronecker sequence over the pixel's samples rotated per pixel,
     /// bounce and sun, each a directional light of the disc's irradiance
     /// over the draws, evaluated (every lobe) and traced as any light is.
-    fn sun_light(&self, sp: &SurfacePoint<'_>, sample: SampleKey, depth: u32, buffers: &mut BatchBuffers) -> SunLight {
+    /// Each group's light goes to `credit`; returns the shadow rays cast.
+    fn sun_light(
+        &self,
+        sp: &SurfacePoint<'_>,
+        sample: SampleKey,
+        depth: u32,
+        buffers: &mut BatchBuffers,
+        credit: &mut impl FnMut(usize, DVec3),
+    ) -> u64 {
         let [seed, x, y, s] = sample;
-        let mut found = SunLight { radiance: vec![DVec3::ZERO; self.lights.len()], shadow_rays: 0 };
+        let mut shadow_rays = 0;
         for (g, group) in self.lights.iter().enumerate().filter(|(_, group)| !group.suns.is_empty()) {
             let mut batch = LightBatch::new(&self.geometry.embree, sp, buffers);
             for (i, sun) in group.suns.iter().enumerate() {
@@ -530,10 +531,10 @@ impl<'a> Integrator<'a> {
                 }
             }
             let batch = batch.finish();
-            found.radiance[g] = batch.radiance;
-            found.shadow_rays += batch.shadow_rays;
+            credit(g, batch.radiance);
+            shadow_rays += batch.shadow_rays;
         }
-        found
+        shadow_rays
     }
 
     /// The light of the moving lights (in no tree: docs/design.md §13.6)
