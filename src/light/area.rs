@@ -63,21 +63,19 @@ impl AreaEmitter {
         AreaSample { point: p0 + a * (p1 - p0) + b * (p2 - p0), normal, triangle, ab: Vec2::new(a, b) }
     }
 
-    /// The radiance leaving triangle `triangle` at (a, b) towards `towards`
-    /// (a point), W/(m^2 sr): the material's emission (texel by texel) on
-    /// the side its winding faces, or on both sides when it emits from
-    /// both; as a ray that hits it reads it.
+    /// The radiance leaving the drawn point `at` towards `towards` (a
+    /// point), W/(m^2 sr): the material's emission (texel by texel) on the
+    /// side its winding faces, or on both sides when it emits from both;
+    /// as a ray that hits it reads it.
     #[must_use]
-    pub fn radiance(&self, scene: &Scene, triangle: usize, ab: Vec2, towards: Vec3) -> Vec3 {
+    pub fn radiance(&self, scene: &Scene, at: &AreaSample, towards: Vec3) -> Vec3 {
         let mesh = &scene.meshes[self.mesh];
         let material = &scene.materials[mesh.material];
-        let [p0, p1, p2] = mesh.triangles[triangle].map(|i| mesh.positions[i as usize]);
-        let y = p0 + ab.x * (p1 - p0) + ab.y * (p2 - p0);
-        let front = (p1 - p0).cross(p2 - p0).dot(towards - y) > 0.0;
+        let front = at.normal.dot(towards - at.point) > 0.0;
         if !(front || material.emits_both_sides) {
             return Vec3::ZERO;
         }
-        material.emission_at(&mesh.tex_coords(triangle, ab.x, ab.y), &scene.textures)
+        material.emission_at(&mesh.tex_coords(at.triangle, at.ab.x, at.ab.y), &scene.textures)
     }
 
     /// The squared distance from `p` to the emitter's box (0 inside it).
@@ -173,13 +171,6 @@ mod tests {
 
     fn quad_scene() -> Scene {
         let text = r#"
-[film]
-width = 4
-height = 4
-[camera]
-eye = [0, 1, 4]
-look_at = [0, 0, 0]
-fov_y = 45
 [[lights]]
 type = "area"
 corner = [-1, 2, -0.5]
@@ -188,7 +179,7 @@ v = [0, 0, 1]
 radiance = [1, 2, 3]
 samples = 16
 "#;
-        Scene::from_spec(std::path::Path::new("a.toml"), toml::from_str(text).unwrap()).unwrap()
+        crate::scene::with_lights_only(text)
     }
 
     #[test]
@@ -218,7 +209,7 @@ samples = 16
         assert!((quadrant as f64 / n as f64 - 0.125).abs() < 0.01, "{quadrant}");
         // u x v = x x z = -y: the front faces down.
         let s = e.sample(&scene, [0.3, 0.2, 0.1]);
-        assert_eq!(e.radiance(&scene, s.triangle, s.ab, Vec3::ZERO), Vec3::new(1.0, 2.0, 3.0));
-        assert_eq!(e.radiance(&scene, s.triangle, s.ab, Vec3::new(0.0, 4.0, 0.0)), Vec3::ZERO);
+        assert_eq!(e.radiance(&scene, &s, Vec3::ZERO), Vec3::new(1.0, 2.0, 3.0));
+        assert_eq!(e.radiance(&scene, &s, Vec3::new(0.0, 4.0, 0.0)), Vec3::ZERO);
     }
 }

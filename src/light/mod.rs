@@ -493,13 +493,6 @@ mod tests {
     #[test]
     fn a_scene_becomes_lights_of_each_kind_in_file_order() {
         let text = r#"
-[film]
-width = 4
-height = 4
-[camera]
-eye = [0, 1, 4]
-look_at = [0, 0, 0]
-fov_y = 45
 [[lights]]
 type = "point"
 position = [0, 2, 0]
@@ -526,7 +519,7 @@ irradiance = [3, 3, 3]
 radiance = [0.1, 0.1, 0.1]
 samples = 7
 "#;
-        let scene = Scene::from_spec(std::path::Path::new("l.toml"), toml::from_str(text).unwrap()).unwrap();
+        let scene = crate::scene::with_lights_only(text);
         let lights = Lights::from_scene(&scene);
         assert_eq!(lights.omni.len(), 1 + 6);
         // Grid lights sit at cell centres, row by row.

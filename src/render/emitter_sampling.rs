@@ -207,13 +207,6 @@ mod tests {
     /// A sky and two area lights of different sizes and radiances.
     fn scene() -> Scene {
         let text = r#"
-[film]
-width = 4
-height = 4
-[camera]
-eye = [0, 1, 4]
-look_at = [0, 0, 0]
-fov_y = 45
 [[lights]]
 type = "area"
 corner = [-1, 2, -0.5]
@@ -229,7 +222,7 @@ radiance = [20, 10, 5]
 [environment]
 radiance = [0.2, 0.2, 0.2]
 "#;
-        Scene::from_spec(std::path::Path::new("e.toml"), toml::from_str(text).unwrap()).unwrap()
+        crate::scene::with_lights_only(text)
     }
 
     /// What MIS weighs a path with must be the density that draws it: the

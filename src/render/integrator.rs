@@ -328,7 +328,7 @@ impl<'a> Integrator<'a> {
                 let wi = to.normalize_or_zero();
                 let f_cos = bsdf.eval(wi, lobes);
                 let e = &emitters.area.emitters[emitter];
-                let light = e.radiance(emitters.scene, sample.triangle, sample.ab, sp.p);
+                let light = e.radiance(emitters.scene, &sample, sp.p);
                 let pdf = emitters.area_pdf(choice, emitter, d2, sample.normal.dot(wi));
                 if f_cos != Vec3::ZERO && light != Vec3::ZERO && pdf > 0.0 && pdf.is_finite() {
                     if let Some(ray) = sp.shadow_ray_to(sample.point) {

@@ -256,5 +256,15 @@ pub fn check_resolution(file: &Path, what: &str, width: u32, height: u32) -> Res
     Ok(())
 }
 
+/// A scene of `lights` (TOML `[[lights]]` and `[environment]` tables) with
+/// a 4 x 4 film and a camera and nothing else: what the lights' unit tests
+/// parse.
+#[cfg(test)]
+pub(crate) fn with_lights_only(lights: &str) -> Scene {
+    let text =
+        format!("[film]\nwidth = 4\nheight = 4\n[camera]\neye = [0, 1, 4]\nlook_at = [0, 0, 0]\nfov_y = 45\n{lights}");
+    Scene::from_spec(Path::new("lights.toml"), toml::from_str(&text).unwrap()).unwrap()
+}
+
 #[cfg(test)]
 mod tests;
