@@ -263,8 +263,9 @@ fn render_small(scene: &Scene) -> Outcome {
 }
 
 /// Renders `scene` lit by `lights` (its lights by group) at 4x3 in every
-/// mode (exact, bounded, stochastic, multidimensional); panics when the
-/// film met a NaN or an infinity, or holds one.
+/// mode (exact, bounded, stochastic, multidimensional), with direct light
+/// and with paths of up to 4 vertices; panics when the film met a NaN or
+/// an infinity, or holds one.
 fn render_lit(scene: &Scene, lights: &[Lights]) -> Outcome {
     let device = Device::try_new().unwrap();
     let Ok(geometry) = Geometry::try_new(&device, scene, lights) else { return Outcome::GeometryRefused };
@@ -284,12 +285,13 @@ fn render_lit(scene: &Scene, lights: &[Lights]) -> Outcome {
         lightcut::build_trees_with(lights, 1, &CutSettings { exhaustive_lights: 0, ..MULTIDIMENSIONAL_DEFAULTS });
     let emission_group = scene.emission_groups();
     let emitters = lightcuts::render::emitter_sampling::EmitterSampling::of(scene, settings.spp);
-    for direct in [
+    let modes = [
         DirectLighting::Exact,
         DirectLighting::Lightcuts { trees: &trees, settings: CutSettings::default() },
         DirectLighting::StochasticLightcuts { trees: &trees, settings: STOCHASTIC_DEFAULTS },
         DirectLighting::Multidimensional { trees: &whole_trees, settings: MULTIDIMENSIONAL_DEFAULTS },
-    ] {
+    ];
+    for (direct, path_depth) in modes.into_iter().flat_map(|m| [(m, None), (m, Some(4))]) {
         let integrator = Integrator {
             geometry: &geometry,
             lights,
@@ -299,6 +301,7 @@ fn render_lit(scene: &Scene, lights: &[Lights]) -> Outcome {
             emission_group: &emission_group,
             emitters: emitters.as_ref(),
             spp: settings.spp,
+            path_depth,
         };
         let (film, _) = render::render(&integrator, &camera, &settings, &|_| {}).unwrap();
         assert!(film.non_finite().is_empty(), "NaN or Inf reached the film: {:?}", film.non_finite());

@@ -248,6 +248,17 @@ pub struct PassArgs {
     /// shutter the animation is not played (a warning says so).
     #[arg(long, value_name = "NAME")]
     pub animation: Option<String>,
+    /// Indirect light, overriding the scene's `[indirect]`: `path` (camera
+    /// paths with next-event estimation at every vertex), `vpl` (virtual
+    /// point lights) or `none` (direct light only). The scene's settings
+    /// of the method are kept; otherwise max-depth 8, or 10,000 one-bounce
+    /// VPL paths (docs/design.md §6.7).
+    #[arg(long, value_name = "path|vpl|none", value_parser = ["path", "vpl", "none"])]
+    pub indirect: Option<String>,
+    /// The path method's most surface interactions per camera path (1:
+    /// direct light only; Mitsuba 3's max_depth counts one more).
+    #[arg(long, value_name = "N")]
+    pub max_depth: Option<u32>,
 }
 
 impl PassArgs {
@@ -262,6 +273,7 @@ impl PassArgs {
         };
         let mut scene = Scene::load_with(path, &options)?;
         scene.add_lights(self.environment.as_deref(), self.sun)?;
+        scene.set_indirect(self.indirect.as_deref(), self.max_depth)?;
         for warning in &scene.warnings {
             eprintln!("warning: {warning}");
         }

@@ -9,7 +9,7 @@ use crate::output::exr::{write_exr, ExrMetadata};
 use crate::output::preview::write_png;
 use crate::render::session::{Mode, PassResult, Session};
 use crate::render::PassSettings;
-use crate::scene::Scene;
+use crate::scene::{Indirect, Scene};
 
 pub fn run(args: &RenderArgs) -> Result<(), CliError> {
     let _claim = if args.no_overwrite {
@@ -85,8 +85,22 @@ fn print_summary(scene: &Scene, settings: &PassSettings, mode: Mode, result: &Pa
         let layers = if settings.aovs.groups { "a layer each" } else { "no layers: --aovs leaves out groups" };
         println!("  light groups     {} ({layers})", scene.groups.names.join(", "));
     }
-    if *vpls > 0 {
-        println!("  indirect         {vpls} virtual point lights traced in {:.3} s", vpl_time.as_secs_f64());
+    match scene.indirect {
+        Some(Indirect::Vpl(_)) => {
+            println!("  indirect         {vpls} virtual point lights traced in {:.3} s", vpl_time.as_secs_f64());
+        }
+        Some(Indirect::Path(path)) => {
+            let samples = stats.camera_rays.max(1) as f64;
+            let rays = (stats.camera_rays + stats.shading.bounce_rays + stats.shading.shadow_rays) as f64;
+            println!(
+                "  indirect         paths of at most {} vertices: {:.2} vertices per camera sample, {:.1} rays per \
+                 sample",
+                path.max_depth,
+                stats.shading.path_vertices as f64 / samples,
+                rays / samples
+            );
+        }
+        None => {}
     }
     let (drawn, stored) = (scene.triangle_count(), scene.stored_triangle_count());
     if drawn == stored {

@@ -16,6 +16,7 @@ use crate::light_tree::LightTrees;
 use crate::lightcut::multidimensional::{GatherPoint, GatherScratch};
 use crate::lightcut::{self, CutResult, CutScratch, CutSettings, StochasticScratch};
 use crate::shading::{BatchBuffers, Bsdf, Geometry, LightBatch, Lobes, SurfacePoint};
+use crate::util::color::luminance;
 use crate::util::sampling::Rng;
 
 /// How direct light is computed at each shading point.
@@ -53,6 +54,22 @@ const MOST_SUN_DRAWS: u32 = 16;
 /// sample's shading point.
 const EMITTER_STREAM: u64 = 0xe4f1_5a3b;
 
+/// Keeps a path's bounces apart from the other streams of its vertex.
+const PATH_STREAM: u64 = 0xba7_4ce5;
+
+/// The path method's vertices before Russian roulette may end a path
+/// (pbrt-v4 starts it after its second bounce too).
+const RUSSIAN_ROULETTE_DEPTH: u32 = 3;
+
+/// Where a path goes from a vertex: the ray, what the path's throughput is
+/// multiplied by, and whether it is a mirror's (a delta bounce, whose
+/// emission the next vertex counts).
+struct Bounce {
+    ray: crate::embree::Ray,
+    weight: DVec3,
+    mirror: bool,
+}
+
 /// Most culled back faces a camera or mirror ray passes through before it
 /// is taken to see nothing (a bound on a hostile stack of coplanar faces).
 const MAX_CULLED_FACES: usize = 64;
@@ -81,6 +98,12 @@ pub struct ShadingStats {
     pub max_cut: u64,
     /// Shading points by cut size (see [`CUT_HISTOGRAM_BUCKETS`]).
     pub cut_histogram: [u64; CUT_HISTOGRAM_BUCKETS],
+    /// Surfaces camera paths met (the camera's hit, mirrors' and the path
+    /// method's bounces): per camera ray, the mean path length.
+    pub path_vertices: u64,
+    /// Rays that continued camera paths past a surface (mirrors' and the
+    /// path method's bounces).
+    pub bounce_rays: u64,
     /// Gather points and gather-tree nodes (the multidimensional mode:
     /// its "shading points" are pixels, its cut nodes (gather, light) pairs).
     pub gather_points: u64,
@@ -100,6 +123,8 @@ impl ShadingStats {
         self.cut_nanos += other.cut_nanos;
         self.gather_points += other.gather_points;
         self.gather_nodes += other.gather_nodes;
+        self.path_vertices += other.path_vertices;
+        self.bounce_rays += other.bounce_rays;
         for (a, b) in self.cut_histogram.iter_mut().zip(&other.cut_histogram) {
             *a += b;
         }
@@ -153,6 +178,9 @@ pub struct Integrator<'a> {
     /// Samples per pixel (how many directions each sample draws from a
     /// sun's disc depends on it).
     pub spp: u32,
+    /// The path method's `max_depth` (docs/design.md §6.7); None: camera
+    /// paths follow mirrors only, to `max_mirror_depth`.
+    pub path_depth: Option<u32>,
 }
 
 impl<'a> Integrator<'a> {
@@ -166,15 +194,18 @@ impl<'a> Integrator<'a> {
         }
     }
 
-    /// Radiance arriving at the camera along `ray` (camera paths bounce only
-    /// off mirrors; every other surface is shaded by direct light). Each
-    /// light group's share is added to `groups[g]` (`groups` has
-    /// [`Integrator::group_slots`] entries): emitters and the environment
-    /// seen directly count in their own groups. With `transparent`, the
-    /// environment is not seen where the camera ray itself hits nothing
-    /// (the film's background is RGB 0, alpha 0); mirrors still show it.
-    /// In the multidimensional mode, direct light is not computed here:
-    /// each shading point joins `gather` with its path's throughput.
+    /// Radiance arriving at the camera along `ray`. Without the path
+    /// method, camera paths bounce only off mirrors and every other surface
+    /// is shaded by direct light; with it (`path_depth`), each vertex is
+    /// lit by next-event estimation and the path goes on by sampling the
+    /// BSDF (docs/design.md §6.7). Each light group's share is added to
+    /// `groups[g]` (`groups` has [`Integrator::group_slots`] entries):
+    /// emitters and the environment seen directly count in their own
+    /// groups. With `transparent`, the environment is not seen where the
+    /// camera ray itself hits nothing (the film's background is RGB 0,
+    /// alpha 0); mirrors still show it. In the multidimensional mode,
+    /// direct light is not computed here: each shading point joins
+    /// `gather` with its path's throughput.
     pub fn trace(
         &self,
         mut ray: crate::embree::Ray,
@@ -193,11 +224,19 @@ impl<'a> Integrator<'a> {
         };
         let mut throughput = DVec3::ONE;
         let scene = self.geometry.scene;
-        for depth in 0..=self.max_mirror_depth {
+        let vertices = self.path_depth.unwrap_or(self.max_mirror_depth + 1);
+        // Whether this vertex's ray counts the emission it finds: at the
+        // camera and after mirrors, yes; after a sampled bounce, no: the
+        // vertex before lit itself by every emitter already (next-event
+        // estimation, design.md §6.7).
+        let mut sees_emitters = true;
+        for depth in 0..vertices {
             let Some(hit) = self.first_hit(&mut ray) else {
                 // The environment, seen directly or in a mirror.
                 let seen_directly = depth == 0;
-                if let Some(environment) = scene.environment.as_ref().filter(|_| !(seen_directly && transparent)) {
+                let environment =
+                    scene.environment.as_ref().filter(|_| sees_emitters && !(seen_directly && transparent));
+                if let Some(environment) = environment {
                     result.opaque |= seen_directly;
                     let seen = throughput * environment.map.radiance(ray.direction.normalize()).as_dvec3();
                     result.radiance += seen;
@@ -208,6 +247,7 @@ impl<'a> Integrator<'a> {
                 break;
             };
             let mut sp = self.geometry.surface(&ray, &hit);
+            result.stats.path_vertices += 1;
             // A glossy lobe too sharp for some emitter's stand-in lights:
             // they light the diffuse lobe, and the glossy one's light from
             // the continuous emitters is sampled (in every mode alike).
@@ -224,7 +264,7 @@ impl<'a> Integrator<'a> {
             }
             // Emitters are seen with their radiance; they reflect light too,
             // as their material says (a TOML area light's is black).
-            if sp.emitted != Vec3::ZERO {
+            if sp.emitted != Vec3::ZERO && sees_emitters {
                 let seen = throughput * sp.emitted.as_dvec3();
                 result.radiance += seen;
                 if let Some(slot) = groups.get_mut(self.emission_group[mesh]) {
@@ -234,55 +274,138 @@ impl<'a> Integrator<'a> {
             if sp.material.unlit {
                 break;
             }
-            if let DirectLighting::Multidimensional { .. } = self.direct {
-                gather.push(GatherPoint { sp: sp.clone(), strength: throughput });
-            } else {
-                let direct = self.direct_light(&sp, sample, depth, groups.len(), scratch, &mut result.stats);
-                result.stats.record_point(direct.nodes, direct.shadow_rays);
-                direct.add_scaled_to(throughput, &mut result.radiance, groups);
-            }
-            if self.lights.iter().any(|group| !group.suns.is_empty()) {
-                let mut credit = |group: usize, radiance: DVec3| {
-                    let seen = throughput * radiance;
-                    result.radiance += seen;
-                    if let Some(slot) = groups.get_mut(group) {
-                        *slot += seen;
-                    }
-                };
-                result.stats.shadow_rays += self.sun_light(&sp, sample, depth, &mut scratch.batch, &mut credit);
-            }
-            if let Some((emitters, bsdf)) = &sharp {
-                // The pixel's samples (and each sample's draws) take
-                // consecutive points of one rotated Kronecker sequence
-                // (`kronecker6`): stratified across them, so the sampled
-                // lobe's noise falls faster.
-                let [seed, x, y, s] = sample;
-                let mut rng = Rng::from_key(&[seed, x, y, u64::from(depth), EMITTER_STREAM]);
-                let shift: [f32; 6] = std::array::from_fn(|_| rng.next_f32());
-                let draws = emitters.draws;
-                emitters.weigh(&sp, &mut scratch.choice);
-                let scale = throughput / f64::from(draws);
-                let mut credit = |group: usize, value: DVec3| {
-                    let seen = scale * value;
-                    result.radiance += seen;
-                    if let Some(slot) = groups.get_mut(group) {
-                        *slot += seen;
-                    }
-                };
-                for j in 0..draws {
-                    let index = (s as u32).wrapping_mul(draws).wrapping_add(j);
-                    let u = crate::util::sampling::kronecker6(index, shift);
-                    result.stats.shadow_rays +=
-                        self.sampled_emitters(emitters, &scratch.choice, &sp, bsdf, u, &mut credit);
-                }
-            }
-            if sp.mirror == Vec3::ZERO || depth == self.max_mirror_depth {
+            self.next_event(&sp, sharp, sample, depth, sees_emitters, throughput, scratch, groups, gather, &mut result);
+            if depth + 1 == vertices {
                 break;
             }
-            throughput *= sp.mirror.as_dvec3();
-            ray = sp.mirror_ray();
+            let bsdf = sharp.map(|(_, bsdf)| bsdf);
+            let Some(bounce) = self.bounce(&sp, bsdf, sample, depth, throughput) else { break };
+            result.stats.bounce_rays += 1;
+            throughput *= bounce.weight;
+            sees_emitters = bounce.mirror;
+            ray = bounce.ray;
         }
         result
+    }
+
+    /// Lights `sp`, the `depth`-th vertex of a camera path of `throughput`,
+    /// by next-event estimation: the cut (or every light, or the gather
+    /// cut's gather point), the suns' discs and, for a lobe too `sharp`
+    /// for the emitters' stand-ins, the emitters' sampling. Vertices the
+    /// camera sees directly or through mirrors (`primary`) draw as many
+    /// directions from a sun's disc and the emitters as the pixel's samples
+    /// leave them; vertices after a sampled bounce draw one.
+    #[allow(clippy::too_many_arguments)]
+    fn next_event(
+        &self,
+        sp: &SurfacePoint<'a>,
+        sharp: Option<(&EmitterSampling<'_>, Bsdf)>,
+        sample: SampleKey,
+        depth: u32,
+        primary: bool,
+        throughput: DVec3,
+        scratch: &mut Scratch,
+        groups: &mut [DVec3],
+        gather: &mut Vec<GatherPoint<'a>>,
+        result: &mut SampleResult,
+    ) {
+        if let DirectLighting::Multidimensional { .. } = self.direct {
+            gather.push(GatherPoint { sp: sp.clone(), strength: throughput });
+        } else {
+            let direct = self.direct_light(sp, sample, depth, groups.len(), scratch, &mut result.stats);
+            result.stats.record_point(direct.nodes, direct.shadow_rays);
+            direct.add_scaled_to(throughput, &mut result.radiance, groups);
+        }
+        let mut credit = |group: usize, radiance: DVec3| {
+            let seen = throughput * radiance;
+            result.radiance += seen;
+            if let Some(slot) = groups.get_mut(group) {
+                *slot += seen;
+            }
+        };
+        let mut rays = 0;
+        if self.lights.iter().any(|group| !group.suns.is_empty()) {
+            rays += self.sun_light(sp, sample, depth, primary, &mut scratch.batch, &mut credit);
+        }
+        if let Some((emitters, bsdf)) = &sharp {
+            // The pixel's samples (and each sample's draws) take
+            // consecutive points of one rotated Kronecker sequence
+            // (`kronecker6`): stratified across them, so the sampled
+            // lobe's noise falls faster.
+            let [seed, x, y, s] = sample;
+            let mut rng = Rng::from_key(&[seed, x, y, u64::from(depth), EMITTER_STREAM]);
+            let shift: [f32; 6] = std::array::from_fn(|_| rng.next_f32());
+            let draws = if primary { emitters.draws } else { 1 };
+            emitters.weigh(sp, &mut scratch.choice);
+            let scale = 1.0 / f64::from(draws);
+            let mut credit = |group: usize, value: DVec3| credit(group, scale * value);
+            for j in 0..draws {
+                let index = (s as u32).wrapping_mul(draws).wrapping_add(j);
+                let u = crate::util::sampling::kronecker6(index, shift);
+                rays += self.sampled_emitters(emitters, &scratch.choice, sp, bsdf, u, &mut credit);
+            }
+        }
+        result.stats.shadow_rays += rays;
+    }
+
+    /// Where the path goes from `sp`, its `depth`-th vertex: without the
+    /// path method, along the mirror (if any); with it, along the mirror
+    /// or a direction the BSDF draws (all its lobes), chosen in proportion
+    /// to their reflectance, then, past the first vertices, through Russian
+    /// roulette on the path's `throughput` so far (docs/design.md §6.7).
+    /// `bsdf` is the point's BSDF when the caller built it already. None:
+    /// the path ends.
+    fn bounce(
+        &self,
+        sp: &SurfacePoint<'_>,
+        bsdf: Option<Bsdf>,
+        sample: SampleKey,
+        depth: u32,
+        throughput: DVec3,
+    ) -> Option<Bounce> {
+        let mirror = sp.mirror.as_dvec3();
+        if self.path_depth.is_none() {
+            return (mirror != DVec3::ZERO).then(|| Bounce { ray: sp.mirror_ray(), weight: mirror, mirror: true });
+        }
+        let [seed, x, y, s] = sample;
+        let mut rng = Rng::from_key(&[seed, x, y, s, u64::from(depth), PATH_STREAM]);
+        let u: [f32; 5] = std::array::from_fn(|_| rng.next_f32());
+        let bsdf = bsdf.unwrap_or_else(|| Bsdf::new(sp));
+        let (mirror_weight, bsdf_weight) = (luminance(sp.mirror), bsdf.reflectance_weight());
+        let total = mirror_weight + bsdf_weight;
+        if !(total > 0.0 && total.is_finite()) {
+            return None;
+        }
+        let p_mirror = mirror_weight / total;
+        let mut bounce = if u[0] < p_mirror {
+            Bounce { ray: sp.mirror_ray(), weight: mirror / f64::from(p_mirror), mirror: true }
+        } else {
+            let s = bsdf.sample([u[1], u[2], u[3]], Lobes::ALL)?;
+            let ray = crate::embree::Ray {
+                origin: sp.offset_origin(),
+                direction: s.wi,
+                t_near: 0.0,
+                t_far: f32::INFINITY,
+                time: sp.time,
+            };
+            let weight = s.f_cos.as_dvec3() / (f64::from(s.pdf) * f64::from(1.0 - p_mirror));
+            Bounce { ray, weight, mirror: false }
+        };
+        if !(bounce.weight.max_element() > 0.0 && bounce.weight.is_finite()) {
+            return None;
+        }
+        // Russian roulette (pbrt-v4's rule): past the first vertices, a
+        // path whose throughput has fallen below 1 goes on with
+        // probability equal to its largest component and is divided by it
+        // when it does, so that its expected value is unchanged.
+        if depth + 1 >= RUSSIAN_ROULETTE_DEPTH {
+            let survive = (throughput * bounce.weight).max_element().min(1.0);
+            if f64::from(u[4]) >= survive {
+                return None;
+            }
+            bounce.weight /= survive;
+        }
+        Some(bounce)
     }
 
     /// The continuous emitters' light at `sp` through the glossy lobe of
@@ -497,7 +620,7 @@ impl<'a> Integrator<'a> {
 
     /// The light of the suns' discs at `sp` (in no tree: docs/design.md
     /// §6.3), by group: each sample draws ceil(samples / spp) directions
-    /// (1 to 16) uniformly over each disc's solid angle, consecutive points
+    /// (1 to 16; one at a vertex past a sampled bounce, not `primary`) uniformly over each disc's solid angle, consecutive points
     /// of a Kronecker sequence over the pixel's samples rotated per pixel,
     /// bounce and sun, each a directional light of the disc's irradiance
     /// over the draws, evaluated (every lobe) and traced as any light is.
@@ -507,6 +630,7 @@ impl<'a> Integrator<'a> {
         sp: &SurfacePoint<'_>,
         sample: SampleKey,
         depth: u32,
+        primary: bool,
         buffers: &mut BatchBuffers,
         credit: &mut impl FnMut(usize, DVec3),
     ) -> u64 {
@@ -518,7 +642,7 @@ impl<'a> Integrator<'a> {
                 let key = [seed, x, y, u64::from(depth), SUN_STREAM, g as u64, i as u64];
                 let mut rng = Rng::from_key(&key);
                 let shift: [f32; 6] = std::array::from_fn(|_| rng.next_f32());
-                let draws = sun.samples.div_ceil(self.spp.max(1)).clamp(1, MOST_SUN_DRAWS);
+                let draws = if primary { sun.samples.div_ceil(self.spp.max(1)).clamp(1, MOST_SUN_DRAWS) } else { 1 };
                 let irradiance = sun.irradiance / draws as f32;
                 for j in 0..draws {
                     let index = (s as u32).wrapping_mul(draws).wrapping_add(j);

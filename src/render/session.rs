@@ -9,7 +9,7 @@ use super::{render, thread_pool, vpl, Film, PassProgress, PassSettings, PassStat
 use crate::embree::{Device, EmbreeError};
 use crate::light::{LightKind, Lights};
 use crate::lightcut::CutSettings;
-use crate::scene::Scene;
+use crate::scene::{Indirect, Scene};
 use crate::shading::{Geometry, GeometryError};
 
 /// How a pass computes direct light at each shading point.
@@ -174,7 +174,7 @@ impl<'s> Session<'s> {
         // Indirect light: VPLs for this seed, added to the oriented lights of
         // the group their path started from.
         let (mut lights, vpls) = match self.scene.indirect {
-            Some(indirect) => {
+            Some(Indirect::Vpl(indirect)) => {
                 let vpls = self.pool.install(|| vpl::trace(&self.geometry, &self.lights, indirect, settings.seed));
                 self.geometry.embree.take_error("tracing the light paths of the VPLs")?;
                 let count = vpls.iter().map(Vec::len).sum();
@@ -184,7 +184,7 @@ impl<'s> Session<'s> {
                 }
                 (std::borrow::Cow::Owned(lights), count)
             }
-            None => (std::borrow::Cow::Borrowed(&self.lights), 0),
+            Some(Indirect::Path(_)) | None => (std::borrow::Cow::Borrowed(&self.lights), 0),
         };
         let split_groups = settings.aovs.groups && self.scene.groups.named();
         if !split_groups && lights.len() > 1 {
@@ -222,6 +222,10 @@ impl<'s> Session<'s> {
             emission_group: &emission_group,
             emitters: emitters.as_ref(),
             spp: settings.spp,
+            path_depth: match self.scene.indirect {
+                Some(Indirect::Path(path)) => Some(path.max_depth),
+                _ => None,
+            },
         };
         let camera = self.scene.camera(settings.width, settings.height);
         let (film, stats) = self.pool.install(|| render(&integrator, &camera, settings, progress))?;

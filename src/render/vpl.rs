@@ -21,7 +21,7 @@ use rayon::prelude::*;
 
 use crate::embree::Ray;
 use crate::light::{Light, Lights, OrientedLight, SpotLight};
-use crate::scene::IndirectSettings;
+use crate::scene::VplSettings;
 use crate::shading::Geometry;
 use crate::util::color::luminance;
 use crate::util::sampling::Rng;
@@ -75,12 +75,7 @@ fn uniform_direction(u: f32, v: f32) -> Vec3 {
 /// order: a VPL belongs to the group of the light its path started from,
 /// so that a group's layer holds its indirect light too.
 #[must_use]
-pub fn trace(
-    geometry: &Geometry<'_>,
-    groups: &[Lights],
-    settings: IndirectSettings,
-    seed: u64,
-) -> Vec<Vec<OrientedLight>> {
+pub fn trace(geometry: &Geometry<'_>, groups: &[Lights], settings: VplSettings, seed: u64) -> Vec<Vec<OrientedLight>> {
     let mut by_group = vec![Vec::new(); groups.len()];
     let (lo, hi) = geometry.bounds;
     if !(lo.is_finite() && hi.is_finite()) || settings.paths == 0 {
@@ -241,7 +236,7 @@ bounces = 1
         let lights = Lights::from_scene(&scene);
         let device = Device::try_new().unwrap();
         let geometry = Geometry::try_new(&device, &scene, std::slice::from_ref(&lights)).unwrap();
-        let settings = scene.indirect.unwrap();
+        let Some(crate::scene::Indirect::Vpl(settings)) = scene.indirect else { panic!("VPL settings") };
         let groups = std::slice::from_ref(&lights);
         let vpls = trace(&geometry, groups, settings, 7).remove(0);
         assert!(vpls.len() > 19_000, "nearly every path hits the floor: {}", vpls.len());

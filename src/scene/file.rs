@@ -30,7 +30,7 @@ pub struct SceneFile {
     pub render: RenderSpec,
     /// Light arriving from infinitely far away, visible in the background.
     pub environment: Option<EnvironmentSpec>,
-    /// Indirect light by instant radiosity.
+    /// Indirect light: camera paths or instant radiosity.
     pub indirect: Option<IndirectSpec>,
 }
 
@@ -128,11 +128,16 @@ fn environment_samples() -> u32 {
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct IndirectSpec {
-    /// Light paths traced from the emitters (each leaves up to `bounces` VPLs).
-    pub paths: u32,
-    /// Diffuse bounces per path (1 = one-bounce indirect light).
-    #[serde(default = "one")]
-    pub bounces: u32,
+    /// `"path"` or `"vpl"`; `"vpl"` when absent and `paths` is given,
+    /// `"path"` otherwise.
+    pub method: Option<String>,
+    /// VPLs: light paths traced from the emitters (each leaves up to
+    /// `bounces` VPLs).
+    pub paths: Option<u32>,
+    /// VPLs: diffuse bounces per light path (1 = one-bounce indirect light).
+    pub bounces: Option<u32>,
+    /// Paths: surface interactions per camera path (1 = direct light only).
+    pub max_depth: Option<u32>,
 }
 
 #[derive(Debug, Clone, Deserialize)]

@@ -109,8 +109,14 @@ pub struct Scene {
     /// Radiance from infinitely far away: visible in the background, and
     /// sampled into directional lights.
     pub environment: Option<Environment>,
-    /// Instant radiosity: VPLs are traced per render (they need Embree and the seed).
-    pub indirect: Option<IndirectSettings>,
+    /// Indirect light: camera paths, or VPLs traced per render (they need
+    /// Embree and the seed); None for direct light only.
+    pub indirect: Option<Indirect>,
+    /// The power the scene's lights emit in all (W, as [`Indirect::Vpl`]'s
+    /// light paths share it out), and the label of the light that emits
+    /// the most: the command line's `--indirect vpl` checks it as the
+    /// loader checks a scene's own `[indirect]`.
+    pub emitted_power: (f64, String),
     /// Metres: 1/d^2 is evaluated at no less than this distance.
     pub distance_clamp: f32,
     /// Every file the scene was read from, in the order it was read: the scene
@@ -133,12 +139,40 @@ pub struct Scene {
 /// Film width of a glTF file rendered without a TOML, pixels.
 pub const DEFAULT_GLTF_WIDTH: u32 = 640;
 
+/// How a scene's indirect light is computed (docs/design.md §6.7).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Indirect {
+    /// Instant radiosity: virtual point lights left by light paths,
+    /// gathered by the cut as any light.
+    Vpl(VplSettings),
+    /// Camera paths continued by BSDF sampling, with next-event estimation
+    /// at every vertex.
+    Path(PathSettings),
+}
+
 /// Instant-radiosity settings of a scene.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct IndirectSettings {
+pub struct VplSettings {
     pub paths: usize,
     pub bounces: u32,
 }
+
+/// The path method's settings.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct PathSettings {
+    /// Surface interactions a camera path may have, each lit by next-event
+    /// estimation (pbrt-v4's `maxdepth`: 1 is direct light only; Mitsuba
+    /// 3's `max_depth` counts one more, Cycles' bounces one fewer).
+    pub max_depth: u32,
+}
+
+/// VPL light paths `--indirect vpl` traces when the scene gives none.
+pub const DEFAULT_VPL_PATHS: usize = 10_000;
+/// The path method's `max_depth` when neither the scene nor the command
+/// line gives one.
+pub const DEFAULT_MAX_DEPTH: u32 = 8;
+/// The deepest path a scene or the command line may ask for.
+pub const MOST_PATH_DEPTH: u32 = 1024;
 
 /// Most light paths a scene may ask for (each leaves up to `bounces` VPLs).
 pub const MAX_VPL_PATHS: u32 = 1 << 24;

@@ -142,6 +142,14 @@ impl Bsdf {
         (pdf > 0.0 && pdf.is_finite()).then(|| BsdfSample { wi, f_cos: self.eval(wi, lobes), pdf })
     }
 
+    /// An estimate of the reflectance of all its lobes (luminance): what a
+    /// path weighs its BSDF against its mirror layer with, choosing which
+    /// one to follow (docs/design.md §6.7).
+    #[must_use]
+    pub fn reflectance_weight(&self) -> f32 {
+        self.diffuse_weight + self.glossy_weight
+    }
+
     /// The solid angle its glossy lobe spreads over, steradians (None
     /// without one): Phong's cos^e integrates to 2 pi / (e + 1); GGX's
     /// half-vectors spread over about pi alpha^2, its reflected directions

@@ -20,6 +20,8 @@ pub struct BenchArgs {
     pub bench: Bench,
 }
 
+// Parsed once per process: the size of its variants costs nothing.
+#[allow(clippy::large_enum_variant)]
 #[derive(Debug, Subcommand)]
 pub enum Bench {
     /// Light-tree build time, memory and quality.

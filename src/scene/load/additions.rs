@@ -7,7 +7,10 @@ use std::path::Path;
 use glam::Vec3;
 
 use crate::scene::groups::DEFAULT_GROUP;
-use crate::scene::{Environment, EnvironmentMap, LightSource, Scene, SceneError};
+use crate::scene::{
+    Environment, EnvironmentMap, Indirect, LightSource, PathSettings, Scene, SceneError, VplSettings,
+    DEFAULT_MAX_DEPTH, DEFAULT_VPL_PATHS, MOST_PATH_DEPTH,
+};
 
 /// Directional lights an added environment becomes.
 pub const ADDED_ENVIRONMENT_SAMPLES: u32 = 1024;
@@ -68,6 +71,46 @@ impl Scene {
             });
             self.groups.of_light.push(group);
             self.additions.push(format!("--sun {azimuth},{elevation},{irradiance}"));
+        }
+        Ok(())
+    }
+
+    /// Sets the indirect light from the command line: `method` is `path`,
+    /// `vpl` or `none` (the scene's own settings of that method are kept;
+    /// otherwise `max_depth` 8 for paths, 10,000 one-bounce light paths for
+    /// VPLs), and `max_depth` the path method's depth. Errors name the flag.
+    pub fn set_indirect(&mut self, method: Option<&str>, max_depth: Option<u32>) -> Result<(), SceneError> {
+        if let Some(method) = method {
+            self.indirect = match (method, self.indirect) {
+                ("none", _) => None,
+                ("path", Some(Indirect::Path(settings))) => Some(Indirect::Path(settings)),
+                ("path", _) => Some(Indirect::Path(PathSettings { max_depth: DEFAULT_MAX_DEPTH })),
+                ("vpl", Some(Indirect::Vpl(settings))) => Some(Indirect::Vpl(settings)),
+                ("vpl", _) => {
+                    let (power, brightest) = &self.emitted_power;
+                    if *power > super::lights::MAX_TOTAL_EMISSION {
+                        let message = super::lights::vpl_power_message(*power);
+                        return Err(SceneError::new(&self.path, "--indirect", format!("{brightest}: {message}")));
+                    }
+                    Some(Indirect::Vpl(VplSettings { paths: DEFAULT_VPL_PATHS, bounces: 1 }))
+                }
+                (other, _) => {
+                    let message = format!("'{other}': must be path, vpl or none");
+                    return Err(SceneError::new(&self.path, "--indirect", message));
+                }
+            };
+            self.additions.push(format!("--indirect {method}"));
+        }
+        if let Some(depth) = max_depth {
+            let bad = |m: String| SceneError::new(&self.path, "--max-depth", m);
+            if !(1..=MOST_PATH_DEPTH).contains(&depth) {
+                return Err(bad(format!("must be between 1 and {MOST_PATH_DEPTH}, got {depth}")));
+            }
+            let Some(Indirect::Path(settings)) = &mut self.indirect else {
+                return Err(bad("is the path method's depth: add --indirect path".into()));
+            };
+            settings.max_depth = depth;
+            self.additions.push(format!("--max-depth {depth}"));
         }
         Ok(())
     }

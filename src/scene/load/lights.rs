@@ -176,7 +176,9 @@ fn light_source(
 /// intensities in all, and, when the scene has indirect light, the power
 /// its light paths carry (a light at infinity lights a disc as wide as the
 /// scene, `radius` metres). The error names the source that emits the most:
-/// `labels[i]` names source i, and `environment` the environment.
+/// `labels[i]` names source i, and `environment` the environment. Returns
+/// the power in all and the label of the source that emits the most
+/// (`Scene::emitted_power`).
 pub(super) fn check_totals(
     v: &Validator<'_>,
     sources: &[LightSource],
@@ -185,7 +187,7 @@ pub(super) fn check_totals(
     environment: Option<&Environment>,
     indirect: bool,
     radius: f64,
-) -> Result<(), SceneError> {
+) -> Result<(f64, String), SceneError> {
     use std::f64::consts::PI;
     let most = |c: Vec3| f64::from(c.max_element());
     // (intensity, power) of each source, and of the environment last.
@@ -226,16 +228,20 @@ pub(super) fn check_totals(
              sums hold"
         )
     })?;
+    let power: f64 = each.iter().map(|e| e.1).sum();
+    let brightest = label(largest(|e| e.1));
     if indirect {
-        let power: f64 = each.iter().map(|e| e.1).sum();
-        v.check(power <= MAX_TOTAL_EMISSION, &label(largest(|e| e.1)), || {
-            format!(
-                "the lights emit {power:.3e} W in all over the scene (this one the most), which [indirect]'s \
-                 light paths share out: at most {MAX_TOTAL_EMISSION:e} W, which their VPLs' f32 intensities hold"
-            )
-        })?;
+        v.check(power <= MAX_TOTAL_EMISSION, &brightest, || vpl_power_message(power))?;
     }
-    Ok(())
+    Ok((power, brightest))
+}
+
+/// Why a scene emitting `power` W cannot have VPLs.
+pub(crate) fn vpl_power_message(power: f64) -> String {
+    format!(
+        "the lights emit {power:.3e} W in all over the scene (this one the most), which [indirect]'s \
+         light paths share out: at most {MAX_TOTAL_EMISSION:e} W, which their VPLs' f32 intensities hold"
+    )
 }
 
 /// Adds an area emitter's geometry: visible, black, emitting `radiance` from

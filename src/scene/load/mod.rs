@@ -193,7 +193,8 @@ impl Scene {
             .flat_map(LightSource::positions)
             .fold(object::world_bounds(&meshes, &objects), |(lo, hi), p| (lo.min(p), hi.max(p)));
         let radius = if lo.is_finite() && hi.is_finite() { 0.5 * (hi - lo).as_dvec3().length() } else { 0.0 };
-        lights::check_totals(&v, &lights, &labels, &meshes, environment.as_ref(), indirect.is_some(), radius)?;
+        let vpls = matches!(indirect, Some(crate::scene::Indirect::Vpl(_)));
+        let emitted_power = lights::check_totals(&v, &lights, &labels, &meshes, environment.as_ref(), vpls, radius)?;
         let groups = LightGroups::assign(
             path,
             &requested_groups,
@@ -217,6 +218,7 @@ impl Scene {
             max_mirror_depth: spec.render.max_mirror_depth.min(64),
             environment,
             indirect,
+            emitted_power,
             distance_clamp: clamp,
             inputs,
             warnings,

@@ -10,8 +10,8 @@ use super::Validator;
 use crate::scene::file::{self, SceneFile};
 use crate::scene::gltf::GltfCamera;
 use crate::scene::{
-    check_resolution, Environment, EnvironmentMap, Film, IndirectSettings, SceneError, DEFAULT_GLTF_WIDTH,
-    MAX_VPL_PATHS,
+    check_resolution, Environment, EnvironmentMap, Film, Indirect, PathSettings, SceneError, VplSettings,
+    DEFAULT_GLTF_WIDTH, DEFAULT_MAX_DEPTH, MAX_VPL_PATHS, MOST_PATH_DEPTH,
 };
 
 /// The film and the camera when the TOML gives them; a scene without a
@@ -181,18 +181,39 @@ pub(super) fn environment(
 }
 
 /// The `[indirect]` light's settings.
-pub(super) fn indirect(v: &Validator<'_>, spec: &SceneFile) -> Result<Option<IndirectSettings>, SceneError> {
-    let indirect = match &spec.indirect {
-        None => None,
-        Some(ind) => {
-            v.check(ind.paths <= MAX_VPL_PATHS, "indirect.paths", || {
-                format!("must be at most {MAX_VPL_PATHS}, got {}", ind.paths)
-            })?;
-            v.check((1..=16).contains(&ind.bounces), "indirect.bounces", || {
-                format!("must be between 1 and 16, got {}", ind.bounces)
-            })?;
-            Some(IndirectSettings { paths: ind.paths as usize, bounces: ind.bounces })
-        }
+pub(super) fn indirect(v: &Validator<'_>, spec: &SceneFile) -> Result<Option<Indirect>, SceneError> {
+    let Some(ind) = &spec.indirect else { return Ok(None) };
+    let method = ind.method.as_deref().unwrap_or(if ind.paths.is_some() { "vpl" } else { "path" });
+    let refused = |field: &str, method: &str| {
+        v.error(&format!("indirect.{field}"), &format!("is a setting of method = \"{method}\", not of this one"))
     };
-    Ok(indirect)
+    match method {
+        "vpl" => {
+            if ind.max_depth.is_some() {
+                return Err(refused("max_depth", "path"));
+            }
+            let paths = ind.paths.ok_or_else(|| v.error("indirect.paths", "method = \"vpl\" needs it"))?;
+            v.check(paths <= MAX_VPL_PATHS, "indirect.paths", || {
+                format!("must be at most {MAX_VPL_PATHS}, got {paths}")
+            })?;
+            let bounces = ind.bounces.unwrap_or(1);
+            v.check((1..=16).contains(&bounces), "indirect.bounces", || {
+                format!("must be between 1 and 16, got {bounces}")
+            })?;
+            Ok(Some(Indirect::Vpl(VplSettings { paths: paths as usize, bounces })))
+        }
+        "path" => {
+            for (field, given) in [("paths", ind.paths.is_some()), ("bounces", ind.bounces.is_some())] {
+                if given {
+                    return Err(refused(field, "vpl"));
+                }
+            }
+            let max_depth = ind.max_depth.unwrap_or(DEFAULT_MAX_DEPTH);
+            v.check((1..=MOST_PATH_DEPTH).contains(&max_depth), "indirect.max_depth", || {
+                format!("must be between 1 and {MOST_PATH_DEPTH}, got {max_depth}")
+            })?;
+            Ok(Some(Indirect::Path(PathSettings { max_depth })))
+        }
+        other => Err(v.error("indirect.method", &format!("must be \"path\" or \"vpl\", got \"{other}\""))),
+    }
 }
