@@ -277,3 +277,15 @@ fn the_indirect_settings_are_checked_and_named() {
     assert!(stdout.contains("paths of at most 3 vertices"), "{stdout}");
     assert!(read_exr(&out).is_ok());
 }
+
+#[test]
+fn the_cornell_box_by_paths_matches_mitsuba_at_both_depths() {
+    // Mitsuba 3's path tracer, 16,384 samples per pixel
+    // (scenes/cornell/mitsuba_reference.py): its max_depth 3 and 8 are
+    // this renderer's 2 and 7 (it counts the segment to the light).
+    for (depth, reference) in [("2", "mitsuba-depth3.exr"), ("7", "mitsuba-depth8.exr")] {
+        let flags =
+            ["--stochastic", "--resolution", "64x64", "--spp", "128", "--indirect", "path", "--max-depth", depth];
+        common::matches_peer("paths-cornell", "cornell", "../cornell.toml", reference, &[&flags]);
+    }
+}

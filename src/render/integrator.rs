@@ -54,6 +54,14 @@ const MOST_SUN_DRAWS: u32 = 16;
 /// sample's shading point.
 const EMITTER_STREAM: u64 = 0xe4f1_5a3b;
 
+/// The most nodes a stochastic cut has at a path's vertex past a sampled
+/// bounce. Any cut is unbiased ([SLC19]; design.md §10.4); a path's noise
+/// is mostly its bounces', so a small cut there buys more paths for the
+/// time: 16 nodes reached the full cut's error in 61% of its time on the
+/// Cornell box and 81% on shiny, where 4 nodes let glossy vertices pick
+/// lights badly (docs/measurements.md).
+const SECONDARY_MAX_CUT: usize = 16;
+
 /// Keeps a path's bounces apart from the other streams of its vertex.
 const PATH_STREAM: u64 = 0xba7_4ce5;
 
@@ -312,7 +320,7 @@ impl<'a> Integrator<'a> {
         if let DirectLighting::Multidimensional { .. } = self.direct {
             gather.push(GatherPoint { sp: sp.clone(), strength: throughput });
         } else {
-            let direct = self.direct_light(sp, sample, depth, groups.len(), scratch, &mut result.stats);
+            let direct = self.direct_light(sp, sample, depth, primary, groups.len(), scratch, &mut result.stats);
             result.stats.record_point(direct.nodes, direct.shadow_rays);
             direct.add_scaled_to(throughput, &mut result.radiance, groups);
         }
@@ -557,12 +565,15 @@ impl<'a> Integrator<'a> {
 
     /// The direct light at `sp` by the pass's mode, with `groups` group
     /// slots (0: not split by group); the time spent choosing a cut is
-    /// added to `stats`.
+    /// added to `stats`. Past a sampled bounce (not `primary`) a
+    /// stochastic cut has at most `SECONDARY_MAX_CUT` nodes.
+    #[allow(clippy::too_many_arguments)]
     fn direct_light(
         &self,
         sp: &SurfacePoint<'_>,
         sample: SampleKey,
         depth: u32,
+        primary: bool,
         groups: usize,
         scratch: &mut Scratch,
         stats: &mut ShadingStats,
@@ -605,6 +616,10 @@ impl<'a> Integrator<'a> {
                     let [seed, x, y, s] = sample;
                     let mut rng = Rng::from_key(&[seed, x, y, s, u64::from(depth), STOCHASTIC_STREAM]);
                     let scratch = &mut scratch.stochastic;
+                    let mut settings = settings;
+                    if !primary {
+                        settings.max_cut = settings.max_cut.min(SECONDARY_MAX_CUT);
+                    }
                     lightcut::stochastic::evaluate(trees, sp, embree, &settings, &mut rng, scratch, groups)
                 };
                 if let Some((start, embree_before)) = timed {
