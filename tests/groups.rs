@@ -299,3 +299,41 @@ fn tiles_and_threads_leave_the_group_layers_and_the_mattes_bit_identical() {
     assert_eq!(crypto(&assembled), crypto(&whole));
     assert_eq!(crypto(&whole).len(), 8);
 }
+
+#[test]
+fn with_paths_the_group_layers_sum_to_the_beauty_and_tiles_keep_their_bits() {
+    // A path's light is credited to the group of the light each vertex's
+    // next-event estimate found (docs/design.md §6.7): the layers still sum
+    // to the beauty, each group keeps its bounced light (the key's, off the
+    // red ball onto the wall), and tiles assemble to the one-process bits.
+    let dir = TempDir::new("groups-paths");
+    let paths = ["--indirect", "path", "--max-depth", "4"];
+    for mode in ["--stochastic", "--exact", "--bounded"] {
+        let image = render(&dir, "paths.exr", &[&paths[..], &[mode, "--spp", "2"]].concat());
+        let mismatch = sum_mismatch(&image);
+        assert!(mismatch < 1e-5, "{mode}: groups sum to the beauty to float rounding, off by {mismatch:e}");
+    }
+    let mean = |i: &ExrImage, c: &str| channel(i, c).iter().map(|&v| f64::from(v)).sum::<f64>();
+    let with = render(&dir, "with.exr", &[&paths[..], &["--stochastic", "--spp", "8"]].concat());
+    let without = render(&dir, "without.exr", &["--stochastic", "--spp", "8", "--indirect", "none"]);
+    for group in GROUPS {
+        let (a, b) = (mean(&with, &format!("Combined_{group}.G")), mean(&without, &format!("Combined_{group}.G")));
+        assert!(a > 1.05 * b, "{group}: paths add bounced light to its layer: {a} vs {b}");
+    }
+    let whole = render(&dir, "whole.exr", &[&paths[..], &["--stochastic", "--cryptomatte", "--threads", "1"]].concat());
+    let scene = dir.path("groups.toml");
+    let mut tiles = Vec::new();
+    for i in 0..2 {
+        let tile = dir.path(&format!("tile{i}.exr"));
+        let args = [&["render", s(&scene), "-o", s(&tile), "-q", "--stochastic", "--cryptomatte"][..], &paths[..]];
+        lightcuts_ok(&[&args.concat()[..], &["--tile", &format!("{i}/2")]].concat());
+        tiles.push(tile);
+    }
+    let out = dir.path("assembled.exr");
+    let output = lightcuts(&["assemble", s(&out), s(&tiles[0]), s(&tiles[1])]);
+    assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
+    let assembled = read_exr(&out).unwrap();
+    for (name, values) in &whole.channels {
+        assert_eq!(&assembled.channels[name], values, "{name}: bit for bit");
+    }
+}

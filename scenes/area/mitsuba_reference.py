@@ -6,6 +6,9 @@ spheres, floor, softbox and sky.
     DRJIT_LIBLLVM_PATH=/usr/lib/x86_64-linux-gnu/libLLVM.so.19.1 \\
         python3 scenes/area/mitsuba_reference.py llvm_ad_rgb 16384 mitsuba-16384.exr
 
+A fourth argument sets max_depth (default 2, direct light only): 8 is
+this renderer's path method at max_depth 7 (mitsuba-depth8-16384.exr).
+
 (Debian 12's libLLVM 15 crashes Dr.Jit's llvm backend; `apt-get install
 libllvm19` gives one that works. `scalar_rgb` needs no LLVM and is slower.)
 
@@ -31,6 +34,7 @@ import mitsuba as mi
 import numpy as np
 
 variant, spp, out = sys.argv[1], int(sys.argv[2]), sys.argv[3]
+depth = int(sys.argv[4]) if len(sys.argv) > 4 else 2
 mi.set_variant(variant)
 
 T = mi.ScalarTransform4f
@@ -50,7 +54,7 @@ def metal(roughness):
 
 scene = mi.load_dict({
     'type': 'scene',
-    'integrator': {'type': 'path', 'max_depth': 2},
+    'integrator': {'type': 'path', 'max_depth': depth},
     'sensor': {'type': 'perspective', 'fov': 30, 'fov_axis': 'y',
                'to_world': T().look_at(origin=[0, 1.2, 5], target=[0, 0.6, 0], up=[0, 1, 0]),
                'sampler': {'type': 'independent', 'sample_count': spp},
