@@ -389,15 +389,8 @@ impl<'a> Integrator<'a> {
             Bounce { ray: sp.mirror_ray(), weight: mirror / f64::from(p_mirror), mirror: true }
         } else {
             let s = bsdf.sample([u[1], u[2], u[3]], Lobes::ALL)?;
-            let ray = crate::embree::Ray {
-                origin: sp.offset_origin(),
-                direction: s.wi,
-                t_near: 0.0,
-                t_far: f32::INFINITY,
-                time: sp.time,
-            };
             let weight = s.f_cos.as_dvec3() / (f64::from(s.pdf) * f64::from(1.0 - p_mirror));
-            Bounce { ray, weight, mirror: false }
+            Bounce { ray: sp.ray_towards(s.wi), weight, mirror: false }
         };
         if !(bounce.weight.max_element() > 0.0 && bounce.weight.is_finite()) {
             return None;
@@ -474,13 +467,7 @@ impl<'a> Integrator<'a> {
         }
         if let Some(s) = bsdf.sample([u[3], u[4], u[5]], lobes) {
             rays += 1;
-            let mut ray = crate::embree::Ray {
-                origin: sp.offset_origin(),
-                direction: s.wi,
-                t_near: 0.0,
-                t_far: f32::INFINITY,
-                time: sp.time,
-            };
+            let mut ray = sp.ray_towards(s.wi);
             match self.first_hit(&mut ray) {
                 None => {
                     if let Some((light, pdf, group)) = emitters.escaped(choice, s.wi) {
@@ -635,8 +622,9 @@ impl<'a> Integrator<'a> {
 
     /// The light of the suns' discs at `sp` (in no tree: docs/design.md
     /// §6.3), by group: each sample draws ceil(samples / spp) directions
-    /// (1 to 16; one at a vertex past a sampled bounce, not `primary`) uniformly over each disc's solid angle, consecutive points
-    /// of a Kronecker sequence over the pixel's samples rotated per pixel,
+    /// (1 to 16; one at a vertex past a sampled bounce, not `primary`)
+    /// uniformly over each disc's solid angle, consecutive points of a
+    /// Kronecker sequence over the pixel's samples rotated per pixel,
     /// bounce and sun, each a directional light of the disc's irradiance
     /// over the draws, evaluated (every lobe) and traced as any light is.
     /// Each group's light goes to `credit`; returns the shadow rays cast.

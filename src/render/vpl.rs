@@ -180,7 +180,7 @@ pub fn trace(geometry: &Geometry<'_>, groups: &[Lights], settings: VplSettings, 
                 vpls.push(OrientedLight { position: sp.offset_origin(), normal: sp.n, intensity: power * sp.kd / PI });
                 power *= sp.kd;
                 let direction = cosine_direction(sp.n, rng.next_f32(), rng.next_f32());
-                ray = Ray { origin: sp.offset_origin(), direction, t_near: 0.0, t_far: f32::INFINITY, time };
+                ray = sp.ray_towards(direction);
             }
             (source_group[index], vpls)
         })

@@ -102,6 +102,14 @@ impl SurfacePoint<'_> {
         let lowest = (0.9 * ng.dot(self.wo)).min(0.01);
         let height = self.r.dot(ng);
         let direction = if height < lowest { (self.r + (lowest - height) * ng).normalize_or(self.r) } else { self.r };
+        self.ray_towards(direction)
+    }
+
+    /// An unbounded ray leaving the surface on the viewer's side towards
+    /// unit `direction`, at the point's time: a bounce's ray (a mirror's,
+    /// a BSDF draw's, a light path's).
+    #[must_use]
+    pub fn ray_towards(&self, direction: Vec3) -> Ray {
         Ray { origin: self.offset_origin(), direction, t_near: 0.0, t_far: f32::INFINITY, time: self.time }
     }
 
