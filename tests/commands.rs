@@ -191,3 +191,35 @@ fn aovs_choose_the_layers_written() {
     lightcuts_ok(&["assemble", s(&frame), s(&tiles[0]), s(&tiles[1])]);
     assert_eq!(read_exr(&frame).unwrap().channels.keys().cloned().collect::<Vec<_>>().join(","), "A,B,G,R,Z");
 }
+
+/// A sweep with paths measures against an exact reference with paths: on
+/// the inside of a closed diffuse sphere (albedo 0.5) paths of 4 vertices
+/// give 1 + 0.5 + 0.25 + 0.125 = 1.875 times the direct light everywhere,
+/// and a reference rendered before without `--indirect` is not reused.
+#[test]
+fn a_sweep_with_paths_has_a_reference_with_paths() {
+    let dir = TempDir::new("sweep-paths");
+    let scene = dir.write("s.toml", &inside_sphere_scene(24, 24));
+    let out = dir.path("out");
+    let sweep = |extra: &[&str]| {
+        let args = [&["sweep", s(&scene), "--out", s(&out), "--errors", "0.02", "--spp", "4"][..], extra].concat();
+        let json = lightcuts_ok(&[&args[..], &["--modes", "bounded,stochastic", "--quiet", "--json"]].concat());
+        let reference = read_exr(&out.join("reference-spp4.exr")).unwrap();
+        (serde_json::from_str::<serde_json::Value>(&json).unwrap(), reference)
+    };
+    let (_, direct) = sweep(&[]);
+    let (rows, paths) = sweep(&["--indirect", "path", "--max-depth", "4"]);
+    let direct_answer = inside_sphere_answer([3.0, 6.0, 9.0]);
+    // One bounce direction per sample: the pixels are noisy, their mean is not.
+    for (c, name) in ["R", "G", "B"].into_iter().enumerate() {
+        let values = paths.channel(&out, name).unwrap();
+        let mean = values.iter().map(|&v| f64::from(v)).sum::<f64>() / values.len() as f64;
+        let want = 1.875 * direct_answer[c];
+        assert!((mean - want).abs() < 0.015 * want, "{name}: the reference with paths is {mean}, not {want}");
+    }
+    assert_inside_sphere_is(&out, &direct, direct_answer, 0.01);
+    for row in rows.as_array().unwrap() {
+        let error = row["mean_relative_error"].as_f64().unwrap();
+        assert!(error < 0.05, "{} against the reference with paths: {error}", row["mode"]);
+    }
+}

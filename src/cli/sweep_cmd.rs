@@ -101,6 +101,12 @@ struct ReferenceKey {
     /// The glTF camera asked for by name (--camera).
     #[serde(default)]
     camera: Option<String>,
+    /// What the command line added to or changed in the scene (an
+    /// environment, a sun, the indirect method and depth, the shutter...):
+    /// a reference rendered without paths must not be reused for a sweep
+    /// with them.
+    #[serde(default)]
+    additions: Vec<String>,
 }
 
 #[derive(Debug, Clone, Serialize, Deserialize)]
@@ -155,7 +161,9 @@ fn metadata(
         lights: (result.lights.iter().sum::<usize>() + result.moving_lights) as u64,
         spp: settings.spp,
         seed: settings.seed,
-        scene_hash: crate::util::hash::combined_hex(key.inputs.iter().map(|(_, h)| *h)),
+        scene_hash: crate::util::hash::combined_hex(
+            key.inputs.iter().map(|(_, h)| *h).chain(key.additions.iter().map(|a| crate::util::hash::hash_bytes(a.as_bytes()))),
+        ),
         world_to_camera: Some(scene.camera(settings.width, settings.height).world_to_camera().to_cols_array()),
         world_to_ndc: Some(scene.camera(settings.width, settings.height).world_to_ndc().to_cols_array()),
     }
@@ -237,6 +245,7 @@ pub fn run(args: &SweepArgs) -> Result<(), CliError> {
             seed: settings.seed,
             bounds: [b.x0, b.x1, b.y0, b.y1],
             camera: args.pass.camera.clone(),
+            additions: scene.additions.clone(),
         };
         let (reference_rgb, record) = reference(&session, &settings, &key, &args.out, args.quiet)?;
         settings.aovs = Aovs::all(true);
