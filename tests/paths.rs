@@ -303,3 +303,15 @@ fn metals_on_a_floor_under_a_softbox_match_mitsuba_with_every_bounce() {
     let flags = ["--stochastic", "--spp", "64", "--indirect", "path", "--max-depth", "7"];
     common::matches_peer("paths-softbox", "area", "softbox.toml", "mitsuba-depth8-16384.exr", &[&flags]);
 }
+
+#[test]
+fn the_atrium_by_paths_matches_mitsuba() {
+    // The README's first scene: sky, sun, six panels, plaster, stone and
+    // a textured floor with Phong lobes, a chrome sphere; two bounces
+    // (Mitsuba's max_depth 4, 16,384 spp; scenes/atrium/mitsuba_reference.py
+    // reads atrium.toml itself). Most of the block error at 64 spp is
+    // noise: at 1,024 spp the two agree within 0.53% over 8x8 blocks
+    // (docs/measurements.md).
+    let flags = ["--stochastic", "--resolution", "160x120", "--spp", "64", "--indirect", "path", "--max-depth", "3"];
+    common::matches_peer("paths-atrium", "atrium", "../atrium.toml", "mitsuba-depth4-16384.exr", &[&flags]);
+}

@@ -8,10 +8,10 @@ off, a box pixel filter one pixel wide, "Standard" view transform, the
 resolution of lobby.toml.
 
     python3 -m venv venv && venv/bin/pip install bpy==5.0.1
-    venv/bin/python scenes/lobby/make_cycles_indirect.py [SAMPLES] [BOUNCES]
+    venv/bin/python scenes/lobby/make_cycles_indirect.py [SAMPLES] [BOUNCES] [OUT.exr]
 
-Writes scenes/lobby/cycles-bounces{BOUNCES}-{SAMPLES}.exr (channels R, G,
-B, A; linear Rec. 709).
+Writes OUT.exr, by default scenes/lobby/cycles-bounces{BOUNCES}-{SAMPLES}.exr
+(channels R, G, B, A; linear Rec. 709).
 """
 
 import os
@@ -58,7 +58,8 @@ def main():
     scene.render.image_settings.file_format = "OPEN_EXR"
     scene.render.image_settings.color_depth = "32"
     scene.render.image_settings.exr_codec = "ZIP"
-    scene.render.filepath = os.path.join(HERE, f"cycles-bounces{bounces}-{samples}.exr")
+    default = os.path.join(HERE, f"cycles-bounces{bounces}-{samples}.exr")
+    scene.render.filepath = os.path.abspath(sys.argv[3]) if len(sys.argv) > 3 else default
     bpy.ops.render.render(write_still=True)
 
 
