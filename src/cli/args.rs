@@ -214,8 +214,9 @@ pub struct PassArgs {
     #[arg(long, value_name = "x0,x1,y0,y1", value_parser = parse_pixel_bounds)]
     pub pixel_bounds: Option<[u32; 4]>,
     /// Render through the glTF camera of this name, or `#N` for the N-th
-    /// camera (from 0) in the file's node order (the scene's first camera
-    /// otherwise; overrides a TOML's [camera]).
+    /// camera (from 0) in the file's node order; or a USD stage's camera by
+    /// its prim path (/World/Cam). The scene's first camera otherwise;
+    /// overrides a TOML's [camera].
     #[arg(long, value_name = "NAME|#N")]
     pub camera: Option<String>,
     /// Add an environment: `R,G,B` (a constant radiance, W/(m^2 sr), e.g.
@@ -240,7 +241,9 @@ pub struct PassArgs {
     /// are the file's seconds: Blender's glTF exporter writes frame f at f
     /// / fps seconds, so frame 6 of a 24 fps animation is --shutter
     /// 0.25,0.25, and the shutter of frame 6 (half a frame, centred) is
-    /// --shutter 0.2396,0.2604.
+    /// --shutter 0.2396,0.2604. For a USD stage OPEN and CLOSE are its time
+    /// codes (frames, for Blender's exports), and what its time samples
+    /// move blurs.
     #[arg(long, value_name = "OPEN,CLOSE", value_parser = parse_shutter, allow_hyphen_values = true)]
     pub shutter: Option<[f32; 2]>,
     /// The glTF file's animation to play over the shutter, by name (its
@@ -248,6 +251,10 @@ pub struct PassArgs {
     /// shutter the animation is not played (a warning says so).
     #[arg(long, value_name = "NAME")]
     pub animation: Option<String>,
+    /// The USD stage's time code to render (its start time code
+    /// otherwise): every attribute is read at it.
+    #[arg(long, value_name = "T", allow_hyphen_values = true)]
+    pub time: Option<f64>,
     /// Indirect light, overriding the scene's `[indirect]`: `path` (camera
     /// paths with next-event estimation at every vertex), `vpl` (virtual
     /// point lights) or `none` (direct light only). The scene's settings
@@ -270,6 +277,7 @@ impl PassArgs {
             lumens_per_watt: self.lumens_per_watt,
             shutter: self.shutter,
             animation: self.animation.as_deref(),
+            time: self.time,
         };
         let mut scene = Scene::load_with(path, &options)?;
         scene.add_lights(self.environment.as_deref(), self.sun)?;

@@ -162,7 +162,10 @@ fn metadata(
         spp: settings.spp,
         seed: settings.seed,
         scene_hash: crate::util::hash::combined_hex(
-            key.inputs.iter().map(|(_, h)| *h).chain(key.additions.iter().map(|a| crate::util::hash::hash_bytes(a.as_bytes()))),
+            key.inputs
+                .iter()
+                .map(|(_, h)| *h)
+                .chain(key.additions.iter().map(|a| crate::util::hash::hash_bytes(a.as_bytes()))),
         ),
         world_to_camera: Some(scene.camera(settings.width, settings.height).world_to_camera().to_cols_array()),
         world_to_ndc: Some(scene.camera(settings.width, settings.height).world_to_ndc().to_cols_array()),

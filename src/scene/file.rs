@@ -16,6 +16,8 @@ pub struct SceneFile {
     pub camera: Option<CameraSpec>,
     /// A glTF 2.0 file whose meshes, materials, lights and cameras join the scene.
     pub gltf: Option<GltfSpec>,
+    /// A USD stage whose meshes, materials, lights and cameras join the scene.
+    pub usd: Option<UsdSpec>,
     #[serde(default)]
     pub materials: BTreeMap<String, MaterialSpec>,
     /// Each a table with a `type`; parsed into [`ShapeSpec`] by
@@ -63,6 +65,35 @@ pub struct GltfSpec {
     /// when the TOML's camera gives none.
     #[serde(skip)]
     pub shutter: Option<[f32; 2]>,
+}
+
+/// `[usd]`: what to import from a USD stage (`.usd`, `.usda`, `.usdc`,
+/// `.usdz`), and how.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct UsdSpec {
+    /// The stage's root layer, relative to the scene file.
+    pub file: String,
+    /// The camera to render through, by prim path (`/World/Cam`); the
+    /// first under the default prim (else on the stage) when absent.
+    pub camera: Option<String>,
+    /// The time code everything is read at; the stage's start time code
+    /// when absent (0 when it has none).
+    pub time: Option<f64>,
+    /// Oriented lights each emissive surface and area light becomes.
+    #[serde(default = "emitter_samples")]
+    pub emitter_samples: u32,
+    /// The shutter `--shutter` gives, in the stage's time codes.
+    #[serde(skip)]
+    pub shutter: Option<[f32; 2]>,
+}
+
+impl UsdSpec {
+    /// Importing `file` with every default.
+    #[must_use]
+    pub fn file(file: String) -> Self {
+        Self { file, camera: None, time: None, emitter_samples: emitter_samples(), shutter: None }
+    }
 }
 
 /// One `[[gltf.groups]]` rule: lights whose light, node or material name

@@ -154,19 +154,35 @@ fn decode_png(reader: impl std::io::Read, encoding: Encoding) -> Result<RgbImage
 /// Reads the R, G and B channels of an OpenEXR's first RGB layer as radiance,
 /// each finite and non-negative.
 pub fn read_radiance_exr(path: &Path) -> Result<RgbImage, ImageError> {
-    let image = exr::prelude::read_first_rgba_layer_from_file(
-        path,
-        |size, _| RgbImage {
-            width: size.width(),
-            height: size.height(),
-            texels: vec![Vec3::ZERO; size.area()],
-            alpha: None,
-        },
-        |image: &mut RgbImage, at, (r, g, b, _): (f32, f32, f32, f32)| {
-            image.texels[at.y() * image.width + at.x()] = Vec3::new(r, g, b);
-        },
-    )
-    .map_err(ImageError::Exr)?;
+    let file = std::fs::File::open(path).map_err(ImageError::Open)?;
+    radiance_exr(std::io::BufReader::new(file))
+}
+
+/// [`read_radiance_exr`] of an EXR in memory (a texture inside a `.usdz`).
+pub fn decode_radiance_exr(bytes: &[u8]) -> Result<RgbImage, ImageError> {
+    radiance_exr(std::io::Cursor::new(bytes))
+}
+
+fn radiance_exr(reader: impl std::io::Read + std::io::Seek) -> Result<RgbImage, ImageError> {
+    use exr::prelude::{ReadChannels, ReadLayers};
+    let image = exr::prelude::read()
+        .no_deep_data()
+        .largest_resolution_level()
+        .rgba_channels(
+            |size, _| RgbImage {
+                width: size.width(),
+                height: size.height(),
+                texels: vec![Vec3::ZERO; size.area()],
+                alpha: None,
+            },
+            |image: &mut RgbImage, at, (r, g, b, _): (f32, f32, f32, f32)| {
+                image.texels[at.y() * image.width + at.x()] = Vec3::new(r, g, b);
+            },
+        )
+        .first_valid_layer()
+        .all_attributes()
+        .from_buffered(reader)
+        .map_err(ImageError::Exr)?;
     let image = image.layer_data.channel_data.pixels;
     if let Some(index) = image.texels.iter().position(|t| !t.is_finite() || t.min_element() < 0.0) {
         return Err(ImageError::BadRadiance { index });

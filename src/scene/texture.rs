@@ -12,6 +12,8 @@ pub enum Wrap {
     Repeat,
     ClampToEdge,
     MirroredRepeat,
+    /// Black outside [0, 1] (UsdUVTexture's `black`).
+    Black,
 }
 
 /// How a lookup between texel centres is filtered (glTF's `magFilter`).
@@ -55,12 +57,28 @@ impl Texture {
         Self { wrap, filter, ..self }
     }
 
+    /// Width and height, texels.
+    #[must_use]
+    pub fn size(&self) -> (usize, usize) {
+        (self.width, self.height)
+    }
+
+    /// The linear texels, row 0 at the top.
+    #[must_use]
+    pub fn texels(&self) -> &[Vec3] {
+        &self.texels
+    }
+
     fn texel(&self, x: i64, y: i64) -> Vec3 {
+        let outside = |i: i64, n: usize, wrap: Wrap| wrap == Wrap::Black && !(0..n as i64).contains(&i);
+        if outside(x, self.width, self.wrap[0]) || outside(y, self.height, self.wrap[1]) {
+            return Vec3::ZERO;
+        }
         let index = |i: i64, n: usize, wrap: Wrap| -> usize {
             let n = n as i64;
             (match wrap {
                 Wrap::Repeat => i.rem_euclid(n),
-                Wrap::ClampToEdge => i.clamp(0, n - 1),
+                Wrap::ClampToEdge | Wrap::Black => i.clamp(0, n - 1),
                 Wrap::MirroredRepeat => {
                     let m = i.rem_euclid(2 * n);
                     if m < n {
@@ -83,7 +101,7 @@ impl Texture {
         let reduce = |t: f32, wrap: Wrap| match wrap {
             Wrap::Repeat => t.rem_euclid(1.0),
             Wrap::MirroredRepeat => t.rem_euclid(2.0),
-            Wrap::ClampToEdge => t.clamp(-1.0, 2.0),
+            Wrap::ClampToEdge | Wrap::Black => t.clamp(-1.0, 2.0),
         };
         let u = reduce(uv.x, self.wrap[0]) * self.width as f32;
         let v = (1.0 - reduce(uv.y, self.wrap[1])) * self.height as f32;

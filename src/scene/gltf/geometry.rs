@@ -524,7 +524,7 @@ pub(super) struct Frame<'a> {
 /// A primitive's tangents: the file's, one per vertex, or MikkTSpace's,
 /// one per triangle corner (`Mesh::set_corner_tangents` splits the
 /// vertices whose corners disagree).
-pub(super) enum Tangents {
+pub(crate) enum Tangents {
     PerVertex(Vec<Vec4>),
     PerCorner(Vec<[Vec4; 3]>),
 }
@@ -533,7 +533,7 @@ pub(super) enum Tangents {
 /// glTF's texture coordinates with v turned up, so that the bitangent
 /// points up the image as glTF's normal maps expect. None if MikkTSpace
 /// fails.
-pub(super) fn mikktspace_tangents(
+pub(crate) fn mikktspace_tangents(
     positions: &[Vec3],
     normals: &[Vec3],
     uvs: &[Vec2],

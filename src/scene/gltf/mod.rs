@@ -19,6 +19,8 @@ mod materials;
 mod nodes;
 
 use std::collections::HashMap;
+
+pub(crate) use geometry::{mikktspace_tangents, Tangents};
 use std::path::{Path, PathBuf};
 
 use super::file::{CameraSpec, GltfSpec};

@@ -17,7 +17,7 @@ use glam::Vec3;
 
 use super::file::{self, SceneFile};
 use super::{
-    gltf, groups, object, within_limits, LightGroups, LightSource, Scene, SceneError, MAX_COORDINATE,
+    gltf, groups, object, usd, within_limits, LightGroups, LightSource, Scene, SceneError, MAX_COORDINATE,
     MAX_EMITTER_SAMPLES,
 };
 
@@ -33,6 +33,8 @@ pub struct LoadOptions<'a> {
     pub shutter: Option<[f32; 2]>,
     /// `--animation NAME`: the glTF file's animation played over the shutter.
     pub animation: Option<&'a str>,
+    /// `--time T`: the USD stage's time code everything is read at.
+    pub time: Option<f64>,
 }
 
 impl Scene {
@@ -54,9 +56,13 @@ impl Scene {
     pub fn load_with(path: &Path, options: &LoadOptions<'_>) -> Result<Self, SceneError> {
         let camera = options.camera;
         let extension = |x: &str| path.extension().is_some_and(|e| e.eq_ignore_ascii_case(x));
+        let is_usd = ["usd", "usda", "usdc", "usdz"].into_iter().any(extension);
         let mut spec = if extension("gltf") || extension("glb") {
             let file = path.file_name().map_or_else(String::new, |f| f.to_string_lossy().into_owned());
             SceneFile { gltf: Some(file::GltfSpec::file(file)), ..SceneFile::default() }
+        } else if is_usd {
+            let file = path.file_name().map_or_else(String::new, |f| f.to_string_lossy().into_owned());
+            SceneFile { usd: Some(file::UsdSpec::file(file)), ..SceneFile::default() }
         } else {
             let text =
                 std::fs::read(path).map_err(|e| SceneError::new(path, "file", format!("cannot read scene: {e}")))?;
@@ -74,10 +80,23 @@ impl Scene {
             }
         };
         if let Some(name) = camera {
-            let gltf = imported_gltf(path, &mut spec, "--camera", "picks a glTF camera")?;
-            gltf.camera = Some(name.to_string());
+            if let Some(usd) = spec.usd.as_mut() {
+                usd.camera = Some(name.to_string());
+            } else {
+                let gltf = imported_gltf(path, &mut spec, "--camera", "picks a glTF or USD camera")?;
+                gltf.camera = Some(name.to_string());
+            }
             // The TOML's own camera would win over the one asked for.
             spec.camera = None;
+        }
+        if let Some(time) = options.time {
+            let usd = spec.usd.as_mut().ok_or_else(|| {
+                SceneError::new(path, "--time", "reads a USD stage at a time code, but the scene imports no USD stage")
+            })?;
+            if !time.is_finite() {
+                return Err(SceneError::new(path, "--time", format!("must be finite, got {time}")));
+            }
+            usd.time = Some(time);
         }
         if let Some(lpw) = options.lumens_per_watt {
             let gltf = imported_gltf(path, &mut spec, "--lumens-per-watt", "converts a glTF file's lights")?;
@@ -104,10 +123,15 @@ impl Scene {
             if let Some(gltf) = spec.gltf.as_mut() {
                 gltf.shutter = Some([open, close]);
             }
+            if let Some(usd) = spec.usd.as_mut() {
+                usd.shutter = Some([open, close]);
+            }
         }
         let imports_itself =
-            spec.gltf.as_ref().is_some_and(|g| path.file_name() == Some(std::ffi::OsStr::new(&g.file)))
-                && (extension("gltf") || extension("glb"));
+            (spec.gltf.as_ref().is_some_and(|g| path.file_name() == Some(std::ffi::OsStr::new(&g.file)))
+                && (extension("gltf") || extension("glb")))
+                || (spec.usd.as_ref().is_some_and(|u| path.file_name() == Some(std::ffi::OsStr::new(&u.file)))
+                    && is_usd);
         let mut scene = Self::from_spec(path, spec)?;
         if !imports_itself {
             scene.inputs.insert(0, path.to_path_buf());
@@ -121,6 +145,9 @@ impl Scene {
         }
         if let Some(name) = options.animation {
             scene.additions.push(format!("--animation {name}"));
+        }
+        if let Some(time) = options.time {
+            scene.additions.push(format!("--time {time}"));
         }
         Ok(scene)
     }
@@ -161,9 +188,31 @@ impl Scene {
                 let shutter = spec.camera.as_ref().filter(|c| c.shutter_open()).map(|c| c.shutter).or(g.shutter);
                 let camera = gltf::import(path, base, g, spec.camera.is_none(), shutter, parts)?;
                 let matched = groups::apply_rules(path, &g.groups, &light_names)?;
-                for (k, group) in matched.into_iter().enumerate() {
-                    requested_groups.push((group, format!("gltf.groups (glTF light {k})")));
-                }
+                requested_groups
+                    .extend(matched.into_iter().enumerate().map(|(k, g)| (g, format!("gltf.groups (glTF light {k})"))));
+                camera
+            }
+        };
+        let lights_before_usd = lights.len();
+        let mut usd_environment = None;
+        let usd_camera = match &spec.usd {
+            None => None,
+            Some(u) => {
+                let mut groups = Vec::new();
+                let parts = usd::Parts {
+                    meshes: &mut meshes,
+                    instances: &mut instances,
+                    materials: &mut materials,
+                    textures: &mut textures,
+                    lights: &mut lights,
+                    groups: &mut groups,
+                    inputs: &mut inputs,
+                    warnings: &mut warnings,
+                    environment: &mut usd_environment,
+                };
+                let camera = import_usd(path, base, &spec, u, gltf_camera.is_none(), parts)?;
+                requested_groups
+                    .extend(groups.into_iter().map(|(g, prim)| (g, format!("usd.file ({prim}.lightcuts:group)"))));
                 camera
             }
         };
@@ -176,30 +225,26 @@ impl Scene {
                 object.motion = motion;
             }
         }
-        let (mut camera_spec, film) =
-            settings::camera_and_film(&v, &spec, gltf_camera, object::world_bounds(&meshes, &objects), &mut warnings)?;
-        // A glTF file's (or the framing) camera opens the shutter --shutter gives.
-        if let (None, Some(shutter)) = (&spec.camera, spec.gltf.as_ref().and_then(|g| g.shutter)) {
-            camera_spec.shutter = shutter;
-        }
-        let environment = settings::environment(&v, base, &spec, &mut inputs)?;
-        let indirect = settings::indirect(&v, &spec)?;
-        let labels: Vec<String> = (0..lights.len())
-            .map(|i| if i < spec.lights.len() { format!("lights[{i}]") } else { "gltf.file".to_string() })
-            .collect();
-        // The scene's extent as light paths see it: geometry and point lights.
-        let (lo, hi) = lights
-            .iter()
-            .flat_map(LightSource::positions)
-            .fold(object::world_bounds(&meshes, &objects), |(lo, hi), p| (lo.min(p), hi.max(p)));
-        let radius = if lo.is_finite() && hi.is_finite() { 0.5 * (hi - lo).as_dvec3().length() } else { 0.0 };
-        let vpls = matches!(indirect, Some(crate::scene::Indirect::Vpl(_)));
-        let emitted_power = lights::check_totals(&v, &lights, &labels, &meshes, environment.as_ref(), vpls, radius)?;
-        let groups = LightGroups::assign(
-            path,
-            &requested_groups,
-            spec.environment.as_ref().map(|e| (e.group.clone(), "environment.group".to_string())),
+        let (mut camera_spec, film) = settings::camera_and_film(
+            &v,
+            &spec,
+            gltf_camera.or(usd_camera),
+            object::world_bounds(&meshes, &objects),
+            &mut warnings,
         )?;
+        // A glTF file's or stage's (or the framing) camera opens the shutter --shutter gives.
+        if spec.camera.is_none() {
+            let given =
+                spec.gltf.as_ref().and_then(|g| g.shutter).or_else(|| spec.usd.as_ref().and_then(|u| u.shutter));
+            camera_spec.shutter = given.unwrap_or(camera_spec.shutter);
+        }
+        let ChosenEnvironment { environment, group: environment_group } =
+            environment(&v, base, &spec, usd_environment, &mut inputs, &mut warnings)?;
+        let indirect = settings::indirect(&v, &spec)?;
+        let counts = [spec.lights.len(), lights_before_usd];
+        let vpls = matches!(indirect, Some(crate::scene::Indirect::Vpl(_)));
+        let emitted_power = emitted_power(&v, &lights, counts, &meshes, &objects, environment.as_ref(), vpls)?;
+        let groups = LightGroups::assign(path, &requested_groups, environment_group)?;
         let clamp = spec.render.distance_clamp;
         v.check((0.0..=MAX_COORDINATE).contains(&clamp), "render.distance_clamp", || {
             format!("must be finite and >= 0, got {clamp}")
@@ -226,6 +271,84 @@ impl Scene {
             animation,
         })
     }
+}
+
+/// The lights' total power, checked (`lights::check_totals`): the TOML's
+/// lights are the first `counts[0]`, the glTF file's run up to
+/// `counts[1]`, the USD stage's follow.
+fn emitted_power(
+    v: &Validator<'_>,
+    lights: &[LightSource],
+    counts: [usize; 2],
+    meshes: &[super::Mesh],
+    objects: &[super::Object],
+    environment: Option<&super::Environment>,
+    vpls: bool,
+) -> Result<(f64, String), SceneError> {
+    let labels: Vec<String> = (0..lights.len())
+        .map(|i| match i {
+            i if i < counts[0] => format!("lights[{i}]"),
+            i if i < counts[1] => "gltf.file".to_string(),
+            _ => "usd.file".to_string(),
+        })
+        .collect();
+    // The scene's extent as light paths see it: geometry and point lights.
+    let (lo, hi) = lights
+        .iter()
+        .flat_map(LightSource::positions)
+        .fold(object::world_bounds(meshes, objects), |(lo, hi), p| (lo.min(p), hi.max(p)));
+    let radius = if lo.is_finite() && hi.is_finite() { 0.5 * (hi - lo).as_dvec3().length() } else { 0.0 };
+    lights::check_totals(v, lights, &labels, meshes, environment, vpls, radius)
+}
+
+/// The scene's environment and the light group it asks for (with the
+/// field that asks, for messages).
+struct ChosenEnvironment {
+    environment: Option<super::Environment>,
+    group: Option<(Option<String>, String)>,
+}
+
+/// The TOML's `[environment]`, else the USD stage's dome light (the
+/// TOML's wins, with a warning, when both give one).
+fn environment(
+    v: &Validator<'_>,
+    base: &Path,
+    spec: &SceneFile,
+    dome: Option<(super::Environment, Option<String>)>,
+    inputs: &mut Vec<std::path::PathBuf>,
+    warnings: &mut Vec<String>,
+) -> Result<ChosenEnvironment, SceneError> {
+    let environment = settings::environment(v, base, spec, inputs)?;
+    let group = spec.environment.as_ref().map(|e| (e.group.clone(), "environment.group".to_string()));
+    Ok(match dome {
+        Some(_) if environment.is_some() => {
+            warnings.push(format!("{}: [environment] is rendered, not the stage's dome light", v.file.display()));
+            ChosenEnvironment { environment, group }
+        }
+        Some((dome, dome_group)) => ChosenEnvironment {
+            environment: Some(dome),
+            group: Some((dome_group, "usd.file (the dome light's lightcuts:group)".to_string())),
+        },
+        None => ChosenEnvironment { environment, group },
+    })
+}
+
+/// The `[usd]` import `u` of `spec`: a TOML camera's open shutter is the
+/// stage's (else `--shutter`'s); the stage's camera is wanted when neither
+/// the TOML nor a glTF import gives one.
+fn import_usd(
+    path: &Path,
+    base: &Path,
+    spec: &SceneFile,
+    u: &file::UsdSpec,
+    no_gltf_camera: bool,
+    parts: usd::Parts<'_>,
+) -> Result<Option<gltf::GltfCamera>, SceneError> {
+    let mut u = u.clone();
+    if let Some(camera) = spec.camera.as_ref().filter(|c| c.shutter_open()) {
+        u.shutter = Some(camera.shutter);
+    }
+    usd::import(path, base, &u, spec.camera.is_none() && no_gltf_camera, parts)
 }
 
 /// The scene's `[gltf]` import, for the command-line `flag` that `does`

@@ -18,10 +18,12 @@ use crate::scene::{
 /// glTF import must give both.
 pub(super) fn check_film_and_camera(v: &Validator<'_>, spec: &SceneFile) -> Result<(), SceneError> {
     let path = v.file;
-    if spec.gltf.is_none() {
-        v.check(spec.film.is_some(), "film", || "missing: give [film] (or import a glTF file with [gltf])".into())?;
+    if spec.gltf.is_none() && spec.usd.is_none() {
+        v.check(spec.film.is_some(), "film", || {
+            "missing: give [film] (or import a glTF file with [gltf] or a USD stage with [usd])".into()
+        })?;
         v.check(spec.camera.is_some(), "camera", || {
-            "missing: give [camera] (or import a glTF file with a camera, with [gltf])".into()
+            "missing: give [camera] (or import a glTF file or USD stage with a camera, with [gltf] or [usd])".into()
         })?;
     }
     if let Some(f) = &spec.film {
@@ -93,8 +95,12 @@ pub(super) fn camera_and_film(
     let (camera_spec, aspect_ratio) = match (&spec.camera, gltf_camera) {
         (Some(c), _) => (c.clone(), None),
         (None, Some(c)) => {
-            let file = spec.gltf.as_ref().map_or("", |g| g.file.as_str());
-            check_camera(v, &c.spec, &format!("gltf.file ({file}) camera"))?;
+            let field = match (&spec.gltf, &spec.usd) {
+                (Some(g), _) => format!("gltf.file ({}) camera", g.file),
+                (None, Some(u)) => format!("usd.file ({}) camera", u.file),
+                (None, None) => "camera".to_string(),
+            };
+            check_camera(v, &c.spec, &field)?;
             (c.spec, c.aspect_ratio)
         }
         (None, None) => {

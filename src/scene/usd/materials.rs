@@ -1,0 +1,714 @@
+//! Materials: a `Material` prim's `outputs:surface` network read as
+//! `UsdPreviewSurface` onto glTF's metallic-roughness model (the mapping
+//! is docs/scene-format.md's, "USD"): its inputs as values or as
+//! `UsdUVTexture` channels (file, wrap modes, scale, bias,
+//! `sourceColorSpace`), their texture coordinates from a
+//! `UsdPrimvarReader_float2` through an optional `UsdTransform2d`. A
+//! texture's scale, bias and channel are applied to its texels once, at
+//! import. An unsupported surface (MaterialX, MDL, RenderMan) falls back to
+//! the material's universal `outputs:surface` when it has one, otherwise to
+//! a grey default with a warning naming it.
+
+use std::collections::HashMap;
+
+use glam::{Affine2, DVec4, Vec3};
+
+use super::geometry::Located;
+use super::schema::Reader;
+use super::stage::Stage;
+use crate::scene::image::{self, Encoding, RgbImage};
+use crate::scene::material::{Albedo, Cutout, Material, NormalMap, PbrMaterial, TextureRef};
+use crate::scene::texture::{Filter, Texture, Wrap};
+
+/// Largest texture file read (256 MiB).
+const MAX_TEXTURE_BYTES: u64 = 256 << 20;
+
+/// The grey of a surface without a usable material (UsdPreviewSurface's
+/// own diffuseColor fallback).
+pub(super) const DEFAULT_GREY: Vec3 = Vec3::splat(0.18);
+
+/// A UsdUVTexture output: which channels it reads.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+enum Channel {
+    Rgb,
+    R,
+    G,
+    B,
+    A,
+}
+
+/// An input's source: a value, or a texture lookup.
+#[derive(Debug, Clone)]
+enum Source {
+    Value(DVec4),
+    Texture(TextureSource),
+}
+
+/// What a UsdUVTexture reads and how.
+#[derive(Debug, Clone)]
+struct TextureSource {
+    shader: String,
+    file: String,
+    channel: Channel,
+    wrap: [Wrap; 2],
+    scale: DVec4,
+    bias: DVec4,
+    /// `sourceColorSpace`: "sRGB", "raw" or "auto".
+    colour_space: String,
+    /// The texture coordinates' primvar and the map from them to the lookup's.
+    varname: String,
+    transform: Affine2,
+}
+
+/// The key a baked texture is cached by.
+#[derive(Debug, Clone, PartialEq, Eq, Hash)]
+struct Baked {
+    file: String,
+    channels: Vec<(Channel, [u64; 2])>,
+    wrap: [u8; 2],
+    srgb: bool,
+    normal: bool,
+}
+
+/// A material as imported, and the texture-coordinate primvar it reads.
+pub(super) struct Imported {
+    pub material: Material,
+    pub varname: String,
+}
+
+/// Imports materials and their textures, each once.
+pub(super) struct Materials<'s> {
+    stage: &'s Stage,
+    time: f64,
+    textures: HashMap<Baked, usize>,
+    images: HashMap<String, RgbImage>,
+}
+
+impl<'s> Materials<'s> {
+    pub(super) fn new(stage: &'s Stage, time: f64) -> Self {
+        Self { stage, time, textures: HashMap::new(), images: HashMap::new() }
+    }
+
+    /// The material at `path` (a `Material` prim), with its textures added
+    /// to `textures` and the files read to `inputs`; warnings for what it
+    /// renders otherwise.
+    pub(super) fn import(
+        &mut self,
+        path: &str,
+        textures: &mut Vec<Texture>,
+        inputs: &mut Vec<std::path::PathBuf>,
+        warnings: &mut Vec<String>,
+    ) -> Result<Imported, Located> {
+        let grey = || Imported { material: default_material(path), varname: "st".to_string() };
+        let info = self.stage.prim(path).map_err(|e| (path.to_string(), e))?;
+        if info.type_name != "Material" {
+            warnings.push(format!("{path}: is bound as a material but is a '{}': grey", info.type_name));
+            return Ok(grey());
+        }
+        let Some(shader) = self.surface_shader(path, warnings)? else {
+            return Ok(grey());
+        };
+        let id = self.stage.token(&shader, "info:id", self.time).map_err(|e| (format!("{shader}.info:id"), e))?;
+        if id.as_deref() != Some("UsdPreviewSurface") {
+            warnings.push(format!(
+                "{shader}: the surface shader '{}' is not UsdPreviewSurface, and the material has no \
+                 UsdPreviewSurface outputs:surface: rendered grey",
+                id.unwrap_or_default()
+            ));
+            return Ok(grey());
+        }
+        self.preview_surface(path, &shader, textures, inputs, warnings)
+    }
+
+    /// The shader behind the material's universal `outputs:surface` (or,
+    /// without one, a warning naming the render contexts it has).
+    fn surface_shader(&self, material: &str, warnings: &mut Vec<String>) -> Result<Option<String>, Located> {
+        let sources = self
+            .stage
+            .connections(material, "outputs:surface")
+            .map_err(|e| (format!("{material}.outputs:surface"), e))?;
+        if let Some(source) = sources.first() {
+            return Ok(Some(self.follow_to_shader(source)?));
+        }
+        let names = self.stage.property_names(material).map_err(|e| (material.to_string(), e))?;
+        let others: Vec<&String> =
+            names.iter().filter(|n| n.starts_with("outputs:") && n.ends_with(":surface")).collect();
+        if others.is_empty() {
+            warnings.push(format!("{material}: has no outputs:surface: rendered grey"));
+        } else {
+            warnings.push(format!(
+                "{material}: only {} (no UsdPreviewSurface outputs:surface): rendered grey",
+                others.iter().map(|s| s.as_str()).collect::<Vec<_>>().join(", ")
+            ));
+        }
+        Ok(None)
+    }
+
+    /// A connection source `/Path/Prim.outputs:name` followed through node
+    /// graphs to the shader prim that computes it.
+    fn follow_to_shader(&self, source: &str) -> Result<String, Located> {
+        let mut source = source.to_string();
+        for _ in 0..64 {
+            let (prim, property) = split(&source);
+            let info = self.stage.prim(prim).map_err(|e| (source.clone(), e))?;
+            if info.type_name == "Shader" {
+                return Ok(prim.to_string());
+            }
+            // A NodeGraph's (or Material's) output forwards its own connection.
+            let next = self.stage.connections(prim, property).map_err(|e| (source.clone(), e))?;
+            match next.first() {
+                Some(n) => source = n.clone(),
+                None => return Err((source.clone(), "connects to nothing that computes it".into())),
+            }
+        }
+        Err((source, "the connections go round in a cycle".into()))
+    }
+
+    /// Input `name` of `shader`: its connection (followed through node
+    /// graphs' interface inputs), its value, or the schema's fallback.
+    fn input(&self, shader: &str, schema: &str, name: &str) -> Result<Source, Located> {
+        let attribute = format!("inputs:{name}");
+        let mut prim = shader.to_string();
+        let mut property = attribute.clone();
+        for _ in 0..64 {
+            let sources = self.stage.connections(&prim, &property).map_err(|e| (format!("{prim}.{property}"), e))?;
+            let Some(source) = sources.first() else {
+                let value = if prim == shader {
+                    self.value(shader, schema, &attribute)?
+                } else {
+                    self.value(&prim, "", &property)?
+                };
+                return Ok(Source::Value(value.unwrap_or_else(|| {
+                    // An interface input with no value: the shader's fallback.
+                    self.value(shader, schema, &attribute).ok().flatten().unwrap_or(DVec4::ZERO)
+                })));
+            };
+            let (source_prim, source_property) = split(source);
+            let info = self.stage.prim(source_prim).map_err(|e| (source.clone(), e))?;
+            if info.type_name == "Shader" {
+                return self.shader_output(source_prim, source_property).map(Source::Texture);
+            }
+            prim = source_prim.to_string();
+            property = source_property.to_string();
+        }
+        Err((format!("{shader}.{attribute}"), "the connections go round in a cycle".into()))
+    }
+
+    /// An attribute's value as four numbers (a scalar in x, a colour in xyz).
+    fn value(&self, prim: &str, schema: &str, attribute: &str) -> Result<Option<DVec4>, Located> {
+        let at = || format!("{prim}.{attribute}");
+        let stage = self.stage;
+        let t = self.time;
+        if let Some(v) = stage.vec3(prim, attribute, t).ok().flatten() {
+            return Ok(Some(v.extend(1.0)));
+        }
+        if let Some(v) = stage.vec4(prim, attribute, t).ok().flatten() {
+            return Ok(Some(v));
+        }
+        if let Some(v) = stage.number(prim, attribute, t).map_err(|e| (at(), e))? {
+            return Ok(Some(DVec4::new(v, v, v, 1.0)));
+        }
+        if schema.is_empty() {
+            return Ok(None);
+        }
+        let read = Reader { stage, prim, schema, time: t };
+        match super::schema::fallback(schema, attribute) {
+            Some(super::schema::Fallback::Vec3(_)) => Ok(Some(read.vec3(attribute)?.extend(1.0))),
+            Some(super::schema::Fallback::Number(_)) => {
+                let v = read.number(attribute)?;
+                Ok(Some(DVec4::new(v, v, v, 1.0)))
+            }
+            _ => Ok(None),
+        }
+    }
+
+    /// A texture shader's output `property` (`outputs:rgb`, `outputs:r`...).
+    fn shader_output(&self, shader: &str, property: &str) -> Result<TextureSource, Located> {
+        let at = |a: &str| format!("{shader}.{a}");
+        let id = self.stage.token(shader, "info:id", self.time).map_err(|e| (at("info:id"), e))?.unwrap_or_default();
+        if id != "UsdUVTexture" {
+            return Err((
+                at("info:id"),
+                format!("'{id}' feeds a UsdPreviewSurface input; only UsdUVTexture outputs can"),
+            ));
+        }
+        let channel = match property {
+            "outputs:rgb" => Channel::Rgb,
+            "outputs:r" => Channel::R,
+            "outputs:g" => Channel::G,
+            "outputs:b" => Channel::B,
+            "outputs:a" => Channel::A,
+            other => return Err((at(other), "is not an output of UsdUVTexture (rgb, r, g, b, a)".into())),
+        };
+        let read = Reader { stage: self.stage, prim: shader, schema: "UsdUVTexture", time: self.time };
+        let file = self
+            .stage
+            .asset(shader, "inputs:file", self.time)
+            .map_err(|e| (at("inputs:file"), e))?
+            .filter(|f| !f.is_empty())
+            .ok_or_else(|| (at("inputs:file"), "names no file".to_string()))?;
+        let wrap = |name: &str| -> Result<Wrap, Located> {
+            Ok(match read.token(name)?.as_str() {
+                "repeat" => Wrap::Repeat,
+                "mirror" => Wrap::MirroredRepeat,
+                "clamp" => Wrap::ClampToEdge,
+                // Without metadata in the file, USD's reading of useMetadata is black.
+                "black" | "useMetadata" => Wrap::Black,
+                other => {
+                    return Err((at(name), format!("'{other}' is not a wrap mode (repeat, mirror, clamp, black)")))
+                }
+            })
+        };
+        let (varname, transform) = self.coordinates(shader)?;
+        Ok(TextureSource {
+            shader: shader.to_string(),
+            file,
+            channel,
+            wrap: [wrap("inputs:wrapS")?, wrap("inputs:wrapT")?],
+            scale: read.vec4("inputs:scale")?,
+            bias: read.vec4("inputs:bias")?,
+            colour_space: read.token("inputs:sourceColorSpace")?,
+            varname,
+            transform,
+        })
+    }
+
+    /// A texture's `inputs:st`: the primvar a UsdPrimvarReader_float2 reads
+    /// and the UsdTransform2d between them, if any (scale, then rotation
+    /// counter-clockwise in degrees, then translation).
+    fn coordinates(&self, texture: &str) -> Result<(String, Affine2), Located> {
+        let mut transform = Affine2::IDENTITY;
+        let mut at = (texture.to_string(), "inputs:st".to_string());
+        for _ in 0..64 {
+            let sources = self.stage.connections(&at.0, &at.1).map_err(|e| (format!("{}.{}", at.0, at.1), e))?;
+            let Some(source) = sources.first() else {
+                // Unconnected: the primvar `st`, as Hydra reads it.
+                return Ok(("st".to_string(), transform));
+            };
+            let (prim, property) = split(source);
+            let info = self.stage.prim(prim).map_err(|e| (source.clone(), e))?;
+            if info.type_name != "Shader" {
+                at = (prim.to_string(), property.to_string());
+                continue;
+            }
+            let id = self
+                .stage
+                .token(prim, "info:id", self.time)
+                .map_err(|e| (format!("{prim}.info:id"), e))?
+                .unwrap_or_default();
+            match id.as_str() {
+                "UsdPrimvarReader_float2" => {
+                    let read = Reader { stage: self.stage, prim, schema: &id, time: self.time };
+                    let name = read.token("inputs:varname")?;
+                    let name = if name.is_empty() { "st".to_string() } else { name };
+                    return Ok((name, transform));
+                }
+                "UsdTransform2d" => {
+                    let read = Reader { stage: self.stage, prim, schema: &id, time: self.time };
+                    let (scale, rotation, translation) =
+                        (read.vec2("inputs:scale")?, read.number("inputs:rotation")?, read.vec2("inputs:translation")?);
+                    let this = Affine2::from_scale_angle_translation(
+                        scale.as_vec2(),
+                        (rotation as f32).to_radians(),
+                        translation.as_vec2(),
+                    );
+                    // Applied after what feeds it.
+                    transform *= this;
+                    at = (prim.to_string(), "inputs:in".to_string());
+                }
+                other => return Err((format!("{prim}.info:id"), format!("'{other}' cannot give texture coordinates"))),
+            }
+        }
+        Err((texture.to_string(), "the texture coordinates' connections go round in a cycle".into()))
+    }
+
+    fn preview_surface(
+        &mut self,
+        material: &str,
+        shader: &str,
+        textures: &mut Vec<Texture>,
+        inputs: &mut Vec<std::path::PathBuf>,
+        warnings: &mut Vec<String>,
+    ) -> Result<Imported, Located> {
+        const SCHEMA: &str = "UsdPreviewSurface";
+        let input = |this: &Self, name: &str| this.input(shader, SCHEMA, name);
+        let mut varname: Option<String> = None;
+        let note_varname = |source: &Source, varname: &mut Option<String>, warnings: &mut Vec<String>| {
+            if let Source::Texture(t) = source {
+                match varname {
+                    None => *varname = Some(t.varname.clone()),
+                    Some(v) if *v != t.varname => warnings.push(format!(
+                        "{}: reads primvar '{}' where another texture reads '{v}': both read '{v}'",
+                        t.shader, t.varname
+                    )),
+                    Some(_) => {}
+                }
+            }
+        };
+        let diffuse = input(self, "diffuseColor")?;
+        note_varname(&diffuse, &mut varname, warnings);
+        let albedo = match &diffuse {
+            Source::Value(v) => Albedo::Constant(v.truncate().as_vec3().clamp(Vec3::ZERO, Vec3::ONE)),
+            Source::Texture(t) => Albedo::Texture(self.texture(&[t], true, false, textures, inputs)?),
+        };
+        let specular_workflow = matches!(input(self, "useSpecularWorkflow")?, Source::Value(v) if v.x != 0.0);
+        let metallic = input(self, "metallic")?;
+        let roughness = input(self, "roughness")?;
+        note_varname(&metallic, &mut varname, warnings);
+        note_varname(&roughness, &mut varname, warnings);
+        let mut pbr = PbrMaterial {
+            metallic: 0.0,
+            roughness: 0.5,
+            specular: 1.0,
+            specular_colour: Vec3::ONE,
+            metallic_roughness: None,
+            specular_texture: None,
+            specular_colour_texture: None,
+            normal_map: None,
+        };
+        // Roughness and metallic as glTF holds them: factors times the
+        // texture's G (roughness) and B (metallic).
+        match (&roughness, &metallic) {
+            (Source::Value(r), Source::Value(m)) => {
+                pbr.roughness = r.x.clamp(0.0, 1.0) as f32;
+                pbr.metallic = if specular_workflow { 0.0 } else { m.x.clamp(0.0, 1.0) as f32 };
+            }
+            _ => {
+                pbr.roughness = 1.0;
+                pbr.metallic = if specular_workflow { 0.0 } else { 1.0 };
+                let texture = self.metallic_roughness(&roughness, &metallic, specular_workflow, textures, inputs)?;
+                pbr.metallic_roughness = Some(texture);
+            }
+        }
+        self.specular(shader, specular_workflow, &mut pbr, textures, inputs)?;
+        let mut material = Material { pbr: None, ..Material::diffuse(material, albedo) };
+        match input(self, "emissiveColor")? {
+            Source::Value(v) => material.emission = v.truncate().as_vec3().max(Vec3::ZERO),
+            Source::Texture(t) => {
+                material.emission = Vec3::ONE;
+                material.emissive_texture = Some(self.texture(&[&t], true, false, textures, inputs)?);
+            }
+        }
+        if let Source::Texture(t) = input(self, "normal")? {
+            let r = self.texture(&[&t], false, true, textures, inputs)?;
+            pbr.normal_map = Some(NormalMap { texture: r.texture, transform: r.transform, scale: 1.0, set: 0 });
+        }
+        material.cutout = self.cutout(shader, textures, inputs, warnings)?;
+        if matches!(input(self, "clearcoat")?, Source::Texture(_))
+            || matches!(input(self, "clearcoat")?, Source::Value(v) if v.x > 0.0)
+        {
+            warnings.push(format!("{shader}: clearcoat is not implemented: the base layer alone"));
+        }
+        if matches!(input(self, "displacement")?, Source::Texture(_)) {
+            warnings.push(format!("{shader}: displacement is not implemented"));
+        }
+        material.pbr = Some(pbr);
+        Ok(Imported { material, varname: varname.unwrap_or_else(|| "st".to_string()) })
+    }
+
+    /// The specular layer: UsdPreviewSurface's specularColor as F0 in the
+    /// specular workflow, its ior's F0 otherwise, and Blender's specular
+    /// level where it writes one.
+    fn specular(
+        &mut self,
+        shader: &str,
+        specular_workflow: bool,
+        pbr: &mut PbrMaterial,
+        textures: &mut Vec<Texture>,
+        inputs: &mut Vec<std::path::PathBuf>,
+    ) -> Result<(), Located> {
+        let input = |this: &Self, name: &str| this.input(shader, "UsdPreviewSurface", name);
+        if specular_workflow {
+            // F0 is specularColor: glTF's dielectric F0 is 0.04 x the
+            // specular colour (KHR_materials_specular).
+            match input(self, "specularColor")? {
+                Source::Value(v) => pbr.specular_colour = (v.truncate().as_vec3() / 0.04).max(Vec3::ZERO),
+                Source::Texture(t) => {
+                    pbr.specular_colour = Vec3::splat(25.0);
+                    pbr.specular_colour_texture = Some(self.texture(&[&t], true, false, textures, inputs)?);
+                }
+            }
+        } else if let Source::Value(ior) = input(self, "ior")? {
+            let ior = ior.x.max(1.0);
+            let f0 = ((ior - 1.0) / (ior + 1.0)).powi(2);
+            pbr.specular_colour = Vec3::splat((f0 / 0.04) as f32);
+        }
+        // Blender writes its Principled BSDF's "Specular IOR Level" (0.5 by
+        // default) as `inputs:specular`, outside UsdPreviewSurface's
+        // schema; its glTF exporter writes twice it as
+        // KHR_materials_specular's factor, which this is read as.
+        if let Some(level) = self
+            .stage
+            .number(shader, "inputs:specular", self.time)
+            .map_err(|e| (format!("{shader}.inputs:specular"), e))?
+        {
+            pbr.specular = (2.0 * level).clamp(0.0, 1.0) as f32;
+        }
+        Ok(())
+    }
+
+    /// A cut-out from opacity below opacityThreshold (UsdPreviewSurface's
+    /// "presence"); transparency, which has no threshold, is named as not
+    /// implemented.
+    fn cutout(
+        &mut self,
+        shader: &str,
+        textures: &mut Vec<Texture>,
+        inputs: &mut Vec<std::path::PathBuf>,
+        warnings: &mut Vec<String>,
+    ) -> Result<Option<Cutout>, Located> {
+        let input = |this: &Self, name: &str| this.input(shader, "UsdPreviewSurface", name);
+        let mut cutout = None;
+        let opacity = input(self, "opacity")?;
+        let threshold = match input(self, "opacityThreshold")? {
+            Source::Value(v) => v.x as f32,
+            Source::Texture(t) => {
+                warnings.push(format!("{}: a textured opacityThreshold is read as 0.5", t.shader));
+                0.5
+            }
+        };
+        match (&opacity, threshold > 0.0) {
+            (Source::Texture(t), true) => {
+                let r = self.texture(&[t], false, false, textures, inputs)?;
+                let texture = &textures[r.texture];
+                let (width, height) = texture.size();
+                let alpha = texture.texels().iter().map(|t| t.x).collect();
+                cutout = Some(Cutout {
+                    alpha,
+                    width: width as u32,
+                    height: height as u32,
+                    transform: r.transform,
+                    cutoff: threshold,
+                });
+            }
+            (Source::Value(v), true) if (v.x as f32) < threshold => {
+                warnings.push(format!(
+                    "{shader}: opacity {} is below its threshold {threshold}: the surface is drawn anyway",
+                    v.x
+                ));
+            }
+            (Source::Value(v), false) if v.x < 1.0 => {
+                warnings.push(format!(
+                    "{shader}: opacity {} (transparency) is not implemented: the surface is opaque",
+                    v.x
+                ));
+            }
+            (Source::Texture(t), false) => {
+                warnings.push(format!(
+                    "{}: a textured opacity without a threshold (transparency) is not implemented: opaque",
+                    t.shader
+                ));
+            }
+            _ => {}
+        }
+        Ok(cutout)
+    }
+
+    /// A glTF metallic-roughness texture (G roughness, B metallic) from
+    /// UsdPreviewSurface's two inputs, each a value or a texture channel;
+    /// at the resolution of the (first) texture.
+    fn metallic_roughness(
+        &mut self,
+        roughness: &Source,
+        metallic: &Source,
+        specular_workflow: bool,
+        textures: &mut Vec<Texture>,
+        inputs: &mut Vec<std::path::PathBuf>,
+    ) -> Result<TextureRef, Located> {
+        let sources: Vec<&TextureSource> = [roughness, metallic]
+            .into_iter()
+            .filter_map(|s| if let Source::Texture(t) = s { Some(t) } else { None })
+            .collect();
+        let first = sources[0];
+        // One texture read through both channels: baked once.
+        fn channel(s: &Source) -> Option<&TextureSource> {
+            match s {
+                Source::Texture(t) => Some(t),
+                Source::Value(_) => None,
+            }
+        }
+        let (r, m) = (channel(roughness), channel(metallic));
+        let image = self.image(first, inputs)?.clone();
+        let (width, height) = (image.width, image.height);
+        let sample =
+            |this: &mut Self, t: &TextureSource, inputs: &mut Vec<std::path::PathBuf>| -> Result<Vec<f32>, Located> {
+                let img = this.image(t, inputs)?;
+                // Resampled to the first texture's size by the nearest texel.
+                Ok((0..width * height)
+                    .map(|p| {
+                        let (x, y) = (p % width, p / width);
+                        let (sx, sy) = (x * img.width / width, y * img.height / height);
+                        let k = sy * img.width + sx;
+                        let v = channel_value(img, k, t.channel);
+                        (f64::from(v) * pick(t.scale, t.channel) + pick(t.bias, t.channel)) as f32
+                    })
+                    .collect())
+            };
+        let constant = |s: &Source| match s {
+            Source::Value(v) => v.x as f32,
+            Source::Texture(_) => 0.0,
+        };
+        let rough = match r {
+            Some(t) => sample(self, t, inputs)?,
+            None => vec![constant(roughness); width * height],
+        };
+        let metal = match (m, specular_workflow) {
+            (_, true) => vec![0.0; width * height],
+            (Some(t), false) => sample(self, t, inputs)?,
+            (None, false) => vec![constant(metallic); width * height],
+        };
+        let texels =
+            rough.iter().zip(&metal).map(|(&g, &b)| Vec3::new(0.0, g.clamp(0.0, 1.0), b.clamp(0.0, 1.0))).collect();
+        textures.push(Texture::from_texels(width, height, texels).with_sampler(first.wrap, Filter::Linear));
+        Ok(TextureRef { texture: textures.len() - 1, transform: first.transform, set: 0 })
+    }
+
+    /// The decoded image a texture reads (linear or sRGB-decoded as its
+    /// colour space says for `srgb_role`), each file read once.
+    fn image(&mut self, t: &TextureSource, inputs: &mut Vec<std::path::PathBuf>) -> Result<&RgbImage, Located> {
+        self.image_as(t, false, inputs)
+    }
+
+    fn image_as(
+        &mut self,
+        t: &TextureSource,
+        srgb: bool,
+        inputs: &mut Vec<std::path::PathBuf>,
+    ) -> Result<&RgbImage, Located> {
+        let key = format!("{}\u{0}{srgb}", t.file);
+        if !self.images.contains_key(&key) {
+            let at = (format!("{}.inputs:file", t.shader), String::new());
+            let (file, bytes) = self.stage.asset_bytes(&t.file, MAX_TEXTURE_BYTES).map_err(|e| (at.0.clone(), e))?;
+            if !inputs.contains(&file) {
+                inputs.push(file);
+            }
+            let encoding = if srgb { Encoding::Srgb } else { Encoding::Linear };
+            let image = image::decode(&bytes, encoding).map_err(|e| (at.0.clone(), format!("'{}': {e}", t.file)))?;
+            self.images.insert(key.clone(), image);
+        }
+        Ok(&self.images[&key])
+    }
+
+    /// A texture as a TextureRef: one source's channels with its scale and
+    /// bias applied (a single channel read as grey), decoded from sRGB when
+    /// it holds colour (`colour`) and its colour space says so or is
+    /// `auto`; a `normal` map's values n in [-1, 1] stored as (n + 1) / 2,
+    /// as the renderer's normal maps hold them.
+    fn texture(
+        &mut self,
+        sources: &[&TextureSource],
+        colour: bool,
+        normal: bool,
+        textures: &mut Vec<Texture>,
+        inputs: &mut Vec<std::path::PathBuf>,
+    ) -> Result<TextureRef, Located> {
+        let t = sources[0];
+        let srgb = match t.colour_space.as_str() {
+            "sRGB" => true,
+            "raw" => false,
+            _ => colour && !normal,
+        };
+        let key = Baked {
+            file: t.file.clone(),
+            channels: vec![(t.channel, [hash4(t.scale), hash4(t.bias)])],
+            wrap: t.wrap.map(|w| w as u8),
+            srgb,
+            normal,
+        };
+        if let Some(&index) = self.textures.get(&key) {
+            return Ok(TextureRef { texture: index, transform: t.transform, set: 0 });
+        }
+        let image = self.image_as(t, srgb, inputs)?;
+        let texels = (0..image.width * image.height)
+            .map(|k| {
+                let raw = match t.channel {
+                    Channel::Rgb => image.texels[k],
+                    c => Vec3::splat(channel_value(image, k, c)),
+                };
+                let v = raw.as_dvec3() * t.scale.truncate() + t.bias.truncate();
+                let v = if normal { (v + 1.0) * 0.5 } else { v };
+                v.as_vec3().max(Vec3::ZERO)
+            })
+            .collect();
+        textures.push(Texture::from_texels(image.width, image.height, texels).with_sampler(t.wrap, Filter::Linear));
+        let index = textures.len() - 1;
+        self.textures.insert(key, index);
+        Ok(TextureRef { texture: index, transform: t.transform, set: 0 })
+    }
+}
+
+/// A texel's channel (alpha 1 where the image has none).
+fn channel_value(image: &RgbImage, k: usize, channel: Channel) -> f32 {
+    match channel {
+        Channel::R | Channel::Rgb => image.texels[k].x,
+        Channel::G => image.texels[k].y,
+        Channel::B => image.texels[k].z,
+        Channel::A => image.alpha.as_ref().map_or(1.0, |a| a[k]),
+    }
+}
+
+/// The component of a scale or bias that applies to a single channel.
+fn pick(v: DVec4, channel: Channel) -> f64 {
+    match channel {
+        Channel::R | Channel::Rgb => v.x,
+        Channel::G => v.y,
+        Channel::B => v.z,
+        Channel::A => v.w,
+    }
+}
+
+fn hash4(v: DVec4) -> u64 {
+    v.to_array().iter().fold(0u64, |h, x| h.rotate_left(17) ^ x.to_bits())
+}
+
+/// `/Path/Prim.property` as (prim, property).
+fn split(source: &str) -> (&str, &str) {
+    match source.rfind('.') {
+        Some(i) if !source[i..].contains('/') => (&source[..i], &source[i + 1..]),
+        _ => (source, ""),
+    }
+}
+
+/// The material of a surface with none bound, or whose material cannot be
+/// read: UsdPreviewSurface's defaults (grey 0.18, roughness 0.5, dielectric).
+pub(super) fn default_material(name: &str) -> Material {
+    let pbr = PbrMaterial {
+        metallic: 0.0,
+        roughness: 0.5,
+        specular: 1.0,
+        specular_colour: Vec3::ONE,
+        metallic_roughness: None,
+        specular_texture: None,
+        specular_colour_texture: None,
+        normal_map: None,
+    };
+    Material { pbr: Some(pbr), ..Material::diffuse(name, Albedo::Constant(DEFAULT_GREY)) }
+}
+
+/// A surface's display colour as its material's base colour (what
+/// UsdGeom's `primvars:displayColor` means when no material is bound).
+pub(super) fn display_material(name: &str, colour: Vec3) -> Material {
+    let mut m = default_material(name);
+    m.albedo = Albedo::Constant(colour.clamp(Vec3::ZERO, Vec3::ONE));
+    m
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use glam::Vec2;
+
+    #[test]
+    fn a_connection_source_splits_at_its_last_dot() {
+        assert_eq!(split("/M/Tex.outputs:rgb"), ("/M/Tex", "outputs:rgb"));
+        assert_eq!(split("/M.v2/Tex.outputs:r"), ("/M.v2/Tex", "outputs:r"));
+    }
+
+    #[test]
+    fn a_transform2d_scales_then_turns_then_moves() {
+        let m = Affine2::from_scale_angle_translation(Vec2::new(2.0, 1.0), 90f32.to_radians(), Vec2::new(0.5, 0.0));
+        // (1, 0) -> scaled (2, 0) -> turned (0, 2) -> moved (0.5, 2).
+        let p = m.transform_point2(Vec2::new(1.0, 0.0));
+        assert!((p - Vec2::new(0.5, 2.0)).length() < 1e-6, "{p}");
+    }
+}

@@ -1,0 +1,841 @@
+//! USD import (`.usd`, `.usda`, `.usdc`, `.usdz`): the composed stage's
+//! meshes and gprims, UsdPreviewSurface materials, UsdLux lights and
+//! cameras, instanceable prims and point instancers as Embree instances,
+//! and time samples over the shutter, mapped onto the renderer's model as
+//! docs/scene-format.md ("USD") tabulates.
+//!
+//! By job: `stage` is the adapter to the `openusd` crate (the only file
+//! that names it); `schema` holds the schemas' fallback values; `xform`
+//! composes transforms; `geometry` makes meshes; `materials` reads
+//! UsdPreviewSurface networks; `lights` maps UsdLux. This file walks the
+//! stage and places what they make.
+
+mod geometry;
+mod lights;
+mod materials;
+mod schema;
+mod stage;
+mod xform;
+
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+
+use glam::{Affine3A, DMat4, DQuat, DVec3, Mat4, Vec3};
+
+use self::geometry::Located;
+use self::stage::Stage;
+use super::environment::{Environment, EnvironmentMap};
+use super::file::{CameraSpec, UsdSpec};
+use super::gltf::GltfCamera;
+use super::material::Material;
+use super::mesh::Mesh;
+use super::object::{Motion, Object};
+use super::texture::Texture;
+use super::{within_limits, LightSource, SceneError, MAX_COORDINATE};
+
+/// Most triangles an import may store (2^28), an instanced mesh once.
+const MAX_TRIANGLES: usize = 1 << 28;
+/// Most instances an import may make (2^24).
+const MAX_INSTANCES: usize = 1 << 24;
+/// Deepest prim hierarchy followed (instances and point instancers count
+/// their prototypes' depth too).
+const MAX_DEPTH: usize = 256;
+/// Time steps a moving object's placement is sampled at over an open
+/// shutter (as the glTF import's animations are).
+const SHUTTER_STEPS: usize = 33;
+/// Directional lights a dome light becomes (as a TOML's `[environment]`).
+const DOME_SAMPLES: u32 = 4096;
+/// Largest dome texture read (1 GiB).
+const MAX_DOME_BYTES: u64 = 1 << 30;
+/// USD's fallback for an unauthored `metersPerUnit`: centimetres.
+const FALLBACK_METERS_PER_UNIT: f64 = 0.01;
+
+/// Where the import's parts go: the scene's own lists (indices are into them).
+pub struct Parts<'a> {
+    pub meshes: &'a mut Vec<Mesh>,
+    /// Objects placing meshes kept in their own space (instances, moving prims).
+    pub instances: &'a mut Vec<Object>,
+    pub materials: &'a mut Vec<Material>,
+    pub textures: &'a mut Vec<Texture>,
+    pub lights: &'a mut Vec<LightSource>,
+    /// Each light's `lightcuts:group` (its own, or its nearest ancestor's)
+    /// and the prim it came from, one per light added.
+    pub groups: &'a mut Vec<(Option<String>, String)>,
+    pub inputs: &'a mut Vec<PathBuf>,
+    pub warnings: &'a mut Vec<String>,
+    /// The stage's dome light, as the scene's environment (with its group).
+    pub environment: &'a mut Option<(Environment, Option<String>)>,
+}
+
+/// Imports `spec.file` (relative to `base`) into `parts`; returns the
+/// camera (`spec.camera` by prim path, else the first found) when
+/// `want_camera`. With a `shutter` (open < close, time codes) what moves
+/// over it blurs; otherwise everything is read at `spec.time`, else the
+/// stage's start time code.
+pub fn import(
+    scene_file: &Path,
+    base: &Path,
+    spec: &UsdSpec,
+    want_camera: bool,
+    parts: Parts<'_>,
+) -> Result<Option<GltfCamera>, SceneError> {
+    let path = base.join(&spec.file);
+    let _ = scene_file;
+    parts.inputs.push(path.clone());
+    // The reader is a young library: should it panic on a hostile file,
+    // the panic is caught here and reported as the file's error, without
+    // the panic's own message on stderr.
+    let previous = std::panic::take_hook();
+    std::panic::set_hook(Box::new(|_| {}));
+    let result =
+        std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| import_stage(&path, spec, want_camera, parts)));
+    std::panic::set_hook(previous);
+    match result {
+        Ok(result) => result,
+        Err(panic) => {
+            let what = panic
+                .downcast_ref::<String>()
+                .cloned()
+                .or_else(|| panic.downcast_ref::<&str>().map(|s| (*s).to_string()))
+                .unwrap_or_default();
+            Err(SceneError::new(&path, "file", format!("the USD reader failed on this file ({what})")))
+        }
+    }
+}
+
+fn import_stage(
+    path: &Path,
+    spec: &UsdSpec,
+    want_camera: bool,
+    parts: Parts<'_>,
+) -> Result<Option<GltfCamera>, SceneError> {
+    let error = |(location, message): Located| SceneError::new(path, location, message);
+    let size = std::fs::metadata(path)
+        .map_err(|e| SceneError::new(path, "file", format!("cannot read the stage: {e}")))?
+        .len();
+    if size == 0 {
+        return Err(SceneError::new(path, "file", "the file is empty"));
+    }
+    let stage = Stage::open(path).map_err(|e| SceneError::new(path, "file", e))?;
+    let up = stage.metadata_token("upAxis").map_err(|e| SceneError::new(path, "upAxis", e))?;
+    let up_z = match up.as_deref() {
+        None | Some("Y") => false,
+        Some("Z") => true,
+        Some(other) => return Err(SceneError::new(path, "upAxis", format!("must be Y or Z, got '{other}'"))),
+    };
+    let meters_per_unit = stage
+        .metadata_number("metersPerUnit")
+        .map_err(|e| SceneError::new(path, "metersPerUnit", e))?
+        .unwrap_or(FALLBACK_METERS_PER_UNIT);
+    if !(meters_per_unit.is_finite() && meters_per_unit > 0.0) {
+        return Err(SceneError::new(path, "metersPerUnit", format!("must be finite and > 0, got {meters_per_unit}")));
+    }
+    // The stage's space into the renderer's: metres, +y up (a Z-up stage
+    // turned -90 degrees about x, so +z goes to +y).
+    let turn = if up_z { DMat4::from_rotation_x(-std::f64::consts::FRAC_PI_2) } else { DMat4::IDENTITY };
+    let root = turn * DMat4::from_scale(DVec3::splat(meters_per_unit));
+    // Blender's exporter says so in the layer's doc ("Blender v5.0.1"), which
+    // the reader calls `documentation`.
+    let doc = stage.metadata_token("documentation").map_err(|e| SceneError::new(path, "doc", e))?;
+    let blender = doc.as_deref().is_some_and(|d| d.starts_with("Blender v"));
+    let time = spec.time.or_else(|| stage.start_time_code()).unwrap_or(0.0);
+    if !time.is_finite() {
+        return Err(SceneError::new(path, "--time", format!("must be finite, got {time}")));
+    }
+    let shutter = spec.shutter.filter(|[open, close]| open < close).map(|[o, c]| [f64::from(o), f64::from(c)]);
+    let times: Vec<f64> = match shutter {
+        Some([open, close]) => {
+            (0..SHUTTER_STEPS).map(|k| open + (close - open) * k as f64 / (SHUTTER_STEPS - 1) as f64).collect()
+        }
+        None => vec![spec.shutter.map_or(time, |[open, _]| f64::from(open))],
+    };
+    let mut walker = Walker {
+        file: path,
+        stage: &stage,
+        spec,
+        times,
+        root,
+        units: lights::Units { meters_per_unit, distant_scale: if blender { 4.0 } else { 1.0 }, up_z },
+        materials: materials::Materials::new(&stage, time),
+        material_index: HashMap::new(),
+        prototypes: HashMap::new(),
+        parts,
+        cameras: Vec::new(),
+        triangles: 0,
+        emitters: 0,
+        still_moving: 0,
+        catmull_clark: 0,
+    };
+    walker.materials = materials::Materials::new(&stage, walker.time());
+    let roots = stage.root_prims().map_err(|e| SceneError::new(path, "/", e))?;
+    let top = Context { worlds: vec![root; walker.times.len()], binding: None, group: None, depth: 0, instance: None };
+    for prim in &roots {
+        walker.walk(prim, &top).map_err(error)?;
+    }
+    if let Some(first) = stage.composition_errors().first() {
+        return Err(SceneError::new(path, "composition", first.clone()));
+    }
+    walker.summarise();
+    if !want_camera {
+        return Ok(None);
+    }
+    walker.camera(spec.camera.as_deref(), stage.default_prim().as_deref()).map_err(error)
+}
+
+/// What flows down the hierarchy.
+#[derive(Clone)]
+struct Context {
+    /// The parent's world matrix at each of the walker's times.
+    worlds: Vec<DMat4>,
+    /// The nearest `material:binding` above (a Material's path).
+    binding: Option<String>,
+    /// The nearest `lightcuts:group` above.
+    group: Option<String>,
+    depth: usize,
+    /// The instance (or point-instancer entry) being walked, by name: its
+    /// prims are drawn as instances of meshes kept once per prototype.
+    instance: Option<String>,
+}
+
+struct Walker<'a, 'p> {
+    file: &'a Path,
+    stage: &'a Stage,
+    spec: &'a UsdSpec,
+    /// The time codes read: one, or the shutter's steps from open to close.
+    times: Vec<f64>,
+    root: DMat4,
+    units: lights::Units,
+    materials: materials::Materials<'a>,
+    /// The scene's material of each (Material path or display colour,
+    /// culls back faces), and the texture coordinates it reads.
+    material_index: HashMap<(String, bool), (usize, String)>,
+    /// Each prototype prim's meshes (scene mesh, its matrix in the
+    /// prototype's space), kept once for all its instances.
+    prototypes: HashMap<String, Vec<(usize, DMat4)>>,
+    parts: Parts<'p>,
+    /// Cameras found: (prim path, world matrices at the times, stage read time).
+    cameras: Vec<(String, Vec<DMat4>)>,
+    triangles: usize,
+    emitters: u64,
+    still_moving: usize,
+    catmull_clark: usize,
+}
+
+/// The gprim types tessellated.
+const GPRIMS: [&str; 6] = ["Sphere", "Cube", "Cylinder", "Cone", "Capsule", "Plane"];
+/// The UsdLux light types.
+const LIGHTS: [&str; 10] = [
+    "SphereLight",
+    "RectLight",
+    "DiskLight",
+    "CylinderLight",
+    "DistantLight",
+    "DomeLight",
+    "DomeLight_1",
+    "GeometryLight",
+    "PortalLight",
+    "PluginLight",
+];
+
+impl Walker<'_, '_> {
+    /// The time everything that does not move is read at: the shutter's open.
+    fn time(&self) -> f64 {
+        self.times[0]
+    }
+
+    fn warn(&mut self, message: String) {
+        self.parts.warnings.push(format!("{}: {message}", self.file.display()));
+    }
+
+    fn walk(&mut self, prim: &str, above: &Context) -> Result<(), Located> {
+        let stage = self.stage;
+        let time = self.time();
+        if above.depth > MAX_DEPTH {
+            return Err((prim.to_string(), format!("the hierarchy is deeper than {MAX_DEPTH} prims")));
+        }
+        let info = stage.prim(prim).map_err(|e| (prim.to_string(), e))?;
+        if !info.present {
+            return Ok(());
+        }
+        let read = schema::Reader { stage, prim, schema: &info.type_name, time };
+        if read.token("visibility")? == "invisible" {
+            return Ok(());
+        }
+        if matches!(read.token("purpose")?.as_str(), "proxy" | "guide") {
+            return Ok(());
+        }
+        let mut here = above.clone();
+        here.depth += 1;
+        if let Some(group) =
+            stage.token(prim, "lightcuts:group", time).map_err(|e| (format!("{prim}.lightcuts:group"), e))?
+        {
+            here.group = Some(group);
+        }
+        if let Some(binding) = self.binding(prim)? {
+            here.binding = Some(binding);
+        }
+        here.worlds = self.worlds(prim, &above.worlds)?;
+        let type_name = info.type_name.as_str();
+        if let Some(prototype) = &info.prototype {
+            // An instance: its prototype's prims, placed by it.
+            let mut inside = here.clone();
+            inside.instance = Some(prim.to_string());
+            for child in stage.children(prototype).map_err(|e| (prototype.clone(), e))? {
+                self.walk(&child, &inside)?;
+            }
+            return Ok(());
+        }
+        match type_name {
+            "Mesh" => self.mesh(prim, &here)?,
+            t if GPRIMS.contains(&t) => self.gprim(prim, t, &here)?,
+            t if LIGHTS.contains(&t) => self.light(prim, t, &info.api_schemas, &here)?,
+            "Camera" if here.instance.is_none() => self.cameras.push((prim.to_string(), here.worlds.clone())),
+            "PointInstancer" => return self.point_instancer(prim, &here),
+            "BasisCurves" | "NurbsCurves" | "Points" | "NurbsPatch" | "Volume" | "TetMesh" | "HermiteCurves" => {
+                self.warn(format!("{prim}: {type_name} is not rendered (meshes and gprims are)"));
+            }
+            _ => {}
+        }
+        for child in stage.children(prim).map_err(|e| (prim.to_string(), e))? {
+            self.walk(&child, &here)?;
+        }
+        Ok(())
+    }
+
+    /// The prim's world matrices at the walker's times from its parent's.
+    fn worlds(&self, prim: &str, parent: &[DMat4]) -> Result<Vec<DMat4>, Located> {
+        let names = xform::op_names(self.stage, prim, self.time())?;
+        let moves = self.times.len() > 1
+            && names.iter().try_fold(false, |any, op| {
+                Ok::<bool, Located>(any || self.stage.varies(prim, op).map_err(|e| (format!("{prim}.{op}"), e))?)
+            })?;
+        let mut worlds = Vec::with_capacity(self.times.len());
+        for (k, &t) in self.times.iter().enumerate() {
+            let (local, resets) = if k == 0 || moves {
+                xform::local(self.stage, prim, t)?
+            } else {
+                xform::local(self.stage, prim, self.times[0])?
+            };
+            let above = if resets { self.root } else { parent[k] };
+            worlds.push(above * local);
+        }
+        Ok(worlds)
+    }
+
+    /// The prim's own `material:binding` (the full-purpose one first).
+    fn binding(&self, prim: &str) -> Result<Option<String>, Located> {
+        for name in ["material:binding:full", "material:binding"] {
+            let targets = self.stage.targets(prim, name).map_err(|e| (format!("{prim}.{name}"), e))?;
+            if let Some(first) = targets.into_iter().next() {
+                return Ok(Some(first));
+            }
+        }
+        Ok(None)
+    }
+
+    /// The scene material for a binding (or a display colour), culling back
+    /// faces or not; and the primvar its textures read.
+    fn material(
+        &mut self,
+        binding: Option<&str>,
+        display: Option<Vec3>,
+        culls: bool,
+    ) -> Result<(usize, String), Located> {
+        let key = match (binding, display) {
+            (Some(b), _) => b.to_string(),
+            (None, Some(c)) => format!("displayColor {c}"),
+            (None, None) => "default".to_string(),
+        };
+        if let Some(found) = self.material_index.get(&(key.clone(), culls)) {
+            return Ok(found.clone());
+        }
+        let (mut material, varname) = match binding {
+            Some(path) => {
+                let mut warnings = Vec::new();
+                let imported = self.materials.import(path, self.parts.textures, self.parts.inputs, &mut warnings)?;
+                for w in warnings {
+                    self.warn(w);
+                }
+                (imported.material, imported.varname)
+            }
+            None => (materials::display_material(&key, display.unwrap_or(materials::DEFAULT_GREY)), "st".to_string()),
+        };
+        material.culls_back_faces = culls;
+        self.parts.materials.push(material);
+        let found = (self.parts.materials.len() - 1, varname);
+        self.material_index.insert((key, culls), found.clone());
+        Ok(found)
+    }
+
+    fn mesh(&mut self, prim: &str, here: &Context) -> Result<(), Located> {
+        let time = self.time();
+        let read = schema::Reader { stage: self.stage, prim, schema: "Mesh", time };
+        if read.token("subdivisionScheme")? != "none" {
+            self.catmull_clark += 1;
+        }
+        let double_sided = read.boolean("doubleSided")?;
+        // The bound material decides which primvar holds the coordinates.
+        let varname = match here.binding.as_deref() {
+            Some(b) => self.material(Some(b), None, !double_sided)?.1,
+            None => "st".to_string(),
+        };
+        let pieces = geometry::mesh(self.stage, prim, time, &geometry::Wanted { st: &varname })?;
+        for piece in pieces {
+            let binding = match &piece.subset {
+                Some(subset) => self.binding(subset)?.or_else(|| here.binding.clone()),
+                None => here.binding.clone(),
+            };
+            self.surface(prim, piece.mesh, binding.as_deref(), double_sided, here)?;
+        }
+        Ok(())
+    }
+
+    fn gprim(&mut self, prim: &str, type_name: &str, here: &Context) -> Result<(), Located> {
+        let time = self.time();
+        let Some(mesh) = geometry::gprim(self.stage, prim, type_name, time)? else { return Ok(()) };
+        let double_sided =
+            schema::Reader { stage: self.stage, prim, schema: type_name, time }.boolean("doubleSided")?;
+        let display = self
+            .stage
+            .vec3s(prim, "primvars:displayColor", time)
+            .map_err(|e| (format!("{prim}.primvars:displayColor"), e))?;
+        let mut mesh = mesh;
+        if here.binding.is_none() {
+            if let Some(c) = display.and_then(|c| c.first().copied()) {
+                mesh.colors = Some(vec![c.as_vec3().max(Vec3::ZERO); mesh.positions.len()]);
+            }
+        }
+        self.surface(prim, mesh, here.binding.clone().as_deref(), double_sided, here)
+    }
+
+    /// A surface (in its prim's space) placed: with its material; as an
+    /// area light if it emits; instanced when its prim is in a prototype
+    /// or moves, copied into the world otherwise.
+    fn surface(
+        &mut self,
+        prim: &str,
+        mut mesh: Mesh,
+        binding: Option<&str>,
+        double_sided: bool,
+        here: &Context,
+    ) -> Result<(), Located> {
+        mesh.name = prim.to_string();
+        // Without a material, a constant display colour is the base colour;
+        // with one, display colours are not read (UsdGeom).
+        let display = match (&binding, &mesh.colors) {
+            (None, Some(colors)) if colors.windows(2).all(|w| w[0] == w[1]) => {
+                let c = colors[0];
+                mesh.colors = None;
+                Some(c)
+            }
+            (None, Some(_)) => Some(Vec3::ONE),
+            (Some(_), _) => {
+                mesh.colors = None;
+                None
+            }
+            (None, None) => None,
+        };
+        let (material, _) = self.material(binding, display, !double_sided)?;
+        mesh.material = material;
+        if self.parts.materials[material].pbr.as_ref().is_some_and(|p| p.normal_map.is_some()) && mesh.uvs.is_some() {
+            geometry::add_tangents(&mut mesh);
+        }
+        self.triangles += mesh.triangles.len();
+        if self.triangles > MAX_TRIANGLES {
+            return Err((prim.to_string(), format!("the stage has more than {MAX_TRIANGLES} triangles")));
+        }
+        let emission = self.parts.materials[material].emission;
+        let world = here.worlds[0];
+        let moving = here.worlds.windows(2).any(|w| w[0] != w[1]);
+        let rigid = world.determinant() > 0.0 && here.worlds.iter().all(|w| w.determinant() > 0.0);
+        if emission == Vec3::ZERO && rigid && (here.instance.is_some() || moving) {
+            let transform = affine(&world, prim)?;
+            let motion = moving.then(|| Motion {
+                steps: here.worlds.iter().map(|w| Affine3A::from_mat4(w.as_mat4()) * transform.inverse()).collect(),
+            });
+            let name = match &here.instance {
+                Some(instance) => format!("{instance}{}", prim.find('/').map_or("", |_| "")),
+                None => prim.to_string(),
+            };
+            let key = format!("{prim}#{}", mesh.material);
+            let index = match self.prototypes.get(&key).and_then(|v| v.first()) {
+                Some(&(index, _)) if here.instance.is_some() => index,
+                _ => {
+                    self.parts.meshes.push(mesh);
+                    let index = self.parts.meshes.len() - 1;
+                    if here.instance.is_some() {
+                        self.prototypes.insert(key, vec![(index, DMat4::IDENTITY)]);
+                    }
+                    index
+                }
+            };
+            let object = Object { mesh: index, transform: Some(transform), name, motion };
+            let (lo, hi) = super::object::world_bounds(self.parts.meshes, std::slice::from_ref(&object));
+            if !(within_limits(lo) && within_limits(hi)) {
+                return Err((
+                    prim.to_string(),
+                    format!("is placed at {lo} to {hi}: coordinates must be finite and within +/-{MAX_COORDINATE:e} m"),
+                ));
+            }
+            if self.parts.instances.len() >= MAX_INSTANCES {
+                return Err((prim.to_string(), format!("the stage has more than {MAX_INSTANCES} instances")));
+            }
+            self.parts.instances.push(object);
+            return Ok(());
+        }
+        self.still_moving += usize::from(moving);
+        let mesh = lights::placed_mesh(mesh, &world);
+        if let Some(p) = mesh.positions.iter().find(|p| !within_limits(**p)) {
+            return Err((
+                prim.to_string(),
+                format!("a point lands at {p}: coordinates must be finite and within +/-{MAX_COORDINATE:e} m"),
+            ));
+        }
+        let has_area = mesh.triangles.iter().any(|t| {
+            let [a, b, c] = t.map(|i| mesh.positions[i as usize]);
+            (b - a).cross(c - a).length() > 0.0
+        });
+        self.parts.meshes.push(mesh);
+        if emission != Vec3::ZERO && has_area {
+            self.emitters += 1;
+            self.parts.lights.push(LightSource::Area {
+                mesh: self.parts.meshes.len() - 1,
+                radiance: emission,
+                samples: self.spec.emitter_samples,
+                seed: 0x05d0_0000 + self.emitters,
+                both_sides: double_sided,
+            });
+            self.parts.materials[material].emits_both_sides = double_sided;
+            self.parts.groups.push((here.group.clone(), prim.to_string()));
+        }
+        Ok(())
+    }
+
+    fn light(&mut self, prim: &str, type_name: &str, api_schemas: &[String], here: &Context) -> Result<(), Located> {
+        let time = self.time();
+        if here.worlds.windows(2).any(|w| w[0] != w[1]) {
+            self.still_moving += 1;
+        }
+        let mut warnings = Vec::new();
+        let read = schema::Reader { stage: self.stage, prim, schema: type_name, time };
+        let made = lights::light(&read, here.worlds[0], &self.units, api_schemas, &mut warnings)?;
+        if type_name == "DistantLight" && self.units.distant_scale != 1.0 {
+            warnings.push(format!(
+                "{prim}: the stage is Blender's, whose exporter writes a sun's strength / 4: read as 4 x intensity, as \
+                 Blender reads it back"
+            ));
+        }
+        for w in warnings {
+            self.warn(w);
+        }
+        match made {
+            None => {}
+            Some(lights::Made::Light(mut source, mesh)) => {
+                if let Some(mesh) = mesh {
+                    let LightSource::Area { radiance, .. } = source else {
+                        unreachable!("only area lights have meshes")
+                    };
+                    self.emitters += 1;
+                    let mut mesh = mesh;
+                    mesh.name = prim.to_string();
+                    // Black, emitting from the side its winding faces.
+                    self.parts.materials.push(Material {
+                        emission: radiance,
+                        ..Material::diffuse(prim, super::material::Albedo::Constant(Vec3::ZERO))
+                    });
+                    mesh.material = self.parts.materials.len() - 1;
+                    self.parts.meshes.push(mesh);
+                    source = LightSource::Area {
+                        mesh: self.parts.meshes.len() - 1,
+                        radiance,
+                        samples: self.spec.emitter_samples,
+                        seed: 0x05d0_0000 + self.emitters,
+                        both_sides: false,
+                    };
+                }
+                if let LightSource::Sun { seed, .. } = &mut source {
+                    *seed = 0x05d1_0000 + self.parts.lights.len() as u64;
+                }
+                for p in source.positions() {
+                    if !within_limits(p) {
+                        return Err((
+                            prim.to_string(),
+                            format!(
+                                "the light lands at {p}: coordinates must be finite and within +/-{MAX_COORDINATE:e} m"
+                            ),
+                        ));
+                    }
+                }
+                self.parts.lights.push(source);
+                self.parts.groups.push((here.group.clone(), prim.to_string()));
+            }
+            Some(lights::Made::Dome { radiance, texture, rotation }) => {
+                if self.parts.environment.is_some() {
+                    self.warn(format!("{prim}: a second dome light is not rendered (the first is the environment)"));
+                    return Ok(());
+                }
+                let map = match texture {
+                    None => EnvironmentMap::Constant(radiance),
+                    Some(file) => self.dome_map(prim, &file, radiance, &rotation)?,
+                };
+                *self.parts.environment = Some((Environment { map, samples: DOME_SAMPLES }, here.group.clone()));
+            }
+        }
+        Ok(())
+    }
+
+    /// A dome's lat-long texture as the renderer's environment map: USD's
+    /// (OpenEXR's) lat-long, turned by the dome's rotation, resampled into
+    /// the renderer's own convention (docs/scene-format.md) at the same
+    /// size, by the nearest texel.
+    fn dome_map(
+        &mut self,
+        prim: &str,
+        file: &str,
+        radiance: Vec3,
+        rotation: &DMat4,
+    ) -> Result<EnvironmentMap, Located> {
+        let at = format!("{prim}.inputs:texture:file");
+        let (read, bytes) = self.stage.asset_bytes(file, MAX_DOME_BYTES).map_err(|e| (at.clone(), e))?;
+        if !self.parts.inputs.contains(&read) {
+            self.parts.inputs.push(read);
+        }
+        let image = if bytes.starts_with(&[0x76, 0x2f, 0x31, 0x01]) {
+            super::image::decode_radiance_exr(&bytes)
+        } else {
+            super::image::decode(&bytes, super::image::Encoding::Srgb)
+        }
+        .map_err(|e| (at.clone(), format!("'{file}': {e}")))?;
+        let (width, height) = (image.width, image.height);
+        let inverse = rotation.inverse();
+        let texels = (0..width * height)
+            .map(|p| {
+                let (x, y) = (p % width, p / width);
+                let d = our_direction((x as f64 + 0.5) / width as f64, (y as f64 + 0.5) / height as f64);
+                let local = inverse.transform_vector3(d).normalize_or_zero();
+                let (u, v) = openexr_latlong(local);
+                let sx = ((u * width as f64) as usize).min(width - 1);
+                let sy = ((v * height as f64) as usize).min(height - 1);
+                image.texels[sy * width + sx] * radiance
+            })
+            .collect();
+        Ok(EnvironmentMap::LatLong { width, height, texels, scale: 1.0 })
+    }
+
+    fn point_instancer(&mut self, prim: &str, here: &Context) -> Result<(), Located> {
+        let time = self.time();
+        let at = |a: &str| format!("{prim}.{a}");
+        let stage = self.stage;
+        let prototypes = stage.targets(prim, "prototypes").map_err(|e| (at("prototypes"), e))?;
+        let indices = stage.ints(prim, "protoIndices", time).map_err(|e| (at("protoIndices"), e))?.unwrap_or_default();
+        let positions = stage.vec3s(prim, "positions", time).map_err(|e| (at("positions"), e))?.unwrap_or_default();
+        let orientations = match stage.quats(prim, "orientations", time).map_err(|e| (at("orientations"), e))? {
+            Some(o) => Some(o),
+            None => stage.quats(prim, "orientationsf", time).map_err(|e| (at("orientationsf"), e))?,
+        };
+        let scales = stage.vec3s(prim, "scales", time).map_err(|e| (at("scales"), e))?;
+        let invisible: std::collections::HashSet<i64> = stage
+            .ints(prim, "invisibleIds", time)
+            .map_err(|e| (at("invisibleIds"), e))?
+            .unwrap_or_default()
+            .into_iter()
+            .collect();
+        let ids = stage.ints(prim, "ids", time).map_err(|e| (at("ids"), e))?;
+        let n = indices.len();
+        if positions.len() != n {
+            return Err((at("positions"), format!("has {} positions for {n} protoIndices", positions.len())));
+        }
+        if orientations.as_ref().is_some_and(|o| o.len() != n) {
+            return Err((
+                at("orientations"),
+                format!("has {} entries for {n} protoIndices", orientations.map_or(0, |o| o.len())),
+            ));
+        }
+        if scales.as_ref().is_some_and(|s| s.len() != n) {
+            return Err((at("scales"), format!("has {} entries for {n} protoIndices", scales.map_or(0, |s| s.len()))));
+        }
+        if self.parts.instances.len() + n > MAX_INSTANCES {
+            return Err((at("protoIndices"), format!("{n} instances: the stage would have more than {MAX_INSTANCES}")));
+        }
+        if here.worlds.windows(2).any(|w| w[0] != w[1]) {
+            self.still_moving += 1;
+        }
+        for k in 0..n {
+            let id = ids.as_ref().and_then(|ids| ids.get(k).copied()).unwrap_or(k as i64);
+            if invisible.contains(&id) {
+                continue;
+            }
+            let index = indices[k];
+            let Some(prototype) = usize::try_from(index).ok().and_then(|i| prototypes.get(i)) else {
+                return Err((
+                    at("protoIndices"),
+                    format!("index {index} is outside the {} prototypes", prototypes.len()),
+                ));
+            };
+            let rotation = orientations.as_ref().map_or(DQuat::IDENTITY, |o| o[k]);
+            let rotation = if rotation.length() > 0.0 { rotation.normalize() } else { DQuat::IDENTITY };
+            let scale = scales.as_ref().map_or(DVec3::ONE, |s| s[k]);
+            let placement = DMat4::from_scale_rotation_translation(scale, rotation, positions[k]);
+            let mut inside = here.clone();
+            inside.depth += 1;
+            inside.instance = Some(format!("{prim}[{k}]"));
+            inside.worlds = here.worlds.iter().map(|w| *w * placement).collect();
+            self.walk(prototype, &inside)?;
+        }
+        Ok(())
+    }
+
+    /// The camera asked for (a prim path), else the first found under the
+    /// default prim, else the first found.
+    fn camera(&self, asked: Option<&str>, default_prim: Option<&str>) -> Result<Option<GltfCamera>, Located> {
+        let chosen = match asked {
+            Some(path) => match self.cameras.iter().find(|(p, _)| p == path) {
+                Some(c) => Some(c),
+                None => {
+                    let known: Vec<&str> = self.cameras.iter().map(|(p, _)| p.as_str()).collect();
+                    return Err((
+                        "--camera".to_string(),
+                        format!(
+                            "no camera '{path}' on the stage (its cameras: {})",
+                            if known.is_empty() { "none".to_string() } else { known.join(", ") }
+                        ),
+                    ));
+                }
+            },
+            None => {
+                let under = default_prim.map(|d| format!("/{d}/"));
+                self.cameras
+                    .iter()
+                    .find(|(p, _)| under.as_ref().is_some_and(|u| p.starts_with(u)))
+                    .or_else(|| self.cameras.first())
+            }
+        };
+        let Some((prim, worlds)) = chosen else { return Ok(None) };
+        let time = self.time();
+        let read = schema::Reader { stage: self.stage, prim, schema: "Camera", time };
+        let projection = read.token("projection")?;
+        if projection != "perspective" {
+            return Err((format!("{prim}.projection"), format!("'{projection}' is not implemented (perspective is)")));
+        }
+        let focal = read.number("focalLength")?;
+        let (horizontal, vertical) = (read.number("horizontalAperture")?, read.number("verticalAperture")?);
+        if !(focal > 0.0 && horizontal > 0.0 && vertical > 0.0) {
+            return Err((
+                format!("{prim}.focalLength"),
+                format!("focalLength {focal} and the apertures {horizontal} x {vertical} must be > 0"),
+            ));
+        }
+        if read.number("horizontalApertureOffset")? != 0.0 || read.number("verticalApertureOffset")? != 0.0 {
+            return Err((
+                format!("{prim}.horizontalApertureOffset"),
+                "aperture offsets (a shifted lens) are not implemented".into(),
+            ));
+        }
+        let fov_y = 2.0 * (vertical / (2.0 * focal)).atan();
+        let place = |m: &DMat4| {
+            let eye = m.transform_point3(DVec3::ZERO);
+            let forward = m.transform_vector3(DVec3::NEG_Z).normalize_or_zero();
+            let up = m.transform_vector3(DVec3::Y).normalize_or_zero();
+            (eye, forward, up)
+        };
+        let (eye, forward, up) = place(&worlds[0]);
+        if forward == DVec3::ZERO || up == DVec3::ZERO {
+            return Err((prim.clone(), "the camera's transform is degenerate (zero scale)".into()));
+        }
+        let scale = worlds[0].transform_vector3(DVec3::NEG_Z).length();
+        // Lengths in the camera's space (tenths of a scene unit for the
+        // lens) into metres.
+        let f_stop = read.number("fStop")?;
+        let focus = read.number("focusDistance")? * scale;
+        let (lens_radius, focus_distance) = if f_stop > 0.0 && focus > 0.0 {
+            (focal / 10.0 * scale / (2.0 * f_stop), Some(focus as f32))
+        } else {
+            (0.0, None)
+        };
+        let distance = focus_distance.map_or(1.0, f64::from);
+        let mut spec = CameraSpec::pinhole(
+            eye.as_vec3().to_array(),
+            (eye + forward * distance).as_vec3().to_array(),
+            up.as_vec3().to_array(),
+            fov_y.to_degrees() as f32,
+        );
+        spec.lens_radius = lens_radius as f32;
+        spec.focus_distance = focus_distance;
+        if worlds.len() > 1 {
+            let (eye_end, forward_end, _) = place(&worlds[worlds.len() - 1]);
+            if eye_end != eye || forward_end != forward {
+                spec.eye_end = Some(eye_end.as_vec3().to_array());
+                spec.look_at_end = Some((eye_end + forward_end * distance).as_vec3().to_array());
+            }
+        }
+        Ok(Some(GltfCamera { spec, aspect_ratio: Some((horizontal / vertical) as f32) }))
+    }
+
+    /// One line each for what the stage asks for that is drawn otherwise.
+    fn summarise(&mut self) {
+        if self.catmull_clark > 0 {
+            let n = self.catmull_clark;
+            self.warn(format!("{n} mesh(es) ask for subdivision (subdivisionScheme): drawn as their control polygons"));
+        }
+        if self.still_moving > 0 {
+            let n = self.still_moving;
+            self.warn(format!(
+                "{n} moving prim(s) drawn as at the shutter's open (emissive or mirroring surfaces, lights, point instancers)"
+            ));
+        }
+    }
+}
+
+/// An f64 matrix as a placement the scene keeps (f32), checked finite.
+fn affine(world: &DMat4, prim: &str) -> Result<Affine3A, Located> {
+    let m: Mat4 = world.as_mat4();
+    if !m.is_finite() {
+        return Err((prim.to_string(), "its world transform is not finite".into()));
+    }
+    Ok(Affine3A::from_mat4(m))
+}
+
+/// The direction the renderer's lat-long maps put at (u, v): u = 0.5 +
+/// atan2(x, -z) / 2 pi around, v = acos(y) / pi down (scene::environment).
+fn our_direction(u: f64, v: f64) -> DVec3 {
+    let phi = (u - 0.5) * std::f64::consts::TAU;
+    let theta = v * std::f64::consts::PI;
+    // x = sin(theta) sin(phi), -z = sin(theta) cos(phi).
+    DVec3::new(theta.sin() * phi.sin(), theta.cos(), -theta.sin() * phi.cos())
+}
+
+/// Where direction `d` falls in an OpenEXR lat-long map (USD's dome):
+/// longitude atan2(x, z) from +pi at the left edge to -pi at the right,
+/// latitude from +pi/2 at the top to -pi/2 at the bottom.
+fn openexr_latlong(d: DVec3) -> (f64, f64) {
+    let longitude = d.x.atan2(d.z);
+    let latitude = d.y.clamp(-1.0, 1.0).asin();
+    let u = (0.5 - longitude / std::f64::consts::TAU).rem_euclid(1.0);
+    let v = 0.5 - latitude / std::f64::consts::PI;
+    (u, v)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// OpenEXR's lat-long (USD's dome): longitude 0 is +z and pi/2 is +x,
+    /// the top row +y; the renderer's own map is the same image turned by
+    /// half its width.
+    #[test]
+    fn the_openexr_latlong_convention() {
+        let close = |a: (f64, f64), b: (f64, f64)| (a.0 - b.0).abs() < 1e-9 && (a.1 - b.1).abs() < 1e-9;
+        assert!(close(openexr_latlong(DVec3::Z), (0.5, 0.5)));
+        assert!(close(openexr_latlong(DVec3::X), (0.25, 0.5)));
+        assert!(close(openexr_latlong(DVec3::NEG_X), (0.75, 0.5)));
+        assert!(openexr_latlong(DVec3::Y).1.abs() < 1e-9);
+        // Pixel centres of a 1000 x 500 map.
+        for (u, v) in [(0.1005, 0.301), (0.6005, 0.701), (0.9505, 0.501)] {
+            let d = our_direction(u, v);
+            let (x, y) = crate::scene::EnvironmentMap::pixel_of(1000, 500, d.as_vec3());
+            assert_eq!((x, y), ((u * 1000.0) as usize, (v * 500.0) as usize), "{u} {v}");
+            let (eu, ev) = openexr_latlong(d);
+            assert!(((eu - u).rem_euclid(1.0) - 0.5).abs() < 1e-9 && (ev - v).abs() < 1e-9);
+        }
+    }
+}

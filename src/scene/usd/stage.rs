@@ -1,0 +1,387 @@
+//! The one file that speaks to the `openusd` crate (pinned at 0.6.0): it
+//! opens a stage (`.usda`, `.usdc`, `.usdz`, composition included) and
+//! answers the import's questions in this crate's own types (glam values,
+//! `String` paths and messages), so that moving to another version of the
+//! crate touches this file alone.
+//!
+//! What 0.6 leaves to its user is done by the import, not here: schema
+//! fallback values (`schema`), world transforms (`xform`), inherited
+//! bindings, primvar indices and triangulation (`geometry`).
+
+use std::io::Read;
+use std::path::{Path, PathBuf};
+
+use glam::{DMat4, DQuat, DVec2, DVec3, DVec4};
+use openusd::{ar, sdf, usd};
+
+/// A composed stage, read at one time code at a time.
+pub(super) struct Stage {
+    stage: usd::Stage,
+    /// The root layer's file (for asset paths relative to it).
+    root: PathBuf,
+}
+
+/// What a prim is, as the import needs it.
+#[derive(Debug, Clone, Default)]
+pub(super) struct PrimInfo {
+    /// The schema's type name (`Mesh`, `RectLight`...); empty for a typeless prim.
+    pub type_name: String,
+    /// Applied API schemas (`ShapingAPI`, `MaterialBindingAPI`...).
+    pub api_schemas: Vec<String>,
+    /// Whether it is drawn at all: active, defined (`def`, not only `over`)
+    /// and not abstract (`class`).
+    pub present: bool,
+    /// The prototype an instanceable prim shares, when it is an instance.
+    pub prototype: Option<String>,
+}
+
+/// A message from the reader, as text.
+pub(super) type Failure = String;
+
+fn failure(e: &impl std::fmt::Display) -> Failure {
+    format!("{e:#}")
+}
+
+/// The largest array an attribute may hold (2^28 elements): a corrupt or
+/// hostile file's counts are refused before anything is made of them.
+pub(super) const MAX_ARRAY: usize = 1 << 28;
+
+fn attribute_path(prim: &str, name: &str) -> String {
+    format!("{prim}.{name}")
+}
+
+impl Stage {
+    /// Opens the stage whose root layer is `path`, loading every payload.
+    pub(super) fn open(path: &Path) -> Result<Self, Failure> {
+        let text = path.to_str().ok_or_else(|| "the path is not UTF-8".to_string())?;
+        let stage = usd::Stage::open(text).map_err(|e| failure(&e))?;
+        let errors = stage.composition_errors();
+        if let Some(first) = errors.first() {
+            return Err(format!("composition: {first}"));
+        }
+        Ok(Self { stage, root: path.to_path_buf() })
+    }
+
+    /// Composition errors found since the stage was opened (a missing
+    /// reference or payload surfaces as its prim is first read).
+    pub(super) fn composition_errors(&self) -> Vec<String> {
+        self.stage.composition_errors().iter().map(ToString::to_string).collect()
+    }
+
+    /// The layer metadata field `name` (`upAxis`, `metersPerUnit`...), as text
+    /// or a number.
+    pub(super) fn metadata_number(&self, name: &str) -> Result<Option<f64>, Failure> {
+        let value = self.stage.stage_metadata(name).map_err(|e| failure(&e))?;
+        Ok(value.and_then(|v| number(&v)))
+    }
+
+    pub(super) fn metadata_token(&self, name: &str) -> Result<Option<String>, Failure> {
+        let value = self.stage.stage_metadata(name).map_err(|e| failure(&e))?;
+        Ok(value.and_then(|v| text(&v)))
+    }
+
+    pub(super) fn default_prim(&self) -> Option<String> {
+        self.stage.default_prim().map(|t| t.as_str().to_string())
+    }
+
+    /// The stage's start time code, when it authors a range.
+    pub(super) fn start_time_code(&self) -> Option<f64> {
+        self.stage.has_authored_time_code_range().then(|| self.stage.start_time_code())
+    }
+
+    /// The root prims' paths (children of `/`).
+    pub(super) fn root_prims(&self) -> Result<Vec<String>, Failure> {
+        let names = self.stage.root_prims().map_err(|e| failure(&e))?;
+        Ok(names.iter().map(|n| format!("/{}", n.as_str())).collect())
+    }
+
+    /// The children's paths of `path`, in the stage's order.
+    pub(super) fn children(&self, path: &str) -> Result<Vec<String>, Failure> {
+        let prim = self.stage.prim(path);
+        let children = prim.children().map_err(|e| failure(&e))?;
+        Ok(children.iter().map(|c| c.path().as_str().to_string()).collect())
+    }
+
+    pub(super) fn prim(&self, path: &str) -> Result<PrimInfo, Failure> {
+        let prim = self.stage.prim(path);
+        let f = |e| failure(&e);
+        let valid = prim.is_valid().map_err(f)?;
+        if !valid {
+            return Ok(PrimInfo::default());
+        }
+        let present =
+            prim.is_active().map_err(f)? && prim.is_defined().map_err(f)? && !prim.is_abstract().map_err(f)?;
+        let type_name = prim.type_name().map_err(f)?.map_or_else(String::new, |t| t.as_str().to_string());
+        let api_schemas = prim.api_schemas().map_err(f)?.iter().map(|t| t.as_str().to_string()).collect();
+        let prototype = if prim.is_instance().map_err(f)? {
+            prim.prototype().map_err(f)?.map(|p| p.as_str().to_string())
+        } else {
+            None
+        };
+        Ok(PrimInfo { type_name, api_schemas, present, prototype })
+    }
+
+    /// The names of the prim's properties (attributes and relationships).
+    pub(super) fn property_names(&self, path: &str) -> Result<Vec<String>, Failure> {
+        let names = self.stage.prim(path).property_names().map_err(|e| failure(&e))?;
+        Ok(names.iter().map(|n| n.as_str().to_string()).collect())
+    }
+
+    /// The raw value of attribute `name` of `prim` at `time` (its default
+    /// value when it has no time samples); None when nothing is authored.
+    fn value(&self, prim: &str, name: &str, time: f64) -> Result<Option<sdf::Value>, Failure> {
+        let attribute = self.stage.attribute(attribute_path(prim, name));
+        let value: Option<sdf::Value> = attribute.get_at(usd::TimeCode::new(time)).map_err(|e| failure(&e))?;
+        Ok(value.filter(|v| !matches!(v, sdf::Value::ValueBlock | sdf::Value::None)))
+    }
+
+    /// Whether attribute `name` of `prim` has an opinion (a value or samples).
+    pub(super) fn has_value(&self, prim: &str, name: &str, time: f64) -> Result<bool, Failure> {
+        Ok(self.value(prim, name, time)?.is_some())
+    }
+
+    /// Whether the attribute has more than one time sample.
+    pub(super) fn varies(&self, prim: &str, name: &str) -> Result<bool, Failure> {
+        let attribute = self.stage.attribute(attribute_path(prim, name));
+        Ok(attribute.num_time_samples().map_err(|e| failure(&e))? > 1)
+    }
+
+    /// A scalar number (float, double, half or an integer).
+    pub(super) fn number(&self, prim: &str, name: &str, time: f64) -> Result<Option<f64>, Failure> {
+        self.typed(prim, name, time, "a number", |v| number(&v))
+    }
+
+    pub(super) fn boolean(&self, prim: &str, name: &str, time: f64) -> Result<Option<bool>, Failure> {
+        self.typed(prim, name, time, "a bool", |v| match v {
+            sdf::Value::Bool(b) => Some(b),
+            sdf::Value::Int(i) => Some(i != 0),
+            _ => None,
+        })
+    }
+
+    /// A token or string.
+    pub(super) fn token(&self, prim: &str, name: &str, time: f64) -> Result<Option<String>, Failure> {
+        self.typed(prim, name, time, "a token or string", |v| text(&v))
+    }
+
+    /// An asset path, as authored.
+    pub(super) fn asset(&self, prim: &str, name: &str, time: f64) -> Result<Option<String>, Failure> {
+        self.typed(prim, name, time, "an asset path", |v| match v {
+            sdf::Value::AssetPath(a) => {
+                Some(a.evaluated_path().map_or_else(|| a.authored_path.clone(), ToString::to_string))
+            }
+            sdf::Value::String(s) => Some(s),
+            _ => None,
+        })
+    }
+
+    pub(super) fn vec2(&self, prim: &str, name: &str, time: f64) -> Result<Option<DVec2>, Failure> {
+        self.typed(prim, name, time, "a 2-vector", |v| match v {
+            sdf::Value::Vec2f(v) => Some(DVec2::new(f64::from(v.x), f64::from(v.y))),
+            sdf::Value::Vec2d(v) => Some(DVec2::new(v.x, v.y)),
+            sdf::Value::Vec2h(v) => Some(DVec2::new(f64::from(v.x), f64::from(v.y))),
+            _ => None,
+        })
+    }
+
+    pub(super) fn vec3(&self, prim: &str, name: &str, time: f64) -> Result<Option<DVec3>, Failure> {
+        self.typed(prim, name, time, "a 3-vector", |v| vec3(&v))
+    }
+
+    pub(super) fn vec4(&self, prim: &str, name: &str, time: f64) -> Result<Option<DVec4>, Failure> {
+        self.typed(prim, name, time, "a 4-vector", |v| match v {
+            sdf::Value::Vec4f(v) => Some(DVec4::new(f64::from(v.x), f64::from(v.y), f64::from(v.z), f64::from(v.w))),
+            sdf::Value::Vec4d(v) => Some(DVec4::new(v.x, v.y, v.z, v.w)),
+            sdf::Value::Vec4h(v) => Some(DVec4::new(f64::from(v.x), f64::from(v.y), f64::from(v.z), f64::from(v.w))),
+            _ => None,
+        })
+    }
+
+    /// A quaternion (USD writes the real part first).
+    pub(super) fn quat(&self, prim: &str, name: &str, time: f64) -> Result<Option<DQuat>, Failure> {
+        self.typed(prim, name, time, "a quaternion", |v| match v {
+            sdf::Value::Quatf(q) => Some(quat(q.w.into(), q.x.into(), q.y.into(), q.z.into())),
+            sdf::Value::Quatd(q) => Some(quat(q.w, q.x, q.y, q.z)),
+            sdf::Value::Quath(q) => Some(quat(q.w.into(), q.x.into(), q.y.into(), q.z.into())),
+            _ => None,
+        })
+    }
+
+    /// A 4 x 4 matrix as this crate uses them (columns, acting on column
+    /// vectors): USD's matrices act on row vectors, so its rows are our
+    /// columns and its translation row is our last column.
+    pub(super) fn matrix(&self, prim: &str, name: &str, time: f64) -> Result<Option<DMat4>, Failure> {
+        self.typed(prim, name, time, "a 4 x 4 matrix", |v| match v {
+            sdf::Value::Matrix4d(m) => Some(DMat4::from_cols_array(&m.0)),
+            _ => None,
+        })
+    }
+
+    pub(super) fn ints(&self, prim: &str, name: &str, time: f64) -> Result<Option<Vec<i64>>, Failure> {
+        self.array(prim, name, time, "an int array", |v| match v {
+            sdf::Value::IntVec(v) => Some(v.into_iter().map(i64::from).collect()),
+            sdf::Value::Int64Vec(v) => Some(v),
+            sdf::Value::UintVec(v) => Some(v.into_iter().map(i64::from).collect()),
+            _ => None,
+        })
+    }
+
+    pub(super) fn vec2s(&self, prim: &str, name: &str, time: f64) -> Result<Option<Vec<DVec2>>, Failure> {
+        self.array(prim, name, time, "an array of 2-vectors", |v| match v {
+            sdf::Value::Vec2fVec(v) => Some(v.iter().map(|v| DVec2::new(v.x.into(), v.y.into())).collect()),
+            sdf::Value::Vec2dVec(v) => Some(v.iter().map(|v| DVec2::new(v.x, v.y)).collect()),
+            sdf::Value::Vec2hVec(v) => Some(v.iter().map(|v| DVec2::new(v.x.into(), v.y.into())).collect()),
+            _ => None,
+        })
+    }
+
+    pub(super) fn vec3s(&self, prim: &str, name: &str, time: f64) -> Result<Option<Vec<DVec3>>, Failure> {
+        self.array(prim, name, time, "an array of 3-vectors", |v| match v {
+            sdf::Value::Vec3fVec(v) => Some(v.iter().map(|v| DVec3::new(v.x.into(), v.y.into(), v.z.into())).collect()),
+            sdf::Value::Vec3dVec(v) => Some(v.iter().map(|v| DVec3::new(v.x, v.y, v.z)).collect()),
+            sdf::Value::Vec3hVec(v) => Some(v.iter().map(|v| DVec3::new(v.x.into(), v.y.into(), v.z.into())).collect()),
+            _ => None,
+        })
+    }
+
+    pub(super) fn quats(&self, prim: &str, name: &str, time: f64) -> Result<Option<Vec<DQuat>>, Failure> {
+        self.array(prim, name, time, "an array of quaternions", |v| match v {
+            sdf::Value::QuathVec(v) => {
+                Some(v.iter().map(|q| quat(q.w.into(), q.x.into(), q.y.into(), q.z.into())).collect())
+            }
+            sdf::Value::QuatfVec(v) => {
+                Some(v.iter().map(|q| quat(q.w.into(), q.x.into(), q.y.into(), q.z.into())).collect())
+            }
+            sdf::Value::QuatdVec(v) => Some(v.iter().map(|q| quat(q.w, q.x, q.y, q.z)).collect()),
+            _ => None,
+        })
+    }
+
+    pub(super) fn tokens(&self, prim: &str, name: &str, time: f64) -> Result<Option<Vec<String>>, Failure> {
+        self.array(prim, name, time, "a token array", |v| match v {
+            sdf::Value::TokenVec(v) => Some(v.iter().map(|t| t.as_str().to_string()).collect()),
+            sdf::Value::StringVec(v) => Some(v),
+            _ => None,
+        })
+    }
+
+    /// The attribute's `interpolation` metadata (a primvar's).
+    pub(super) fn interpolation(&self, prim: &str, name: &str) -> Result<Option<String>, Failure> {
+        let attribute = self.stage.attribute(attribute_path(prim, name));
+        let value: Option<sdf::Value> = attribute.get_metadata("interpolation").map_err(|e| failure(&e))?;
+        Ok(value.and_then(|v| text(&v)))
+    }
+
+    /// The targets of relationship `name` of `prim` (paths).
+    pub(super) fn targets(&self, prim: &str, name: &str) -> Result<Vec<String>, Failure> {
+        let relationship = self.stage.relationship(attribute_path(prim, name));
+        let targets = relationship.targets().map_err(|e| failure(&e))?;
+        Ok(targets.iter().map(|p| p.as_str().to_string()).collect())
+    }
+
+    /// The sources attribute `name` of `prim` is connected to
+    /// (`/Material/Shader.outputs:rgb`).
+    pub(super) fn connections(&self, prim: &str, name: &str) -> Result<Vec<String>, Failure> {
+        let attribute = self.stage.attribute(attribute_path(prim, name));
+        let sources = attribute.connections().map_err(|e| failure(&e))?;
+        Ok(sources.iter().map(|p| p.as_str().to_string()).collect())
+    }
+
+    /// The bytes of the asset `asset` names, resolved as USD resolves it:
+    /// relative to the root layer's directory, or inside the root `.usdz`
+    /// package. Returns the file it read (for messages and the scene's
+    /// inputs) too.
+    pub(super) fn asset_bytes(&self, asset: &str, limit: u64) -> Result<(PathBuf, Vec<u8>), Failure> {
+        let root_is_package = self.root.extension().is_some_and(|e| e.eq_ignore_ascii_case("usdz"));
+        let base = self.root.parent().unwrap_or(Path::new("."));
+        let relative = asset.trim_start_matches("./");
+        if root_is_package && !Path::new(asset).is_absolute() && !ar::is_package_relative_path(asset) {
+            let name = format!("{}[{relative}]", self.root.display());
+            let resolver = ar::DefaultResolver::new();
+            let resolved = ar::Resolver::resolve(&resolver, &name)
+                .ok_or_else(|| format!("'{asset}' is not in the package {}", self.root.display()))?;
+            let mut reader = ar::Resolver::open_asset(&resolver, &resolved).map_err(|e| e.to_string())?;
+            let mut bytes = Vec::new();
+            reader.by_ref().take(limit + 1).read_to_end(&mut bytes).map_err(|e| e.to_string())?;
+            if bytes.len() as u64 > limit {
+                return Err(format!("'{asset}' is larger than {limit} bytes"));
+            }
+            return Ok((self.root.clone(), bytes));
+        }
+        let file = base.join(relative);
+        let size = std::fs::metadata(&file).map_err(|e| format!("cannot read '{}': {e}", file.display()))?.len();
+        if size > limit {
+            return Err(format!("'{}' is larger than {limit} bytes", file.display()));
+        }
+        let bytes = std::fs::read(&file).map_err(|e| format!("cannot read '{}': {e}", file.display()))?;
+        Ok((file, bytes))
+    }
+
+    fn typed<T>(
+        &self,
+        prim: &str,
+        name: &str,
+        time: f64,
+        expected: &str,
+        convert: impl FnOnce(sdf::Value) -> Option<T>,
+    ) -> Result<Option<T>, Failure> {
+        match self.value(prim, name, time)? {
+            None => Ok(None),
+            Some(value) => {
+                let kind = format!("{value:?}");
+                let kind: String = kind.chars().take_while(|c| c.is_alphanumeric()).collect();
+                convert(value).map(Some).ok_or_else(|| format!("must be {expected}, got a {kind}"))
+            }
+        }
+    }
+
+    fn array<T>(
+        &self,
+        prim: &str,
+        name: &str,
+        time: f64,
+        expected: &str,
+        convert: impl FnOnce(sdf::Value) -> Option<Vec<T>>,
+    ) -> Result<Option<Vec<T>>, Failure> {
+        let values = self.typed(prim, name, time, expected, convert)?;
+        if values.as_ref().is_some_and(|v| v.len() > MAX_ARRAY) {
+            return Err(format!("holds more than {MAX_ARRAY} elements"));
+        }
+        Ok(values)
+    }
+}
+
+fn number(value: &sdf::Value) -> Option<f64> {
+    Some(match *value {
+        sdf::Value::Float(x) => f64::from(x),
+        sdf::Value::Double(x) => x,
+        sdf::Value::Half(x) => f64::from(x),
+        sdf::Value::Int(x) => f64::from(x),
+        sdf::Value::Int64(x) => x as f64,
+        sdf::Value::Uint(x) => f64::from(x),
+        sdf::Value::Uchar(x) => f64::from(x),
+        sdf::Value::TimeCode(t) => t.value(),
+        _ => return None,
+    })
+}
+
+fn text(value: &sdf::Value) -> Option<String> {
+    match value {
+        sdf::Value::Token(t) => Some(t.as_str().to_string()),
+        sdf::Value::String(s) => Some(s.clone()),
+        _ => None,
+    }
+}
+
+fn vec3(value: &sdf::Value) -> Option<DVec3> {
+    match value {
+        sdf::Value::Vec3f(v) => Some(DVec3::new(v.x.into(), v.y.into(), v.z.into())),
+        sdf::Value::Vec3d(v) => Some(DVec3::new(v.x, v.y, v.z)),
+        sdf::Value::Vec3h(v) => Some(DVec3::new(v.x.into(), v.y.into(), v.z.into())),
+        _ => None,
+    }
+}
+
+fn quat(w: f64, x: f64, y: f64, z: f64) -> DQuat {
+    DQuat::from_xyzw(x, y, z, w)
+}
