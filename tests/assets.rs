@@ -9,7 +9,17 @@ use std::process::Command;
 use lightcuts::scene::Scene;
 
 /// Extensions of the files `Scene::load` reads as scenes.
-const SCENE_EXTENSIONS: [&str; 4] = ["toml", "json", "gltf", "glb"];
+const SCENE_EXTENSIONS: [&str; 8] = ["toml", "json", "gltf", "glb", "usd", "usda", "usdc", "usdz"];
+
+/// Files with a scene's extension that are not scenes: the answers the
+/// tests compare with (`expected.json`), the layers a USD stage composes
+/// (referenced, not rendered by themselves), and the broken files the
+/// tests feed the command line (scenes/usd/broken/).
+fn is_scene(path: &Path) -> bool {
+    let name = path.file_name().and_then(|n| n.to_str()).unwrap_or_default();
+    let broken = path.parent().and_then(Path::file_name).is_some_and(|d| d == "broken");
+    name != "expected.json" && !matches!(name, "asset.usda" | "payload.usda" | "main.usda") && !broken
+}
 
 fn scene_files(dir: &Path, found: &mut Vec<PathBuf>) {
     let mut entries: Vec<PathBuf> = std::fs::read_dir(dir)
@@ -20,7 +30,9 @@ fn scene_files(dir: &Path, found: &mut Vec<PathBuf>) {
     for path in entries {
         if path.is_dir() {
             scene_files(&path, found);
-        } else if path.extension().and_then(|e| e.to_str()).is_some_and(|e| SCENE_EXTENSIONS.contains(&e)) {
+        } else if path.extension().and_then(|e| e.to_str()).is_some_and(|e| SCENE_EXTENSIONS.contains(&e))
+            && is_scene(&path)
+        {
             found.push(path);
         }
     }

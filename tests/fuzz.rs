@@ -1,6 +1,8 @@
-//! A seeded mutation fuzzer for the scene parser, the OBJ loader and the
+//! A seeded mutation fuzzer for the scene parser, the OBJ loader, the
 //! glTF loader (a small glTF with every kind of light, as JSON with an
-//! embedded buffer and as GLB).
+//! embedded buffer and as GLB) and the USD import (a small stage with
+//! every UsdLux light, instances and a point instancer, as `.usda` text and
+//! as a `.usdc` crate file: scenes/usd/fuzz/).
 //!
 //! Each iteration mutates a valid scene (or OBJ) with byte flips, deletions,
 //! duplications and splices of a dictionary of troublesome tokens, loads it
@@ -342,16 +344,20 @@ fn try_input(path: &Path, file: &str) -> Option<Outcome> {
     .ok()
 }
 
-/// Runs the fuzzer; the outcomes of the scene (TOML) mutants and of the
-/// glTF mutants.
-fn fuzz(iterations: u64, seed: u64, deadline: Option<std::time::Instant>) -> (Counts, Counts) {
+/// Runs the fuzzer; the outcomes of the scene (TOML) mutants, of the glTF
+/// mutants and of the USD mutants.
+fn fuzz(iterations: u64, seed: u64, deadline: Option<std::time::Instant>) -> (Counts, Counts, Counts) {
     let temporary = tempfile::tempdir().unwrap();
     let dir = temporary.path();
     std::fs::write(dir.join("m.obj"), OBJ).unwrap();
     let scene_path = dir.join("scene.toml");
     let mut rng = Rng::seeded(seed);
-    let (mut scenes, mut gltfs) = (Counts::default(), Counts::default());
+    let (mut scenes, mut gltfs, mut usds) = (Counts::default(), Counts::default(), Counts::default());
     let (gltf_text, glb) = small_gltf();
+    let stages = common::scenes().join("usd/fuzz");
+    std::fs::copy(stages.join("texture.png"), dir.join("texture.png")).unwrap();
+    let usda = std::fs::read(stages.join("stage.usda")).unwrap();
+    let usdc = std::fs::read(stages.join("stage.usdc")).unwrap();
     for i in 0..iterations {
         if deadline.is_some_and(|d| std::time::Instant::now() >= d) {
             break;
@@ -373,6 +379,33 @@ fn fuzz(iterations: u64, seed: u64, deadline: Option<std::time::Instant>) -> (Co
             };
             gltfs.add(outcome);
         }
+        // USD mutants: the text stage and the crate file, through the
+        // command line first (the reader can abort a process on a corrupt
+        // crate file's counts, which the command catches in a child: it
+        // must exit 0, or 1 with one line naming the file), then, when they
+        // load, in this process to render.
+        for (name, valid) in [("fuzz.usda", &usda), ("fuzz.usdc", &usdc)] {
+            let input = mutate(&mut rng, valid);
+            let path = dir.join(name);
+            std::fs::write(&path, &input).unwrap();
+            let out = common::lightcuts(&["inspect", common::s(&path)]);
+            let stderr = String::from_utf8_lossy(&out.stderr);
+            match out.status.code() {
+                Some(0) => {}
+                Some(1) => {
+                    let errors: Vec<&str> = stderr.lines().filter(|l| l.starts_with("error")).collect();
+                    assert!(errors.len() == 1 && errors[0].contains(name), "iteration {i}: {name}: {stderr}");
+                    usds.add(Outcome::Rejected);
+                    continue;
+                }
+                other => panic!("iteration {i}: {name}: exit {other:?}: {stderr}\n{}", String::from_utf8_lossy(&input)),
+            }
+            assert!(!stderr.contains("panicked"), "iteration {i}: {name}: {stderr}");
+            let Some(outcome) = try_input(&path, name) else {
+                panic!("iteration {i}: panic on {name}:\n{}", String::from_utf8_lossy(&input))
+            };
+            usds.add(outcome);
+        }
         // OBJ mutants.
         let obj = mutate(&mut rng, OBJ.as_bytes());
         let obj_path = dir.join("fuzz.obj");
@@ -381,7 +414,7 @@ fn fuzz(iterations: u64, seed: u64, deadline: Option<std::time::Instant>) -> (Co
             panic!("iteration {i}: panic on OBJ input:\n{}", String::from_utf8_lossy(&obj));
         }
     }
-    (scenes, gltfs)
+    (scenes, gltfs, usds)
 }
 
 /// The glTF the fuzzer mutates: a floor, a point light, a spot, a sun, an
@@ -450,11 +483,11 @@ fn small_gltf() -> (Vec<u8>, Vec<u8>) {
 
 #[test]
 fn scene_and_obj_mutants_never_panic() {
-    let (scenes, gltfs) = fuzz(300, 1, None);
-    println!("TOML mutants: {scenes:?}\nglTF mutants: {gltfs:?}");
+    let (scenes, gltfs, usds) = fuzz(300, 1, None);
+    println!("TOML mutants: {scenes:?}\nglTF mutants: {gltfs:?}\nUSD mutants: {usds:?}");
     // Every path must be exercised: mutants rendered in every mode, and
     // mutants rejected with a message.
-    for (what, counts) in [("TOML", scenes), ("glTF", gltfs)] {
+    for (what, counts) in [("TOML", scenes), ("glTF", gltfs), ("USD", usds)] {
         assert!(counts.rendered > 10 && counts.rejected > 10, "{what} mutants: {counts:?}");
     }
 }
@@ -471,13 +504,13 @@ fn long_fuzz_run() {
         env("LIGHTCUTS_FUZZ_SEED", 2),
     );
     let start = std::time::Instant::now();
-    let (scenes, gltfs) = fuzz(iterations, seed, Some(start + std::time::Duration::from_secs(seconds)));
+    let (scenes, gltfs, usds) = fuzz(iterations, seed, Some(start + std::time::Duration::from_secs(seconds)));
     let iterations = scenes.rendered + scenes.too_big + scenes.geometry_refused + scenes.rejected;
     println!(
-        "{iterations} iterations (seed {seed}) in {:.0} s, each a TOML, a glTF, a GLB and an OBJ mutant; no panic, \
+        "{iterations} iterations (seed {seed}) in {:.0} s, each a TOML, a glTF, a GLB, a USD text, a USD crate and an OBJ mutant; no panic, \
          every rendered value finite.\n  TOML: {} rendered in every mode, {} loaded but too big to render, {} loaded \
          but refused by Embree, {} rejected by the loader\n  glTF and GLB: {} rendered, {} too big, {} refused by \
-         Embree, {} rejected",
+         Embree, {} rejected\n  USD text and crate: {} rendered, {} too big, {} refused by Embree, {} rejected",
         start.elapsed().as_secs_f64(),
         scenes.rendered,
         scenes.too_big,
@@ -486,6 +519,10 @@ fn long_fuzz_run() {
         gltfs.rendered,
         gltfs.too_big,
         gltfs.geometry_refused,
-        gltfs.rejected
+        gltfs.rejected,
+        usds.rendered,
+        usds.too_big,
+        usds.geometry_refused,
+        usds.rejected
     );
 }

@@ -671,7 +671,10 @@ fn the_lobby_matches_cycles() {
 /// are 12% of the image, so direct light alone fails it.
 #[test]
 fn the_lobby_with_paths_matches_cycles_with_bounces() {
-    lobby_matches("cycles-bounces7-8192.exr", &["--stochastic", "--spp", "64", "--indirect", "path", "--max-depth", "8"]);
+    lobby_matches(
+        "cycles-bounces7-8192.exr",
+        &["--stochastic", "--spp", "64", "--indirect", "path", "--max-depth", "8"],
+    );
 }
 
 /// Renders the lobby's glTF file at 160 x 120 with `flags` and holds it to

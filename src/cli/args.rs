@@ -279,6 +279,7 @@ impl PassArgs {
             animation: self.animation.as_deref(),
             time: self.time,
         };
+        super::process::read_usd_in_a_child(path, &options.flags())?;
         let mut scene = Scene::load_with(path, &options)?;
         scene.add_lights(self.environment.as_deref(), self.sun)?;
         scene.set_indirect(self.indirect.as_deref(), self.max_depth)?;

@@ -6,6 +6,7 @@ mod assemble_cmd;
 pub mod bench;
 mod compare_cmd;
 mod farm;
+mod inspect_cmd;
 mod process;
 mod progress;
 mod render_cmd;
@@ -37,6 +38,8 @@ pub enum Command {
     Bench(bench::BenchArgs),
     /// Assemble one frame from the tiles of `render --tile I/N`.
     Assemble(assemble_cmd::AssembleArgs),
+    /// What a scene becomes once loaded (objects, lights, camera), without rendering.
+    Inspect(inspect_cmd::InspectArgs),
 }
 
 /// Everything that can stop a command, each naming its cause.
@@ -77,6 +80,7 @@ pub fn main() -> i32 {
         Command::Bench(args) => bench::run(&args),
         Command::Sweep(args) => sweep_cmd::run(&args),
         Command::Assemble(args) => assemble_cmd::run(&args),
+        Command::Inspect(args) => inspect_cmd::run(&args),
     };
     match result {
         Ok(()) => 0,

@@ -1,8 +1,59 @@
 //! This process's CPU time and resident memory, read from Linux's /proc
 //! (the procfs crate: clock ticks per second from sysconf, not assumed), for
-//! `render --stats` and `bench tree`. None where /proc is unavailable.
+//! `render --stats` and `bench tree`. None where /proc is unavailable. And
+//! the USD stage read once in a child process first, where an abort of the
+//! reader cannot take the command with it.
+
+use std::path::Path;
 
 use procfs::process::{ClearRefs, Process};
+
+use crate::scene::{Scene, SceneError};
+
+/// Set in the child that reads a stage for [`read_usd_in_a_child`], which
+/// must not spawn another.
+const CHILD: &str = "LIGHTCUTS_USD_CHILD";
+
+/// Reads the USD stage `scene` names (if any) in a child process first
+/// (`lightcuts inspect` with the same `flags`): the USD reader (openusd
+/// 0.6) allocates what a crate file's counts say before checking them, and
+/// a corrupt file's absurd count makes the allocation fail, which aborts a
+/// process; so does a stack overflow. A child that dies by a signal is this
+/// scene's error, naming the stage, and nothing is written. A child that
+/// fails otherwise has met an error the load in this process reports
+/// itself. Costs one more read of the stage.
+pub fn read_usd_in_a_child(scene: &Path, flags: &[String]) -> Result<(), SceneError> {
+    use std::os::unix::process::ExitStatusExt;
+    if std::env::var_os(CHILD).is_some() {
+        return Ok(());
+    }
+    let Some(stage) = Scene::usd_stage(scene) else { return Ok(()) };
+    let Ok(exe) = std::env::current_exe() else { return Ok(()) };
+    let status = std::process::Command::new(exe)
+        .arg("inspect")
+        .arg(scene)
+        .args(flags)
+        .env(CHILD, "1")
+        .stdin(std::process::Stdio::null())
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::null())
+        .status();
+    match status {
+        Ok(status) => match status.signal() {
+            Some(signal) => Err(SceneError::new(
+                &stage,
+                "file",
+                format!(
+                    "the USD reader aborted on this file (signal {signal}: a corrupt or hostile file, whose counts ask \
+                     for more memory than there is, or whose nesting overflows the stack)"
+                ),
+            )),
+            None => Ok(()),
+        },
+        // Without a child (no process table), the load goes on in this process.
+        Err(_) => Ok(()),
+    }
+}
 
 /// User plus system CPU time of this process so far, seconds.
 #[must_use]

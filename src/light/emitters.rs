@@ -12,19 +12,27 @@ use crate::scene::EnvironmentMap;
 use crate::util::color::luminance;
 use crate::util::sampling::Rng;
 
-/// Stratified points on the unit square: an n_u x n_v grid (n_u * n_v >= n,
-/// as square as possible) with one jittered point per cell, the first n.
+/// `n` stratified points on the unit square, one jittered point per cell of
+/// equal area 1/n that together tile the square: ceil(sqrt n) rows, each of
+/// as many equal cells as it holds points (the last row may hold fewer),
+/// each row as tall as its share of the points. (A full n_u x n_v grid cut
+/// at n points left its last cells empty: a triangle's few points, folded,
+/// missed the corner at its first vertex, the centre of a fan-triangulated
+/// disk, whose light came out 2.8% short with 5 points a triangle.)
 fn stratified_square(n: usize, rng: &mut Rng) -> Vec<Vec2> {
-    let nu = (n as f64).sqrt().ceil().max(1.0) as usize;
-    let nv = n.div_ceil(nu);
+    let columns = (n as f64).sqrt().ceil().max(1.0) as usize;
+    let rows = n.div_ceil(columns);
     let mut points = Vec::with_capacity(n);
-    'outer: for j in 0..nv {
-        for i in 0..nu {
-            if points.len() == n {
-                break 'outer;
-            }
-            points.push(Vec2::new((i as f32 + rng.next_f32()) / nu as f32, (j as f32 + rng.next_f32()) / nv as f32));
+    let mut bottom = 0.0f32;
+    for j in 0..rows {
+        let cells = columns.min(n - j * columns);
+        let height = cells as f32 / n as f32;
+        for i in 0..cells {
+            let u = (i as f32 + rng.next_f32()) / cells as f32;
+            let v = bottom + height * rng.next_f32();
+            points.push(Vec2::new(u, v.min(1.0)));
         }
+        bottom += height;
     }
     points
 }
@@ -324,6 +332,33 @@ pub fn sample_environment(map: &EnvironmentMap, samples: usize, seed: u64) -> Ve
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Every count tiles the whole square at equal density: each quarter
+    /// of the square holds its share of the points (within one cell's
+    /// worth), and the corner the old grid left empty is covered.
+    #[test]
+    fn stratified_points_cover_the_square_for_any_count() {
+        let mut rng = Rng::from_key(&[7]);
+        for n in [1usize, 2, 3, 5, 7, 10, 17, 100, 250, 256] {
+            let points = stratified_square(n, &mut rng);
+            assert_eq!(points.len(), n);
+            assert!(points.iter().all(|p| (0.0..=1.0).contains(&p.x) && (0.0..=1.0).contains(&p.y)));
+            for (lo, hi) in [(Vec2::ZERO, Vec2::splat(0.5)), (Vec2::splat(0.5), Vec2::ONE)] {
+                let inside = points.iter().filter(|p| p.x >= lo.x && p.x < hi.x && p.y >= lo.y && p.y < hi.y).count();
+                let share = n as f64 / 4.0;
+                // A cell straddling the quarter's edges counts on either side.
+                let slack = 2.0 * (n as f64).sqrt() + 1.0;
+                assert!((inside as f64 - share).abs() <= slack, "n {n}: {inside} points in {lo}..{hi}, share {share}");
+            }
+        }
+        // Five points: a row of three cells 0.6 high, then one of two cells
+        // 0.4 high, so the top right cell [0.5, 1] x [0.6, 1] holds one (the
+        // old 3 x 2 grid left [2/3, 1] x [1/2, 1] empty).
+        for _ in 0..20 {
+            let points = stratified_square(5, &mut rng);
+            assert_eq!(points.iter().filter(|p| p.x > 0.5 && p.y > 0.6).count(), 1, "{points:?}");
+        }
+    }
 
     #[test]
     fn area_light_samples_carry_the_emitters_power() {

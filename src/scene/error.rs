@@ -20,8 +20,8 @@ impl SceneError {
     /// The message is folded onto one line (parsers' messages span several):
     /// one error, one line.
     pub fn new(file: &Path, location: impl Into<String>, message: impl Into<String>) -> Self {
-        let message: String = message.into();
-        let message = message.lines().map(str::trim).filter(|l| !l.is_empty()).collect::<Vec<_>>().join("; ");
-        Self { file: file.to_path_buf(), location: location.into(), message }
+        let fold = |text: String| text.lines().map(str::trim).filter(|l| !l.is_empty()).collect::<Vec<_>>().join("; ");
+        // A location can quote the file (a malformed path a stage authors).
+        Self { file: file.to_path_buf(), location: fold(location.into()), message: fold(message.into()) }
     }
 }

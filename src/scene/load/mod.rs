@@ -37,6 +37,25 @@ pub struct LoadOptions<'a> {
     pub time: Option<f64>,
 }
 
+impl LoadOptions<'_> {
+    /// These options as `lightcuts inspect` takes them on its command line
+    /// (what a child process reading the same scene needs).
+    #[must_use]
+    pub fn flags(&self) -> Vec<String> {
+        let mut flags = Vec::new();
+        if let Some(camera) = self.camera {
+            flags.extend(["--camera".to_string(), camera.to_string()]);
+        }
+        if let Some(time) = self.time {
+            flags.extend(["--time".to_string(), time.to_string()]);
+        }
+        if let Some([open, close]) = self.shutter {
+            flags.extend(["--shutter".to_string(), format!("{open},{close}")]);
+        }
+        flags
+    }
+}
+
 impl Scene {
     /// Reads, parses and validates a scene file (`.json` as JSON, anything
     /// else as TOML).
@@ -150,6 +169,23 @@ impl Scene {
             scene.additions.push(format!("--time {time}"));
         }
         Ok(scene)
+    }
+
+    /// The USD stage a scene file reads: the file itself when it is one,
+    /// else its `[usd]` file (relative to it); None when it reads none, or
+    /// cannot be parsed (loading it then says why).
+    #[must_use]
+    pub fn usd_stage(path: &Path) -> Option<std::path::PathBuf> {
+        let extension = |x: &str| path.extension().is_some_and(|e| e.eq_ignore_ascii_case(x));
+        if ["usd", "usda", "usdc", "usdz"].into_iter().any(extension) {
+            return Some(path.to_path_buf());
+        }
+        if extension("gltf") || extension("glb") {
+            return None;
+        }
+        let text = String::from_utf8(std::fs::read(path).ok()?).ok()?;
+        let spec = if extension("json") { parse_json(path, &text) } else { parse_toml(path, &text) }.ok()?;
+        Some(path.parent().unwrap_or(Path::new(".")).join(spec.usd?.file))
     }
 
     /// Validates a parsed scene file; `path` is used for messages and to

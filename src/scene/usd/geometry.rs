@@ -179,6 +179,18 @@ pub(super) fn mesh(stage: &Stage, prim: &str, time: f64, wanted: &Wanted<'_>) ->
     let st_name = format!("primvars:{}", wanted.st);
     let st = primvar(stage, prim, &st_name, time, &sizes, Interpolation::FaceVarying, Stage::vec2s)?;
     let colors = primvar(stage, prim, "primvars:displayColor", time, &sizes, Interpolation::Constant, Stage::vec3s)?;
+    // A primvar's values reach the film (a texture lookup, a colour): each
+    // must be finite.
+    let finite3 = |p: &Option<Primvar<DVec3>>| p.as_ref().is_none_or(|p| p.values.iter().all(|v| v.is_finite()));
+    for (ok, name) in [
+        (finite3(&normals), "primvars:normals"),
+        (st.as_ref().is_none_or(|p| p.values.iter().all(|v| v.is_finite())), st_name.as_str()),
+        (finite3(&colors), "primvars:displayColor"),
+    ] {
+        if !ok {
+            return Err((at(name), "holds a value that is not finite".into()));
+        }
+    }
 
     // Faces by subset: each subset's faces, then the rest.
     let subsets = material_subsets(stage, prim, time, counts.len())?;

@@ -194,8 +194,20 @@ impl<'s> Materials<'s> {
         Err((format!("{shader}.{attribute}"), "the connections go round in a cycle".into()))
     }
 
-    /// An attribute's value as four numbers (a scalar in x, a colour in xyz).
+    /// An attribute's value as four numbers (a scalar in x, a colour in
+    /// xyz), finite.
     fn value(&self, prim: &str, schema: &str, attribute: &str) -> Result<Option<DVec4>, Located> {
+        let value = self.any_value(prim, schema, attribute)?;
+        if value.is_some_and(|v| !v.is_finite()) {
+            return Err((
+                format!("{prim}.{attribute}"),
+                format!("must be finite, got {:?}", value.unwrap_or_default()),
+            ));
+        }
+        Ok(value)
+    }
+
+    fn any_value(&self, prim: &str, schema: &str, attribute: &str) -> Result<Option<DVec4>, Located> {
         let at = || format!("{prim}.{attribute}");
         let stage = self.stage;
         let t = self.time;

@@ -182,6 +182,24 @@ fn import_stage(
     walker.camera(spec.camera.as_deref(), stage.default_prim().as_deref()).map_err(error)
 }
 
+/// An instance being walked. Its prims are walked where they stand for
+/// the prototype's (an instanceable prim's instance proxies, a point
+/// instancer's prototype itself), under `root`; the same prim of every
+/// instance shares one mesh, keyed by `key` + its path below `root`, and is
+/// named `name` + that path.
+#[derive(Clone)]
+struct Instance {
+    root: String,
+    key: String,
+    name: String,
+}
+
+impl Instance {
+    fn below<'p>(&self, prim: &'p str) -> &'p str {
+        prim.strip_prefix(self.root.as_str()).unwrap_or(prim)
+    }
+}
+
 /// What flows down the hierarchy.
 #[derive(Clone)]
 struct Context {
@@ -192,9 +210,9 @@ struct Context {
     /// The nearest `lightcuts:group` above.
     group: Option<String>,
     depth: usize,
-    /// The instance (or point-instancer entry) being walked, by name: its
-    /// prims are drawn as instances of meshes kept once per prototype.
-    instance: Option<String>,
+    /// The instance (or point-instancer entry) being walked: its prims are
+    /// drawn as instances of meshes kept once per prototype.
+    instance: Option<Instance>,
 }
 
 struct Walker<'a, 'p> {
@@ -277,10 +295,16 @@ impl Walker<'_, '_> {
         here.worlds = self.worlds(prim, &above.worlds)?;
         let type_name = info.type_name.as_str();
         if let Some(prototype) = &info.prototype {
-            // An instance: its prototype's prims, placed by it.
+            // An instance: its prototype's prims, read through the
+            // instance's proxies (openusd 0.6 composes the proxies of an
+            // internal reference's instances, not their prototype's prims).
             let mut inside = here.clone();
-            inside.instance = Some(prim.to_string());
-            for child in stage.children(prototype).map_err(|e| (prototype.clone(), e))? {
+            let name = match &here.instance {
+                Some(outer) => format!("{}{}", outer.name, outer.below(prim)),
+                None => prim.to_string(),
+            };
+            inside.instance = Some(Instance { root: prim.to_string(), key: prototype.clone(), name });
+            for child in stage.children(prim).map_err(|e| (prim.to_string(), e))? {
                 self.walk(&child, &inside)?;
             }
             return Ok(());
@@ -453,11 +477,13 @@ impl Walker<'_, '_> {
             let motion = moving.then(|| Motion {
                 steps: here.worlds.iter().map(|w| Affine3A::from_mat4(w.as_mat4()) * transform.inverse()).collect(),
             });
-            let name = match &here.instance {
-                Some(instance) => format!("{instance}{}", prim.find('/').map_or("", |_| "")),
-                None => prim.to_string(),
+            let (name, key) = match &here.instance {
+                Some(instance) => (
+                    format!("{}{}", instance.name, instance.below(prim)),
+                    format!("{}{}#{}", instance.key, instance.below(prim), mesh.material),
+                ),
+                None => (prim.to_string(), String::new()),
             };
-            let key = format!("{prim}#{}", mesh.material);
             let index = match self.prototypes.get(&key).and_then(|v| v.first()) {
                 Some(&(index, _)) if here.instance.is_some() => index,
                 _ => {
@@ -587,7 +613,7 @@ impl Walker<'_, '_> {
     /// A dome's lat-long texture as the renderer's environment map: USD's
     /// (OpenEXR's) lat-long, turned by the dome's rotation, resampled into
     /// the renderer's own convention (docs/scene-format.md) at the same
-    /// size, by the nearest texel.
+    /// size.
     fn dome_map(
         &mut self,
         prim: &str,
@@ -608,15 +634,24 @@ impl Walker<'_, '_> {
         .map_err(|e| (at.clone(), format!("'{file}': {e}")))?;
         let (width, height) = (image.width, image.height);
         let inverse = rotation.inverse();
+        // Each of the renderer's texels averages 4 x 4 nearest lookups of
+        // the dome's, so that the map's integral survives the turn.
+        const SUB: usize = 4;
         let texels = (0..width * height)
             .map(|p| {
                 let (x, y) = (p % width, p / width);
-                let d = our_direction((x as f64 + 0.5) / width as f64, (y as f64 + 0.5) / height as f64);
-                let local = inverse.transform_vector3(d).normalize_or_zero();
-                let (u, v) = openexr_latlong(local);
-                let sx = ((u * width as f64) as usize).min(width - 1);
-                let sy = ((v * height as f64) as usize).min(height - 1);
-                image.texels[sy * width + sx] * radiance
+                let mut sum = Vec3::ZERO;
+                for k in 0..SUB * SUB {
+                    let (sx, sy) = ((k % SUB) as f64 + 0.5, (k / SUB) as f64 + 0.5);
+                    let u = (x as f64 + sx / SUB as f64) / width as f64;
+                    let v = (y as f64 + sy / SUB as f64) / height as f64;
+                    let local = inverse.transform_vector3(our_direction(u, v)).normalize_or_zero();
+                    let (u, v) = openexr_latlong(local);
+                    let tx = ((u * width as f64) as usize).min(width - 1);
+                    let ty = ((v * height as f64) as usize).min(height - 1);
+                    sum += image.texels[ty * width + tx];
+                }
+                sum / (SUB * SUB) as f32 * radiance
             })
             .collect();
         Ok(EnvironmentMap::LatLong { width, height, texels, scale: 1.0 })
@@ -678,7 +713,9 @@ impl Walker<'_, '_> {
             let placement = DMat4::from_scale_rotation_translation(scale, rotation, positions[k]);
             let mut inside = here.clone();
             inside.depth += 1;
-            inside.instance = Some(format!("{prim}[{k}]"));
+            let parent = prototype.rfind('/').map_or("", |i| &prototype[..i]);
+            inside.instance =
+                Some(Instance { root: parent.to_string(), key: parent.to_string(), name: format!("{prim}[{k}]") });
             inside.worlds = here.worlds.iter().map(|w| *w * placement).collect();
             self.walk(prototype, &inside)?;
         }

@@ -46,8 +46,34 @@ fn failure(e: &impl std::fmt::Display) -> Failure {
 /// hostile file's counts are refused before anything is made of them.
 pub(super) const MAX_ARRAY: usize = 1 << 28;
 
-fn attribute_path(prim: &str, name: &str) -> String {
-    format!("{prim}.{name}")
+/// `prim.name`, once both are checked well-formed (see [`checked`]).
+fn attribute_path(prim: &str, name: &str) -> Result<String, Failure> {
+    let name_ok = !name.is_empty() && name.split(':').all(identifier);
+    if !name_ok {
+        return Err(format!("'{name}' is not a property name"));
+    }
+    Ok(format!("{}.{name}", checked(prim)?))
+}
+
+/// Whether `name` is a USD identifier: a letter or `_`, then letters,
+/// digits and `_`.
+fn identifier(name: &str) -> bool {
+    let mut chars = name.chars();
+    chars.next().is_some_and(|c| c.is_ascii_alphabetic() || c == '_')
+        && chars.all(|c| c.is_ascii_alphanumeric() || c == '_')
+}
+
+/// `path` if it is an absolute prim path of identifiers (`/World/Ball`):
+/// the reader does not check the paths it is handed, and a malformed one
+/// (a connection a corrupt file authors, say) sent it into unbounded
+/// recursion in the fuzzer.
+fn checked(path: &str) -> Result<&str, Failure> {
+    let ok = path == "/" || (path.starts_with('/') && path[1..].split('/').all(identifier));
+    if ok {
+        Ok(path)
+    } else {
+        Err(format!("'{path}' is not a prim path"))
+    }
 }
 
 impl Stage {
@@ -97,13 +123,13 @@ impl Stage {
 
     /// The children's paths of `path`, in the stage's order.
     pub(super) fn children(&self, path: &str) -> Result<Vec<String>, Failure> {
-        let prim = self.stage.prim(path);
+        let prim = self.stage.prim(checked(path)?);
         let children = prim.children().map_err(|e| failure(&e))?;
         Ok(children.iter().map(|c| c.path().as_str().to_string()).collect())
     }
 
     pub(super) fn prim(&self, path: &str) -> Result<PrimInfo, Failure> {
-        let prim = self.stage.prim(path);
+        let prim = self.stage.prim(checked(path)?);
         let f = |e| failure(&e);
         let valid = prim.is_valid().map_err(f)?;
         if !valid {
@@ -123,14 +149,14 @@ impl Stage {
 
     /// The names of the prim's properties (attributes and relationships).
     pub(super) fn property_names(&self, path: &str) -> Result<Vec<String>, Failure> {
-        let names = self.stage.prim(path).property_names().map_err(|e| failure(&e))?;
+        let names = self.stage.prim(checked(path)?).property_names().map_err(|e| failure(&e))?;
         Ok(names.iter().map(|n| n.as_str().to_string()).collect())
     }
 
     /// The raw value of attribute `name` of `prim` at `time` (its default
     /// value when it has no time samples); None when nothing is authored.
     fn value(&self, prim: &str, name: &str, time: f64) -> Result<Option<sdf::Value>, Failure> {
-        let attribute = self.stage.attribute(attribute_path(prim, name));
+        let attribute = self.stage.attribute(attribute_path(prim, name)?);
         let value: Option<sdf::Value> = attribute.get_at(usd::TimeCode::new(time)).map_err(|e| failure(&e))?;
         Ok(value.filter(|v| !matches!(v, sdf::Value::ValueBlock | sdf::Value::None)))
     }
@@ -142,7 +168,7 @@ impl Stage {
 
     /// Whether the attribute has more than one time sample.
     pub(super) fn varies(&self, prim: &str, name: &str) -> Result<bool, Failure> {
-        let attribute = self.stage.attribute(attribute_path(prim, name));
+        let attribute = self.stage.attribute(attribute_path(prim, name)?);
         Ok(attribute.num_time_samples().map_err(|e| failure(&e))? > 1)
     }
 
@@ -267,14 +293,14 @@ impl Stage {
 
     /// The attribute's `interpolation` metadata (a primvar's).
     pub(super) fn interpolation(&self, prim: &str, name: &str) -> Result<Option<String>, Failure> {
-        let attribute = self.stage.attribute(attribute_path(prim, name));
+        let attribute = self.stage.attribute(attribute_path(prim, name)?);
         let value: Option<sdf::Value> = attribute.get_metadata("interpolation").map_err(|e| failure(&e))?;
         Ok(value.and_then(|v| text(&v)))
     }
 
     /// The targets of relationship `name` of `prim` (paths).
     pub(super) fn targets(&self, prim: &str, name: &str) -> Result<Vec<String>, Failure> {
-        let relationship = self.stage.relationship(attribute_path(prim, name));
+        let relationship = self.stage.relationship(attribute_path(prim, name)?);
         let targets = relationship.targets().map_err(|e| failure(&e))?;
         Ok(targets.iter().map(|p| p.as_str().to_string()).collect())
     }
@@ -282,7 +308,7 @@ impl Stage {
     /// The sources attribute `name` of `prim` is connected to
     /// (`/Material/Shader.outputs:rgb`).
     pub(super) fn connections(&self, prim: &str, name: &str) -> Result<Vec<String>, Failure> {
-        let attribute = self.stage.attribute(attribute_path(prim, name));
+        let attribute = self.stage.attribute(attribute_path(prim, name)?);
         let sources = attribute.connections().map_err(|e| failure(&e))?;
         Ok(sources.iter().map(|p| p.as_str().to_string()).collect())
     }

@@ -1,0 +1,137 @@
+//! `lightcuts inspect`: what a scene file becomes once loaded (objects
+//! with their world bounds, light sources, the camera, the environment,
+//! the warnings), without rendering: how a user checks what an importer
+//! made of a glTF file or a USD stage, and how the tests compare an
+//! import with another reader's evaluation of the same file.
+
+use std::path::PathBuf;
+
+use clap::Args;
+use serde_json::json;
+
+use super::CliError;
+use crate::scene::{EnvironmentMap, LightSource, LoadOptions, Scene};
+
+#[derive(Debug, Args)]
+pub struct InspectArgs {
+    /// Scene file (TOML, JSON, glTF or USD).
+    pub scene: PathBuf,
+    /// The glTF camera (name or #N) or USD camera (prim path) to load.
+    #[arg(long, value_name = "NAME|#N|/PATH")]
+    pub camera: Option<String>,
+    /// The USD stage's time code to read.
+    #[arg(long, value_name = "T", allow_hyphen_values = true)]
+    pub time: Option<f64>,
+    /// Open the shutter from OPEN to CLOSE (as `render --shutter`).
+    #[arg(long, value_name = "OPEN,CLOSE", value_parser = super::args::parse_shutter, allow_hyphen_values = true)]
+    pub shutter: Option<[f32; 2]>,
+    /// Print JSON.
+    #[arg(long)]
+    pub json: bool,
+}
+
+pub fn run(args: &InspectArgs) -> Result<(), CliError> {
+    let options = LoadOptions {
+        camera: args.camera.as_deref(),
+        time: args.time,
+        shutter: args.shutter,
+        ..LoadOptions::default()
+    };
+    super::process::read_usd_in_a_child(&args.scene, &options.flags())?;
+    let scene = Scene::load_with(&args.scene, &options)?;
+    let report = report(&scene);
+    if args.json {
+        println!("{}", serde_json::to_string_pretty(&report).expect("plain values serialise"));
+        return Ok(());
+    }
+    println!("scene        {}", scene.path.display());
+    println!("film         {} x {}, {} spp", scene.film.width, scene.film.height, scene.film.spp);
+    let c = &scene.camera_spec;
+    println!("camera       eye {:?} looking at {:?}, up {:?}, {} degrees vertical", c.eye, c.look_at, c.up, c.fov_y);
+    println!(
+        "objects      {} ({} triangles drawn, {} stored)",
+        scene.objects.len(),
+        scene.triangle_count(),
+        scene.stored_triangle_count()
+    );
+    for object in &report["objects"].as_array().cloned().unwrap_or_default() {
+        println!("  {}  {}  {}", object["name"], object["min"], object["max"]);
+    }
+    println!("lights       {}", scene.lights.len());
+    for light in report["lights"].as_array().cloned().unwrap_or_default() {
+        println!("  {light}");
+    }
+    println!("environment  {}", report["environment"]);
+    for warning in &scene.warnings {
+        println!("warning: {warning}");
+    }
+    Ok(())
+}
+
+/// The scene as JSON: every object's name and world bounds (metres), every
+/// light source, the camera, the environment, the warnings.
+fn report(scene: &Scene) -> serde_json::Value {
+    let objects: Vec<serde_json::Value> = scene
+        .objects
+        .iter()
+        .map(|object| {
+            let (lo, hi) = crate::scene::object::world_bounds(&scene.meshes, std::slice::from_ref(object));
+            json!({
+                "name": object.name,
+                "mesh": object.mesh,
+                "instance": object.transform.is_some(),
+                "moves": object.motion.is_some(),
+                "triangles": scene.meshes[object.mesh].triangles.len(),
+                "material": scene.materials[scene.meshes[object.mesh].material].name,
+                "min": lo.to_array(),
+                "max": hi.to_array(),
+            })
+        })
+        .collect();
+    let lights: Vec<serde_json::Value> = scene
+        .lights
+        .iter()
+        .map(|light| match *light {
+            LightSource::Point { position, intensity } => {
+                json!({ "kind": "point", "position": position.to_array(), "intensity": intensity.to_array() })
+            }
+            LightSource::MovingPoint { start, end, intensity } => json!({
+                "kind": "moving point", "start": start.to_array(), "end": end.to_array(), "intensity": intensity.to_array()
+            }),
+            LightSource::Spot { position, direction, intensity, inner_angle_degrees, outer_angle_degrees } => json!({
+                "kind": "spot", "position": position.to_array(), "direction": direction.to_array(),
+                "intensity": intensity.to_array(), "inner_degrees": inner_angle_degrees, "outer_degrees": outer_angle_degrees
+            }),
+            LightSource::Grid { count, intensity, .. } => {
+                json!({ "kind": "grid", "count": count, "intensity": intensity.to_array() })
+            }
+            LightSource::Area { mesh, radiance, samples, both_sides, .. } => json!({
+                "kind": "area", "mesh": scene.meshes[mesh].name, "radiance": radiance.to_array(),
+                "area": scene.meshes[mesh].surface_area(), "samples": samples, "both_sides": both_sides
+            }),
+            LightSource::Sun { direction, irradiance, angular_radius_degrees, .. } => json!({
+                "kind": "sun", "direction": direction.to_array(), "irradiance": irradiance.to_array(),
+                "angular_radius_degrees": angular_radius_degrees
+            }),
+        })
+        .collect();
+    let environment = match scene.environment.as_ref().map(|e| &e.map) {
+        None => json!(null),
+        Some(EnvironmentMap::Constant(c)) => json!({ "constant": c.to_array() }),
+        Some(EnvironmentMap::LatLong { width, height, scale, .. }) => {
+            json!({ "latlong": [width, height], "scale": scale })
+        }
+    };
+    let c = &scene.camera_spec;
+    json!({
+        "film": { "width": scene.film.width, "height": scene.film.height, "spp": scene.film.spp },
+        "camera": {
+            "eye": c.eye, "look_at": c.look_at, "up": c.up, "fov_y": c.fov_y,
+            "lens_radius": c.lens_radius, "focus_distance": c.focus_distance, "shutter": c.shutter
+        },
+        "objects": objects,
+        "lights": lights,
+        "environment": environment,
+        "warnings": scene.warnings,
+    })
+}

@@ -1,0 +1,269 @@
+//! USD stages (docs/scene-format.md, "USD") against answers that do not
+//! come from this renderer: stages written by Pixar's usd-core with what
+//! each should render as (scenes/usd/make_fixtures.py: the UsdLux
+//! schema's units and closed forms; usd-core's own evaluation of a
+//! composed, packaged stage), and the Blender lobby exported as USD
+//! against its glTF export and Cycles.
+
+mod common;
+
+use common::{channel, lightcuts, lightcuts_fails, lightcuts_ok, render, s, scenes, TempDir};
+
+/// The mean R, G, B over an image.
+fn mean_rgb(image: &common::ExrImage) -> [f64; 3] {
+    ["R", "G", "B"].map(|c| {
+        let values = channel(image, c);
+        values.iter().map(|&v| f64::from(v)).sum::<f64>() / values.len() as f64
+    })
+}
+
+/// Each UsdLux light (and an emissive mesh) over a Lambertian floor of
+/// albedo rho, in Y-up metres and Z-up centimetres, normalised or not: the
+/// irradiance E = pi L / rho the camera sees at its point, per channel,
+/// against the schema's closed form, within 1% (2% for the textured dome,
+/// whose map becomes 4,096 directional lights), in the exact and the
+/// stochastic modes. A light read in the wrong units, at the wrong
+/// fallback or normalised by the wrong area is off by a factor, not a
+/// percent.
+#[test]
+fn every_usdlux_light_matches_its_closed_form_in_the_schema_s_units() {
+    let dir = TempDir::new("usd-lights");
+    let folder = scenes().join("usd/lights");
+    let expected: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(folder.join("expected.json")).unwrap()).unwrap();
+    let albedo = expected["albedo"].as_f64().unwrap();
+    let mut failures = Vec::new();
+    let stages = expected["irradiance"].as_object().unwrap();
+    assert!(stages.len() >= 12, "{} stages", stages.len());
+    for (stage, cameras) in stages {
+        for (camera, want) in cameras.as_object().unwrap() {
+            let want: Vec<f64> = want.as_array().unwrap().iter().map(|v| v.as_f64().unwrap()).collect();
+            let tolerance = if stage == "dome_texture" { 0.02 } else { 0.01 };
+            // The stage through a TOML that asks for 4,096 points per area
+            // light (the default 256 are a quadrature off by up to 1% at
+            // these distances: docs/measurements.md).
+            let path = dir.write(
+                &format!("{stage}.toml"),
+                &format!("[usd]\nfile = {:?}\nemitter_samples = 4096\n", s(&folder.join(format!("{stage}.usda")))),
+            );
+            for mode in [&["--exact", "--spp", "4"][..], &["--stochastic", "--spp", "64"][..]] {
+                let mut flags = vec!["--camera", camera.as_str(), "--resolution", "8x8", "--aovs", "none"];
+                flags.extend_from_slice(mode);
+                let image = render(&path, &dir.path("out.exr"), &flags);
+                let got = mean_rgb(&image).map(|l| std::f64::consts::PI * l / albedo);
+                let error = (0..3).map(|k| (got[k] - want[k]).abs() / want[k]).fold(0.0, f64::max);
+                eprintln!("{stage} {camera} {mode:?}: E {got:.5?}, closed form {want:.5?}, {:.3}%", 100.0 * error);
+                if error > tolerance {
+                    failures.push(format!("{stage} {camera} {mode:?}: {got:?} vs {want:?}"));
+                }
+            }
+        }
+    }
+    assert!(failures.is_empty(), "{failures:#?}");
+}
+
+/// A packaged stage that composes (a reference, a payload with a variant
+/// selected, three instanceable references, a textured quad): the objects
+/// `lightcuts inspect` reports are usd-core's drawn gprims, by the paths
+/// usd-core gives them (an instance's prims under the instance), each with
+/// usd-core's world bounds within 1e-4 m (the spheres are tessellated
+/// through their poles and equator, whose extremes are the sphere's).
+#[test]
+fn a_composed_usdz_package_has_usd_core_s_objects_where_usd_core_puts_them() {
+    let folder = scenes().join("usd/composition");
+    let expected: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(folder.join("expected.json")).unwrap()).unwrap();
+    let expected = expected["objects"].as_object().unwrap();
+    let report = lightcuts_ok(&["inspect", s(&folder.join("composition.usdz")), "--json"]);
+    let report: serde_json::Value = serde_json::from_str(&report).unwrap();
+    let objects = report["objects"].as_array().unwrap();
+    let names: Vec<&str> = objects.iter().map(|o| o["name"].as_str().unwrap()).collect();
+    let mut want: Vec<&str> = expected.keys().map(String::as_str).collect();
+    let mut got = names.clone();
+    want.sort_unstable();
+    got.sort_unstable();
+    assert_eq!(got, want, "the objects differ from usd-core's gprims");
+    for object in objects {
+        let name = object["name"].as_str().unwrap();
+        let bounds = &expected[name];
+        for (k, corner) in ["min", "max"].into_iter().enumerate() {
+            for axis in 0..3 {
+                let (ours, theirs) = (object[corner][axis].as_f64().unwrap(), bounds[k][axis].as_f64().unwrap());
+                assert!((ours - theirs).abs() < 1e-4, "{name} {corner}[{axis}]: {ours} vs usd-core's {theirs}");
+            }
+        }
+    }
+    // The three instances share one prototype's meshes through Embree instances.
+    let instances = objects.iter().filter(|o| o["instance"].as_bool().unwrap()).count();
+    assert_eq!(instances, 6, "{report}");
+    // And it renders: the texture is read from inside the package.
+    let dir = TempDir::new("usd-composition");
+    let image = render(&folder.join("composition.usdz"), &dir.path("out.exr"), &["--resolution", "48x32"]);
+    assert!(mean_rgb(&image).iter().all(|&c| c > 0.0));
+}
+
+/// The lobby (scenes/lobby/) exported by Blender 5.0's own USD exporter
+/// renders as its glTF export does (mean within 1%, measured 0.00%) and
+/// within 1.5% of Cycles' render of the .blend (measured 0.65%, the glTF
+/// export's own difference).
+#[test]
+fn the_lobby_exported_as_usd_renders_as_its_gltf_export_and_as_cycles() {
+    let dir = TempDir::new("usd-lobby");
+    let lobby = scenes().join("lobby");
+    let flags = ["--exact", "--spp", "8", "--resolution", "160x120"];
+    let usd = render(&lobby.join("lobby.usdc"), &dir.path("usd.exr"), &flags);
+    let gltf = render(&scenes().join("lobby.toml"), &dir.path("gltf.exr"), &flags);
+    let cycles = common::read_exr(&lobby.join("cycles_2048.exr")).unwrap();
+    let mean = |image: &common::ExrImage| common::luminance(image).iter().sum::<f64>();
+    let against_gltf = mean(&usd) / mean(&gltf);
+    let against_cycles = mean(&usd) / mean(&cycles);
+    eprintln!("lobby.usdc: mean {against_gltf:.5} x the glTF export's, {against_cycles:.5} x Cycles'");
+    assert!((against_gltf - 1.0).abs() < 0.01, "{against_gltf}");
+    assert!((against_cycles - 1.0).abs() < 0.015, "{against_cycles}");
+}
+
+/// A prim that moves over its time samples blurs under `--shutter` (in
+/// time codes), and `--time` reads the stage at one time code: the sphere
+/// at frame 1 and at frame 24 lands where its samples put it, and the same
+/// bits come for any thread count.
+#[test]
+fn time_samples_move_a_prim_under_the_shutter_and_time_picks_a_frame() {
+    let dir = TempDir::new("usd-time");
+    let stage = dir.write(
+        "moving.usda",
+        r#"#usda 1.0
+(
+    defaultPrim = "World"
+    metersPerUnit = 1
+    upAxis = "Y"
+    startTimeCode = 1
+    endTimeCode = 24
+)
+def Xform "World"
+{
+    def Sphere "Ball"
+    {
+        double radius = 0.5
+        double3 xformOp:translate.timeSamples = { 1: (-2, 0.5, 0), 24: (2, 0.5, 0) }
+        uniform token[] xformOpOrder = ["xformOp:translate"]
+    }
+    def Camera "Camera"
+    {
+        float focalLength = 35
+        float horizontalAperture = 36
+        float verticalAperture = 24
+        double3 xformOp:translate = (0, 1, 8)
+        uniform token[] xformOpOrder = ["xformOp:translate"]
+    }
+    def DomeLight "Sky"
+    {
+        float inputs:intensity = 1
+    }
+}
+"#,
+    );
+    let at = |time: &str| {
+        let report = lightcuts_ok(&["inspect", s(&stage), "--time", time, "--json"]);
+        let report: serde_json::Value = serde_json::from_str(&report).unwrap();
+        let ball = report["objects"].as_array().unwrap().iter().find(|o| o["name"] == "/World/Ball").unwrap().clone();
+        0.5 * (ball["min"][0].as_f64().unwrap() + ball["max"][0].as_f64().unwrap())
+    };
+    assert!((at("1") + 2.0).abs() < 1e-5, "{}", at("1"));
+    assert!((at("24") - 2.0).abs() < 1e-5);
+    // Halfway between the samples, linearly.
+    assert!((at("12.5") - 0.0).abs() < 1e-5, "{}", at("12.5"));
+    // Without --time: the stage's start.
+    let report: serde_json::Value = serde_json::from_str(&lightcuts_ok(&["inspect", s(&stage), "--json"])).unwrap();
+    assert!(report["objects"][0]["min"][0].as_f64().unwrap() < -2.4);
+    // Under the shutter the ball is an instance with motion, and blurs.
+    let report: serde_json::Value =
+        serde_json::from_str(&lightcuts_ok(&["inspect", s(&stage), "--shutter", "1,24", "--json"])).unwrap();
+    assert_eq!(report["objects"][0]["moves"], true, "{report}");
+    let flags = ["--resolution", "96x64", "--spp", "16", "--stochastic", "--shutter", "1,24"];
+    let blurred = render(&stage, &dir.path("blurred.exr"), &flags);
+    let still = render(&stage, &dir.path("still.exr"), &["--resolution", "96x64", "--spp", "16", "--stochastic"]);
+    assert!(common::mean_relative_error(&blurred, &still) > 0.05);
+    common::assert_same_bits_for_any_threads_and_window(&dir, &stage, 96, &flags);
+}
+
+/// What a stage says that is not in the schemas, or breaks them: a clear
+/// error naming the file and the prim (or the file's part), exit code 1, no
+/// output, no panic.
+#[test]
+fn broken_stages_fail_with_the_file_and_the_prim_named() {
+    let dir = TempDir::new("usd-broken");
+    let lights = scenes().join("usd/lights");
+    let bad = |name: &str, text: &str| dir.write(name, text);
+    let header = "#usda 1.0\n(\n    metersPerUnit = 1\n)\n";
+    let cases: Vec<(std::path::PathBuf, &str)> = vec![
+        (bad("negative.usda", &format!("{header}def SphereLight \"L\"\n{{\n    float inputs:intensity = -3\n}}\n")), "/L.inputs:intensity"),
+        (
+            bad("indices.usda", &format!("{header}def Mesh \"M\"\n{{\n    point3f[] points = [(0,0,0),(1,0,0),(0,1,0)]\n    int[] faceVertexCounts = [3]\n    int[] faceVertexIndices = [0, 1, 7]\n}}\n")),
+            "/M.faceVertexIndices",
+        ),
+        (
+            bad("counts.usda", &format!("{header}def Mesh \"M\"\n{{\n    point3f[] points = [(0,0,0),(1,0,0),(0,1,0)]\n    int[] faceVertexCounts = [4]\n    int[] faceVertexIndices = [0, 1, 2]\n}}\n")),
+            "/M.faceVertexCounts",
+        ),
+        (
+            bad("primvar.usda", &format!("{header}def Mesh \"M\"\n{{\n    point3f[] points = [(0,0,0),(1,0,0),(0,1,0)]\n    int[] faceVertexCounts = [3]\n    int[] faceVertexIndices = [0, 1, 2]\n    texCoord2f[] primvars:st = [(0,0)] (\n        interpolation = \"faceVarying\"\n    )\n}}\n")),
+            "/M.primvars:st",
+        ),
+        (bad("xform.usda", &format!("{header}def Xform \"X\"\n{{\n    uniform token[] xformOpOrder = [\"xformOp:translate\"]\n}}\n")), "/X.xformOp:translate"),
+        (bad("reference.usda", &format!("{header}def Xform \"X\" (\n    references = @./missing.usda@\n)\n{{\n}}\n")), "missing.usda"),
+        (bad("texture.usda", &format!("{header}def DomeLight \"D\"\n{{\n    asset inputs:texture:file = @./missing.exr@\n}}\n")), "/D.inputs:texture:file"),
+        (bad("camera.usda", &format!("{header}def Camera \"C\"\n{{\n    token projection = \"orthographic\"\n}}\n")), "/C.projection"),
+    ];
+    for (path, location) in cases {
+        let out = dir.path("out.exr");
+        let stderr = lightcuts_fails(&["render", s(&path), "-o", s(&out)]);
+        let file = path.file_name().unwrap().to_string_lossy().into_owned();
+        assert!(stderr.contains(&file) && stderr.contains(location), "{file}: expected '{location}' in: {stderr}");
+        assert!(!out.exists(), "{file}: an output was written");
+    }
+    // Truncated and corrupted crate files, and a .usdz whose zip is broken.
+    let crate_bytes = std::fs::read(scenes().join("lobby/lobby.usdc")).unwrap();
+    let package = std::fs::read(scenes().join("usd/composition/composition.usdz")).unwrap();
+    let mut corrupted = crate_bytes.clone();
+    for k in (64..corrupted.len()).step_by(97) {
+        corrupted[k] ^= 0x5a;
+    }
+    let broken: Vec<(&str, Vec<u8>)> = vec![
+        ("truncated.usdc", crate_bytes[..crate_bytes.len() / 3].to_vec()),
+        ("header.usdc", crate_bytes[..40].to_vec()),
+        ("corrupted.usdc", corrupted),
+        ("empty.usda", Vec::new()),
+        ("zip.usdz", package[..package.len() / 2].to_vec()),
+    ];
+    for (name, bytes) in broken {
+        let path = dir.path(name);
+        std::fs::write(&path, bytes).unwrap();
+        let out = dir.path("out.exr");
+        let stderr = lightcuts_fails(&["render", s(&path), "-o", s(&out), "--resolution", "8x8"]);
+        assert!(stderr.contains(name), "{name}: {stderr}");
+        assert!(!out.exists());
+    }
+    // A crate file whose one corrupt byte (byte 663 of scenes/usd/fuzz/
+    // stage.usdc set to 207, found by the fuzzer) makes an array's count
+    // ask for 3.5 TB: the reader's allocation fails, which aborts the
+    // process it runs in, so the command reads stages in a child first.
+    let huge = scenes().join("usd/broken/huge-count.usdc");
+    let out = dir.path("huge.exr");
+    let stderr = lightcuts_fails(&["render", s(&huge), "-o", s(&out), "--resolution", "8x8"]);
+    assert!(stderr.contains("huge-count.usdc") && stderr.contains("aborted"), "{stderr}");
+    assert!(!out.exists());
+    // Read in this process the same file does abort it (so the child is needed).
+    let child = std::process::Command::new(env!("CARGO_BIN_EXE_lightcuts"))
+        .args(["inspect", s(&huge)])
+        .env("LIGHTCUTS_USD_CHILD", "1")
+        .output()
+        .unwrap();
+    assert!(std::os::unix::process::ExitStatusExt::signal(&child.status).is_some(), "{:?}", child.status);
+    // A reference cycle is refused, not followed forever.
+    dir.write("a.usda", &format!("{header}def Xform \"A\" (\n    references = @./b.usda@</B>\n)\n{{\n}}\n"));
+    let b = dir.write("b.usda", &format!("{header}def Xform \"B\" (\n    references = @./a.usda@</A>\n)\n{{\n}}\n"));
+    let stderr = lightcuts_fails(&["render", s(&b), "-o", s(&dir.path("out.exr"))]);
+    assert!(stderr.contains("b.usda"), "{stderr}");
+    // The fixtures themselves load (so the cases above fail for their fault).
+    assert!(lightcuts(&["inspect", s(&lights.join("sphere.usda"))]).status.success());
+}
