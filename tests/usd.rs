@@ -267,3 +267,180 @@ fn broken_stages_fail_with_the_file_and_the_prim_named() {
     // The fixtures themselves load (so the cases above fail for their fault).
     assert!(lightcuts(&["inspect", s(&lights.join("sphere.usda"))]).status.success());
 }
+
+/// UsdPreviewSurface's texture network as the schema defines it, seen
+/// through emission (the camera sees an emissive surface's radiance as
+/// is): a 2 x 2 sRGB PNG read through UsdUVTexture's `rgb` and `r`
+/// outputs with its `scale` and `bias`, on a quad that fills a 2 x 2 film
+/// so that each pixel's centre is a texel's centre. Each pixel is the
+/// texel, decoded from sRGB, times the scale plus the bias.
+#[test]
+fn a_texture_s_channels_scale_and_bias_are_the_schema_s() {
+    let dir = TempDir::new("usd-texture");
+    // Four 8 x 8 blocks (row 0 at the top): red, green / blue, grey 128,
+    // on a 16 x 16 film: a pixel at least one pixel from a block's edge
+    // reads its block's colour wherever its sample falls (bilinear reads
+    // the four nearest texels), and the texture clamps at its edges.
+    let png = [[[255u8, 0, 0], [0, 255, 0]], [[0, 0, 255], [128, 128, 128]]];
+    let texels: Vec<u8> = (0..16).flat_map(|y| (0..16).flat_map(move |x| png[y / 8][x / 8])).collect();
+    let mut encoder = png::Encoder::new(std::fs::File::create(dir.path("t.png")).unwrap(), 16, 16);
+    encoder.set_color(png::ColorType::Rgb);
+    encoder.write_header().unwrap().write_image_data(&texels).unwrap();
+    let srgb = |v: u8| {
+        let c = f64::from(v) / 255.0;
+        if c <= 0.04045 {
+            c / 12.92
+        } else {
+            ((c + 0.055) / 1.055).powf(2.4)
+        }
+    };
+    for (output, scale, bias) in [("rgb", [2.0, 1.0, 0.5], [0.1, 0.0, 0.2]), ("r", [3.0, 3.0, 3.0], [0.0, 0.05, 0.0])] {
+        let kind = if output == "rgb" { "float3" } else { "float" };
+        let stage = dir.write(
+            "textured.usda",
+            &format!(
+                r#"#usda 1.0
+(
+    metersPerUnit = 1
+    upAxis = "Y"
+)
+def Xform "World"
+{{
+    def Mesh "Quad" (
+        prepend apiSchemas = ["MaterialBindingAPI"]
+    )
+    {{
+        int[] faceVertexCounts = [4]
+        int[] faceVertexIndices = [0, 1, 2, 3]
+        point3f[] points = [(-1, -1, -5), (1, -1, -5), (1, 1, -5), (-1, 1, -5)]
+        texCoord2f[] primvars:st = [(0, 0), (1, 0), (1, 1), (0, 1)] (
+            interpolation = "vertex"
+        )
+        uniform token subdivisionScheme = "none"
+        rel material:binding = </World/Looks/Glow>
+    }}
+    def Scope "Looks"
+    {{
+        def Material "Glow"
+        {{
+            token outputs:surface.connect = </World/Looks/Glow/Surface.outputs:surface>
+            def Shader "Surface"
+            {{
+                uniform token info:id = "UsdPreviewSurface"
+                color3f inputs:diffuseColor = (0, 0, 0)
+                color3f inputs:emissiveColor.connect = </World/Looks/Glow/Texture.outputs:{output}>
+                token outputs:surface
+            }}
+            def Shader "Texture"
+            {{
+                uniform token info:id = "UsdUVTexture"
+                asset inputs:file = @t.png@
+                token inputs:sourceColorSpace = "sRGB"
+                token inputs:wrapS = "clamp"
+                token inputs:wrapT = "clamp"
+                float4 inputs:scale = ({}, {}, {}, 1)
+                float4 inputs:bias = ({}, {}, {}, 0)
+                float2 inputs:st.connect = </World/Looks/Glow/Reader.outputs:result>
+                {kind} outputs:{output}
+            }}
+            def Shader "Reader"
+            {{
+                uniform token info:id = "UsdPrimvarReader_float2"
+                string inputs:varname = "st"
+                float2 outputs:result
+            }}
+        }}
+    }}
+    def Camera "Camera"
+    {{
+        float focalLength = 50
+        float horizontalAperture = 20
+        float verticalAperture = 20
+    }}
+}}
+"#,
+                scale[0], scale[1], scale[2], bias[0], bias[1], bias[2]
+            ),
+        );
+        let image = render(&stage, &dir.path("out.exr"), &["--resolution", "16x16", "--exact", "--aovs", "none"]);
+        let [r, g, b] = ["R", "G", "B"].map(|c| channel(&image, c));
+        for (y, x) in (0..16).flat_map(|y| (0..16).map(move |x| (y, x))) {
+            // Pixels beside a block's edge blend two blocks.
+            if [y, x].iter().any(|&v| matches!(v, 7 | 8)) {
+                continue;
+            }
+            let linear = png[y / 8][x / 8].map(srgb);
+            let want: Vec<f64> =
+                (0..3).map(|k| if output == "rgb" { linear[k] } else { linear[0] } * scale[k] + bias[k]).collect();
+            let p = y * 16 + x;
+            let got = [r[p], g[p], b[p]].map(f64::from);
+            for k in 0..3 {
+                assert!((got[k] - want[k]).abs() < 1e-3, "{output}: pixel ({x}, {y}): {got:?}, want {want:?}");
+            }
+        }
+    }
+}
+
+/// `lightcuts:group` on a light or an ancestor puts its light in that
+/// group: the layers sum to the beauty, and each holds its lights' light.
+#[test]
+fn lightcuts_group_attributes_make_light_groups() {
+    let dir = TempDir::new("usd-groups");
+    let stage = dir.write(
+        "groups.usda",
+        r#"#usda 1.0
+(
+    metersPerUnit = 1
+    upAxis = "Y"
+)
+def Xform "World"
+{
+    def Mesh "Floor"
+    {
+        int[] faceVertexCounts = [4]
+        int[] faceVertexIndices = [0, 1, 2, 3]
+        point3f[] points = [(-5, 0, 5), (5, 0, 5), (5, 0, -5), (-5, 0, -5)]
+        uniform token subdivisionScheme = "none"
+    }
+    def Xform "Warm" (
+    )
+    {
+        custom string lightcuts:group = "key"
+        def SphereLight "A"
+        {
+            color3f inputs:color = (1, 0.5, 0.2)
+            float inputs:intensity = 100
+            float inputs:radius = 0.1
+            double3 xformOp:translate = (-1, 2, 0)
+            uniform token[] xformOpOrder = ["xformOp:translate"]
+        }
+    }
+    def SphereLight "B"
+    {
+        custom token lightcuts:group = "fill"
+        color3f inputs:color = (0.2, 0.5, 1)
+        float inputs:intensity = 100
+        float inputs:radius = 0.1
+        double3 xformOp:translate = (1, 2, 0)
+        uniform token[] xformOpOrder = ["xformOp:translate"]
+    }
+    def Camera "Camera"
+    {
+        float focalLength = 20
+        double3 xformOp:translate = (0, 3, 8)
+        float xformOp:rotateX = -25
+        uniform token[] xformOpOrder = ["xformOp:translate", "xformOp:rotateX"]
+    }
+}
+"#,
+    );
+    let image = render(&stage, &dir.path("out.exr"), &["--resolution", "32x24", "--exact"]);
+    assert!(mean_rgb(&image)[1] > 0.0, "the camera sees the lit floor");
+    let mean = |name: &str| channel(&image, name).iter().map(|&v| f64::from(v)).sum::<f64>();
+    for c in ["R", "G", "B"] {
+        let sum = mean(&format!("Combined_key.{c}")) + mean(&format!("Combined_fill.{c}"));
+        assert!((sum - mean(c)).abs() <= 1e-4 * mean(c), "{c}: {sum} vs {}", mean(c));
+    }
+    assert!(mean("Combined_key.R") > 2.0 * mean("Combined_key.B"), "the key is warm");
+    assert!(mean("Combined_fill.B") > 2.0 * mean("Combined_fill.R"), "the fill is cool");
+}

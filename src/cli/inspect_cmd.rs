@@ -40,32 +40,45 @@ pub fn run(args: &InspectArgs) -> Result<(), CliError> {
     super::process::read_usd_in_a_child(&args.scene, &options.flags())?;
     let scene = Scene::load_with(&args.scene, &options)?;
     let report = report(&scene);
-    if args.json {
-        println!("{}", serde_json::to_string_pretty(&report).expect("plain values serialise"));
-        return Ok(());
+    // A reader that stops early (`| head`) is not an error: printing stops.
+    let _ = print(&scene, &report, args.json);
+    Ok(())
+}
+
+fn print(scene: &Scene, report: &serde_json::Value, json: bool) -> std::io::Result<()> {
+    use std::io::Write;
+    let mut out = std::io::BufWriter::new(std::io::stdout().lock());
+    if json {
+        writeln!(out, "{}", serde_json::to_string_pretty(report).expect("plain values serialise"))?;
+        return out.flush();
     }
-    println!("scene        {}", scene.path.display());
-    println!("film         {} x {}, {} spp", scene.film.width, scene.film.height, scene.film.spp);
+    writeln!(out, "scene        {}", scene.path.display())?;
+    writeln!(out, "film         {} x {}, {} spp", scene.film.width, scene.film.height, scene.film.spp)?;
     let c = &scene.camera_spec;
-    println!("camera       eye {:?} looking at {:?}, up {:?}, {} degrees vertical", c.eye, c.look_at, c.up, c.fov_y);
-    println!(
+    writeln!(
+        out,
+        "camera       eye {:?} looking at {:?}, up {:?}, {} degrees vertical",
+        c.eye, c.look_at, c.up, c.fov_y
+    )?;
+    writeln!(
+        out,
         "objects      {} ({} triangles drawn, {} stored)",
         scene.objects.len(),
         scene.triangle_count(),
         scene.stored_triangle_count()
-    );
-    for object in &report["objects"].as_array().cloned().unwrap_or_default() {
-        println!("  {}  {}  {}", object["name"], object["min"], object["max"]);
+    )?;
+    for object in report["objects"].as_array().into_iter().flatten() {
+        writeln!(out, "  {}  {}  {}", object["name"], object["min"], object["max"])?;
     }
-    println!("lights       {}", scene.lights.len());
-    for light in report["lights"].as_array().cloned().unwrap_or_default() {
-        println!("  {light}");
+    writeln!(out, "lights       {}", scene.lights.len())?;
+    for light in report["lights"].as_array().into_iter().flatten() {
+        writeln!(out, "  {light}")?;
     }
-    println!("environment  {}", report["environment"]);
+    writeln!(out, "environment  {}", report["environment"])?;
     for warning in &scene.warnings {
-        println!("warning: {warning}");
+        writeln!(out, "warning: {warning}")?;
     }
-    Ok(())
+    out.flush()
 }
 
 /// The scene as JSON: every object's name and world bounds (metres), every

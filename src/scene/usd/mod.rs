@@ -159,6 +159,7 @@ fn import_stage(
         materials: materials::Materials::new(&stage, time),
         material_index: HashMap::new(),
         prototypes: HashMap::new(),
+        templates: HashMap::new(),
         parts,
         cameras: Vec::new(),
         triangles: 0,
@@ -200,6 +201,15 @@ impl Instance {
     }
 }
 
+/// An instanced mesh a prototype's walk placed: the mesh, its name below
+/// the instance, its placement relative to the instance's root.
+#[derive(Clone)]
+struct Placed {
+    mesh: usize,
+    suffix: String,
+    relative: Affine3A,
+}
+
 /// What flows down the hierarchy.
 #[derive(Clone)]
 struct Context {
@@ -230,6 +240,10 @@ struct Walker<'a, 'p> {
     /// Each prototype prim's meshes (scene mesh, its matrix in the
     /// prototype's space), kept once for all its instances.
     prototypes: HashMap<String, Vec<(usize, DMat4)>>,
+    /// What walking an instance of each prototype (by its key) made, for
+    /// the next instances to repeat by matrix instead of walking again:
+    /// None where a walk made more than instanced meshes (lights, copies).
+    templates: HashMap<String, Option<Vec<Placed>>>,
     parts: Parts<'p>,
     /// Cameras found: (prim path, world matrices at the times, stage read time).
     cameras: Vec<(String, Vec<DMat4>)>,
@@ -304,10 +318,8 @@ impl Walker<'_, '_> {
                 None => prim.to_string(),
             };
             inside.instance = Some(Instance { root: prim.to_string(), key: prototype.clone(), name });
-            for child in stage.children(prim).map_err(|e| (prim.to_string(), e))? {
-                self.walk(&child, &inside)?;
-            }
-            return Ok(());
+            let children = stage.children(prim).map_err(|e| (prim.to_string(), e))?;
+            return self.walk_instance(prototype, &children, &inside);
         }
         match type_name {
             "Mesh" => self.mesh(prim, &here)?,
@@ -717,8 +729,63 @@ impl Walker<'_, '_> {
             inside.instance =
                 Some(Instance { root: parent.to_string(), key: parent.to_string(), name: format!("{prim}[{k}]") });
             inside.worlds = here.worlds.iter().map(|w| *w * placement).collect();
-            self.walk(prototype, &inside)?;
+            self.walk_instance(&format!("{prim} {prototype}"), std::slice::from_ref(prototype), &inside)?;
         }
+        Ok(())
+    }
+
+    /// Walks `prims` (an instance's, placed by `inside.worlds`) the first
+    /// time a prototype `key` is met; after that, when the first walk made
+    /// nothing but instanced meshes and nothing moves, places the same
+    /// meshes by the new instance's matrix without walking again (a point
+    /// instancer's 100,000 entries cost one walk).
+    fn walk_instance(&mut self, key: &str, prims: &[String], inside: &Context) -> Result<(), Located> {
+        let instance = inside.instance.as_ref().expect("an instance's walk");
+        let root = affine(&inside.worlds[0], &instance.root)?;
+        if let Some(Some(template)) = self.templates.get(key) {
+            if self.parts.instances.len() + template.len() > MAX_INSTANCES {
+                return Err((instance.root.clone(), format!("the stage has more than {MAX_INSTANCES} instances")));
+            }
+            for placed in template {
+                let name = format!("{}{}", instance.name, placed.suffix);
+                let object = Object { mesh: placed.mesh, transform: Some(root * placed.relative), name, motion: None };
+                let (lo, hi) = super::object::world_bounds(self.parts.meshes, std::slice::from_ref(&object));
+                if !(within_limits(lo) && within_limits(hi)) {
+                    return Err((
+                        instance.root.clone(),
+                        format!("places a mesh at {lo} to {hi}: beyond +/-{MAX_COORDINATE:e} m"),
+                    ));
+                }
+                self.triangles += self.parts.meshes[placed.mesh].triangles.len();
+                self.parts.instances.push(object);
+            }
+            return Ok(());
+        }
+        let before = (self.parts.instances.len(), self.parts.meshes.len(), self.parts.lights.len());
+        let dome = self.parts.environment.is_some();
+        for prim in prims {
+            self.walk(prim, inside)?;
+        }
+        if self.templates.contains_key(key) {
+            return Ok(());
+        }
+        let made = &self.parts.instances[before.0..];
+        let only_instances = self.times.len() == 1
+            && self.parts.lights.len() == before.2
+            && self.parts.environment.is_some() == dome
+            && made.iter().all(|o| o.transform.is_some() && o.motion.is_none())
+            && (before.1..self.parts.meshes.len()).all(|m| made.iter().any(|o| o.mesh == m));
+        let template = only_instances.then(|| {
+            let inverse = root.inverse();
+            made.iter()
+                .map(|o| Placed {
+                    mesh: o.mesh,
+                    suffix: o.name.strip_prefix(instance.name.as_str()).unwrap_or(&o.name).to_string(),
+                    relative: inverse * o.transform.unwrap_or(Affine3A::IDENTITY),
+                })
+                .collect()
+        });
+        self.templates.insert(key.to_string(), template);
         Ok(())
     }
 
