@@ -444,3 +444,100 @@ def Xform "World"
     assert!(mean("Combined_key.R") > 2.0 * mean("Combined_key.B"), "the key is warm");
     assert!(mean("Combined_fill.B") > 2.0 * mean("Combined_fill.R"), "the fill is cool");
 }
+
+/// What the schemas say of visibility, purpose, cameras and materials a
+/// renderer cannot draw, read back through `lightcuts inspect --json`:
+/// invisible prims (and their subtrees) and proxy or guide prims are not
+/// drawn; a camera's fStop and focusDistance make the thin lens (radius
+/// focalLength / 10 / (2 fStop) in scene units, here centimetres); a
+/// material with only a MaterialX surface is grey with a warning naming it.
+#[test]
+fn visibility_purpose_the_thin_lens_and_unsupported_shaders() {
+    let dir = TempDir::new("usd-details");
+    let stage = dir.write(
+        "details.usda",
+        r#"#usda 1.0
+(
+    metersPerUnit = 0.01
+    upAxis = "Y"
+)
+def Xform "World"
+{
+    def Sphere "Shown"
+    {
+        rel material:binding = </World/Looks/OnlyX>
+    }
+    def Xform "Hidden"
+    {
+        token visibility = "invisible"
+        def Sphere "Child"
+        {
+        }
+    }
+    def Sphere "Proxy"
+    {
+        uniform token purpose = "proxy"
+    }
+    def Xform "Guides"
+    {
+        uniform token purpose = "guide"
+        def Cube "Inherits"
+        {
+        }
+    }
+    def Cube "Render"
+    {
+        uniform token purpose = "render"
+        double3 xformOp:translate = (0, 0, -300)
+        uniform token[] xformOpOrder = ["xformOp:translate"]
+    }
+    def Scope "Looks"
+    {
+        def Material "OnlyX"
+        {
+            token outputs:mtlx:surface.connect = </World/Looks/OnlyX/Standard.outputs:out>
+            def Shader "Standard"
+            {
+                uniform token info:id = "ND_standard_surface_surfaceshader"
+                token outputs:out
+            }
+        }
+    }
+    def Camera "Camera"
+    {
+        float focalLength = 50
+        float horizontalAperture = 36
+        float verticalAperture = 24
+        float fStop = 2
+        float focusDistance = 400
+        double3 xformOp:translate = (0, 0, 500)
+        uniform token[] xformOpOrder = ["xformOp:translate"]
+    }
+    def DomeLight "Sky"
+    {
+    }
+}
+"#,
+    );
+    let report: serde_json::Value = serde_json::from_str(&lightcuts_ok(&["inspect", s(&stage), "--json"])).unwrap();
+    let mut names: Vec<&str> =
+        report["objects"].as_array().unwrap().iter().map(|o| o["name"].as_str().unwrap()).collect();
+    names.sort_unstable();
+    assert_eq!(names, ["/World/Render", "/World/Shown"], "{report}");
+    let camera = &report["camera"];
+    // 50 mm in a centimetre stage is 5 scene units, 0.05 m: / (2 x 2).
+    let lens = camera["lens_radius"].as_f64().unwrap();
+    assert!((lens - 0.0125).abs() < 1e-6, "{camera}");
+    assert!((camera["focus_distance"].as_f64().unwrap() - 4.0).abs() < 1e-5, "{camera}");
+    // 2 atan(12 / 50): the vertical aperture over the focal length.
+    let fov = camera["fov_y"].as_f64().unwrap();
+    assert!((fov - 2.0 * (12.0f64 / 50.0).atan().to_degrees()).abs() < 1e-4, "{fov}");
+    assert_eq!((report["film"]["width"].as_u64(), report["film"]["height"].as_u64()), (Some(640), Some(427)));
+    let warnings = report["warnings"].as_array().unwrap();
+    assert!(
+        warnings
+            .iter()
+            .any(|w| w.as_str().unwrap().contains("/World/Looks/OnlyX") && w.as_str().unwrap().contains("mtlx")),
+        "{warnings:?}"
+    );
+}
