@@ -33,6 +33,15 @@ pub struct Mesh {
 }
 
 impl Mesh {
+    /// Whether some triangle has an area (an emitter of none emits nothing).
+    #[must_use]
+    pub fn has_area(&self) -> bool {
+        self.triangles.iter().any(|t| {
+            let [a, b, c] = t.map(|i| self.positions[i as usize]);
+            (b - a).cross(c - a).length() > 0.0
+        })
+    }
+
     /// The area of its triangles, square metres (f64: a mesh may span
     /// 1e16 m, whose squares overflow f32).
     #[must_use]

@@ -121,10 +121,7 @@ impl Importer<'_, '_> {
             Some(Tangents::PerVertex(tangents)) => mesh.tangents = Some(tangents),
             Some(Tangents::PerCorner(corners)) => mesh.set_corner_tangents(&corners),
         }
-        let has_area = mesh.triangles.iter().any(|t| {
-            let [a, b, c] = t.map(|i| mesh.positions[i as usize]);
-            (b - a).cross(c - a).length() > 0.0
-        });
+        let has_area = mesh.has_area();
         self.parts.meshes.push(mesh);
         if emission != Vec3::ZERO && has_area {
             self.emitters += 1;

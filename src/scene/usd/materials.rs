@@ -368,16 +368,7 @@ impl<'s> Materials<'s> {
         let roughness = input(self, "roughness")?;
         note_varname(&metallic, &mut varname, warnings);
         note_varname(&roughness, &mut varname, warnings);
-        let mut pbr = PbrMaterial {
-            metallic: 0.0,
-            roughness: 0.5,
-            specular: 1.0,
-            specular_colour: Vec3::ONE,
-            metallic_roughness: None,
-            specular_texture: None,
-            specular_colour_texture: None,
-            normal_map: None,
-        };
+        let mut pbr = preview_defaults();
         // Roughness and metallic as glTF holds them: factors times the
         // texture's G (roughness) and B (metallic).
         match (&roughness, &metallic) {
@@ -684,7 +675,13 @@ fn split(source: &str) -> (&str, &str) {
 /// The material of a surface with none bound, or whose material cannot be
 /// read: UsdPreviewSurface's defaults (grey 0.18, roughness 0.5, dielectric).
 pub(super) fn default_material(name: &str) -> Material {
-    let pbr = PbrMaterial {
+    Material { pbr: Some(preview_defaults()), ..Material::diffuse(name, Albedo::Constant(DEFAULT_GREY)) }
+}
+
+/// UsdPreviewSurface's fallbacks as metallic-roughness parameters: a
+/// dielectric (ior 1.5: F0 0.04) of roughness 0.5.
+fn preview_defaults() -> PbrMaterial {
+    PbrMaterial {
         metallic: 0.0,
         roughness: 0.5,
         specular: 1.0,
@@ -693,8 +690,7 @@ pub(super) fn default_material(name: &str) -> Material {
         specular_texture: None,
         specular_colour_texture: None,
         normal_map: None,
-    };
-    Material { pbr: Some(pbr), ..Material::diffuse(name, Albedo::Constant(DEFAULT_GREY)) }
+    }
 }
 
 /// A surface's display colour as its material's base colour (what

@@ -529,10 +529,7 @@ impl Walker<'_, '_> {
                 format!("a point lands at {p}: coordinates must be finite and within +/-{MAX_COORDINATE:e} m"),
             ));
         }
-        let has_area = mesh.triangles.iter().any(|t| {
-            let [a, b, c] = t.map(|i| mesh.positions[i as usize]);
-            (b - a).cross(c - a).length() > 0.0
-        });
+        let has_area = mesh.has_area();
         self.parts.meshes.push(mesh);
         if emission != Vec3::ZERO && has_area {
             self.emitters += 1;
