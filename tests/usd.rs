@@ -243,8 +243,8 @@ fn broken_stages_fail_with_the_file_and_the_prim_named() {
         assert!(stderr.contains(name), "{name}: {stderr}");
         assert!(!out.exists());
     }
-    // A crate file whose one corrupt byte (byte 663 of scenes/usd/fuzz/
-    // stage.usdc set to 207, found by the fuzzer) makes an array's count
+    // A crate file whose one corrupt byte (byte 100 of scenes/usd/fuzz/
+    // stage.usdc set to 207, found by mutating each byte) makes an array's count
     // ask for 3.5 TB: the reader's allocation fails, which aborts the
     // process it runs in, so the command reads stages in a child first.
     let huge = scenes().join("usd/broken/huge-count.usdc");

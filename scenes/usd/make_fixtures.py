@@ -22,7 +22,7 @@ UsdLux schema and closed forms, not by the renderer:
   instancer, time samples, every UsdLux light, a camera), as text and as a
   crate file, for tests/fuzz.rs to mutate.
 - broken/huge-count.usdc is not written here: it is fuzz/stage.usdc with
-  byte 663 set to 207 (found by tests/fuzz.rs), an array count that asks
+  byte 100 set to 207 (found by mutating each byte), an array count that asks
   the reader for 3.5 TB; tests/usd.rs checks that the command reports it.
 - composition/: a stage with a reference, a payload, a variant set, three
   instances of an instanceable asset and a textured quad, packaged as
@@ -573,7 +573,9 @@ def write_fuzz():
     lux(sky, intensity=0.2)
     camera_looking(stage, '/World/Camera', [0, -30, 20], [0, 0, 0], Gf.Vec3d(0, 0, 1), 35.0, (36.0, 27.0))
     stage.Save()
-    stage.Export(os.path.join(out, 'stage.usdc'))
+    # The root layer as it is: a stage's Export flattens it and anchors
+    # asset paths to this machine's directory.
+    stage.GetRootLayer().Export(os.path.join(out, 'stage.usdc'))
 
 
 if __name__ == '__main__':
