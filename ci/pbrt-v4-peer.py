@@ -3,9 +3,11 @@
 in both renderers, print time to equal error.
 
 Usage:
+    cargo build --release
     python3 ci/pbrt-v4-peer.py PBRT_SRC [--build DIR] [--out DIR]
-        [--scene scenes/grid10k.toml] [--pbrt-spp 16,64,256,1024]
-        [--threads 2] [--skip-build]
+        [--scene scenes/grid10k.toml | --scene scattered]
+        [--pbrt-spp 16,64,256,1024] [--ours 'SETTING;SETTING...']
+        [--threads 2] [--skip-build | --build-only]
 
 PBRT_SRC is pbrt-v4's source tree with its submodules (`git clone
 --recursive https://github.com/mmp/pbrt-v4`). Not part of .ci/run: CI has no
@@ -321,6 +323,9 @@ def main():
     if args.build_only:
         return
     pbrt = os.path.join(args.build, 'pbrt')
+    for binary, how in ((pbrt, 'build it: drop --skip-build'), (args.lightcuts, 'cargo build --release')):
+        if not os.path.exists(binary):
+            sys.exit(f'pbrt-v4-peer: {binary} does not exist ({how})')
     width, height = map(int, args.resolution.split('x'))
 
     if args.scene == 'scattered':
