@@ -7,7 +7,7 @@ use std::f32::consts::PI;
 use glam::{Vec2, Vec3};
 
 use super::environment::{pixel_solid_angle, EnvironmentLight};
-use super::{DirectionalLight, OrientedLight};
+use super::{AreaLight, DirectionalLight};
 use crate::scene::EnvironmentMap;
 use crate::util::color::luminance;
 use crate::util::sampling::Rng;
@@ -106,34 +106,54 @@ fn total_area(triangles: &[EmitterTriangle]) -> f64 {
 }
 
 /// An area light of radiance `radiance` (W/(m^2 sr)) emitting from the front
-/// of its triangles, as `samples` oriented lights: each sample stands for
-/// area / samples of the surface and has intensity Le * area / samples along
-/// its normal (a Lambertian emitter's I(theta) = Le A cos(theta)). Samples are
-/// spread over the triangles in proportion to area, stratified in each.
-/// `offset` lifts samples off the surface so shadow rays do not start inside it.
+/// of its triangles, as about `samples` triangle lights (docs/design.md
+/// §6.1): each triangle gets its share of `samples` by area (largest
+/// remainder, in order, at least one) and is split into n x n equal
+/// triangles, n the nearest integer to the square root of its share; each
+/// part is a light of intensity Le * its area along its normal (a
+/// Lambertian emitter's I(theta) = Le A cos(theta)) that shines from a
+/// point drawn uniformly on it per shading point. `offset` lifts the parts
+/// off the surface so shadow rays do not start inside it.
 #[must_use]
-pub fn sample_area_light(
-    triangles: &[EmitterTriangle],
-    radiance: Vec3,
-    samples: usize,
-    offset: f32,
-    seed: u64,
-) -> Vec<OrientedLight> {
+pub fn sample_area_light(triangles: &[EmitterTriangle], radiance: Vec3, samples: usize, offset: f32) -> Vec<AreaLight> {
     let total = total_area(triangles);
     if total <= 0.0 || samples == 0 {
         return Vec::new();
     }
-    let mut rng = Rng::from_key(&[seed, 0xa4ea]);
-    // Every sample carries the same share of the emitter's power.
-    let intensity = radiance * (total / samples as f64) as f32;
-    points_by_area(triangles, total, samples, &mut rng)
-        .into_iter()
-        .map(|(k, ab)| {
-            let t = &triangles[k];
-            let normal = t.normal();
-            OrientedLight { position: t.point(ab) + normal * offset, normal, intensity }
-        })
-        .collect()
+    let mut lights = Vec::with_capacity(samples.max(triangles.len()));
+    let mut assigned = 0usize;
+    let mut cumulative = 0.0f64;
+    for (k, t) in triangles.iter().enumerate() {
+        cumulative += f64::from(t.area());
+        let until =
+            if k + 1 == triangles.len() { samples } else { ((cumulative / total) * samples as f64).round() as usize };
+        let share = until.saturating_sub(assigned);
+        assigned += share;
+        if t.area() <= 0.0 {
+            continue;
+        }
+        let n = ((share as f64).sqrt().round() as usize).max(1);
+        let normal = t.normal();
+        let edges = [(t.p[1] - t.p[0]) / n as f32, (t.p[2] - t.p[0]) / n as f32];
+        let intensity = radiance * (t.area() / (n * n) as f32);
+        // The parts of a regular subdivision: at (i, j) the upright one,
+        // corners (i, j), (i + 1, j), (i, j + 1) in units of the edges, and
+        // below the far edge the inverted one beside it.
+        for i in 0..n {
+            for j in 0..n - i {
+                let corner = t.p[0] + i as f32 * edges[0] + j as f32 * edges[1];
+                let upright = corner + (edges[0] + edges[1]) / 3.0;
+                lights.push(AreaLight { position: upright + normal * offset, normal, intensity, edges });
+                if i + j + 1 < n {
+                    let far = corner + edges[0] + edges[1];
+                    let inverted = far - (edges[0] + edges[1]) / 3.0;
+                    let flipped = [-edges[0], -edges[1]];
+                    lights.push(AreaLight { position: inverted + normal * offset, normal, intensity, edges: flipped });
+                }
+            }
+        }
+    }
+    lights
 }
 
 /// Emitting candidate points a textured emitter's samples are drawn from,
@@ -176,7 +196,7 @@ pub fn sample_textured_area_light(
     samples: usize,
     offset: f32,
     seed: u64,
-) -> Vec<OrientedLight> {
+) -> Vec<AreaLight> {
     let total = total_area(triangles);
     if total <= 0.0 || samples == 0 {
         return Vec::new();
@@ -224,7 +244,7 @@ pub fn sample_textured_area_light(
     if phi <= 0.0 {
         return Vec::new();
     }
-    let mut lights: Vec<OrientedLight> = Vec::with_capacity(samples);
+    let mut lights: Vec<AreaLight> = Vec::with_capacity(samples);
     let mut running = 0.0f64;
     let mut next = 0usize;
     let mut last = usize::MAX;
@@ -241,7 +261,12 @@ pub fn sample_textured_area_light(
         } else {
             let t = &triangles[k];
             let normal = t.normal();
-            lights.push(OrientedLight { position: t.point(ab) + normal * offset, normal, intensity });
+            lights.push(AreaLight {
+                position: t.point(ab) + normal * offset,
+                normal,
+                intensity,
+                edges: [Vec3::ZERO; 2],
+            });
             last = next;
         }
     }
@@ -361,28 +386,62 @@ mod tests {
     }
 
     #[test]
-    fn area_light_samples_carry_the_emitters_power() {
+    fn area_light_triangles_tile_the_emitter_and_carry_its_power() {
         // A 2 x 3 quad as two triangles, radiance (1, 2, 3): power pi Le A.
         let quad = [
             EmitterTriangle { p: [Vec3::ZERO, Vec3::new(2.0, 0.0, 0.0), Vec3::new(2.0, 0.0, 3.0)] },
             EmitterTriangle { p: [Vec3::ZERO, Vec3::new(2.0, 0.0, 3.0), Vec3::new(0.0, 0.0, 3.0)] },
         ];
         let le = Vec3::new(1.0, 2.0, 3.0);
-        for samples in [1, 7, 1000, 4096] {
-            let lights = sample_area_light(&quad, le, samples, 0.0, 3);
-            assert_eq!(lights.len(), samples);
-            // Each oriented light radiates pi * I in all (cosine lobe).
+        // Shares 1, 4, 500 and 2048 per triangle: 1, 4, 484 and 2025 parts.
+        for (samples, parts) in [(1, 2), (7, 8), (1000, 968), (4096, 4050)] {
+            let lights = sample_area_light(&quad, le, samples, 0.0);
+            assert_eq!(lights.len(), parts, "{samples} samples");
+            // Each part radiates pi * I in all (cosine lobe).
             let power: Vec3 = lights.iter().map(|l| PI * l.intensity).sum();
             let expected = PI * le * 6.0;
             assert!((power - expected).abs().max_element() <= 1e-4 * expected.max_element(), "{power} vs {expected}");
+            let area: f32 = lights.iter().map(|l| 0.5 * l.edges[0].cross(l.edges[1]).length()).sum();
+            assert!((area - 6.0).abs() < 1e-3, "the parts' areas sum to the quad's: {area}");
             for l in &lights {
-                assert!(l.position.x >= 0.0 && l.position.x <= 2.0 && l.position.z >= 0.0 && l.position.z <= 3.0);
+                for c in l.corners() {
+                    assert!(c.x >= -1e-5 && c.x <= 2.0 + 1e-5 && c.z >= -1e-5 && c.z <= 3.0 + 1e-5, "{c}");
+                }
                 assert!((l.normal - Vec3::new(0.0, -1.0, 0.0)).length() < 1e-6, "winding gives the normal");
             }
         }
-        // Deterministic for a seed, different across seeds.
-        assert_eq!(sample_area_light(&quad, le, 50, 0.0, 3), sample_area_light(&quad, le, 50, 0.0, 3));
-        assert_ne!(sample_area_light(&quad, le, 50, 0.0, 3), sample_area_light(&quad, le, 50, 0.0, 4));
+        // The parts tile the quad: points uniform over it fall in exactly
+        // one part each (strictly inside one, away from the shared edges).
+        let lights = sample_area_light(&quad, le, 50, 0.0);
+        let mut rng = Rng::from_key(&[12]);
+        let mut hits = vec![0usize; lights.len()];
+        for _ in 0..20_000 {
+            let p = Vec3::new(2.0 * rng.next_f32(), 0.0, 3.0 * rng.next_f32());
+            let inside: Vec<usize> = (0..lights.len())
+                .filter(|&i| {
+                    let [a, b, c] = lights[i].corners();
+                    let side = |u: Vec3, v: Vec3| (v - u).cross(p - u).y;
+                    let s = [side(a, b), side(b, c), side(c, a)];
+                    s.iter().all(|&x| x > 1e-4) || s.iter().all(|&x| x < -1e-4)
+                })
+                .collect();
+            assert!(inside.len() <= 1, "{p} in {inside:?}");
+            if let [i] = inside[..] {
+                hits[i] += 1;
+            }
+        }
+        // Equal parts of each triangle get equal shares of the points.
+        let expected = 20_000.0 / lights.len() as f64;
+        for h in hits {
+            assert!((h as f64 - expected).abs() < 0.25 * expected, "{h} against {expected}");
+        }
+        // A point drawn on a part lies on it.
+        for l in &lights {
+            let p = l.point_at([0.9, 0.7]);
+            let [a, b, c] = l.corners();
+            let area = |u: Vec3, v: Vec3, w: Vec3| 0.5 * (v - u).cross(w - u).length();
+            assert!((area(p, a, b) + area(p, b, c) + area(p, c, a) - area(a, b, c)).abs() < 1e-4);
+        }
     }
 
     /// Radiance bright only on a small patch (a < 0.05 on the first

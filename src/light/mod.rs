@@ -125,6 +125,59 @@ pub struct OrientedLight {
     pub intensity: Vec3,
 }
 
+/// One of an area light's triangles (a whole emitting triangle, or one
+/// of the equal parts a large one is split into: docs/design.md §6.1), as
+/// a leaf of the light tree: it radiates L_e A cos(phi) (W/sr) from a point
+/// drawn uniformly on it per shading point ([`AreaLight::point_at`]), so
+/// the light over many shading points is the triangle's, not a dot's.
+/// A light with zero edges is a fixed point (a textured emitter's points).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct AreaLight {
+    /// The triangle's centroid, metres: where the tree clusters it and what
+    /// a fixed representative stands at.
+    pub position: Vec3,
+    /// Unit normal of the emitting side.
+    pub normal: Vec3,
+    /// Radiant intensity along the normal, L_e x area, W/sr.
+    pub intensity: Vec3,
+    /// The triangle's edges q1 - q0 and q2 - q0, metres (zero for a point).
+    pub edges: [Vec3; 2],
+}
+
+impl AreaLight {
+    /// The point at the numbers `u` in [0, 1)^2, uniform by area over the
+    /// triangle (the unit square folded onto it): q0 + a e1 + b e2, with q0
+    /// = position - (e1 + e2) / 3.
+    #[must_use]
+    pub fn point_at(&self, u: [f32; 2]) -> Vec3 {
+        let (a, b) = fold(u);
+        self.position + (a - 1.0 / 3.0) * self.edges[0] + (b - 1.0 / 3.0) * self.edges[1]
+    }
+
+    /// The triangle's corners (three times its position for a point).
+    #[must_use]
+    pub fn corners(&self) -> [Vec3; 3] {
+        triangle_corners(self.position, self.edges)
+    }
+}
+
+/// The corners of the triangle of centroid `centroid` and edges `edges`.
+#[must_use]
+pub fn triangle_corners(centroid: Vec3, edges: [Vec3; 2]) -> [Vec3; 3] {
+    let q0 = centroid - (edges[0] + edges[1]) / 3.0;
+    [q0, q0 + edges[0], q0 + edges[1]]
+}
+
+/// The unit square folded onto the triangle a + b <= 1 (uniform in area).
+#[must_use]
+pub fn fold(u: [f32; 2]) -> (f32, f32) {
+    if u[0] + u[1] > 1.0 {
+        (1.0 - u[0], 1.0 - u[1])
+    } else {
+        (u[0], u[1])
+    }
+}
+
 /// A light at infinity: irradiance `irradiance` (W/m^2 on a surface facing
 /// it) arriving from unit `direction` (pointing *towards* the light).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -188,8 +241,8 @@ impl SpotLight {
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Light {
     Omni(OmniLight),
-    /// One of an area light's points.
-    Area(OrientedLight),
+    /// One of an area light's triangles.
+    Area(AreaLight),
     Oriented(OrientedLight),
     Directional(DirectionalLight),
     /// One of the environment's directions.
@@ -224,6 +277,9 @@ pub struct TreeLight {
     /// A spot's cosines of its inner and outer cone half-angles; (0, 0)
     /// for the other kinds. (A spot's `normal` is its direction.)
     pub spread: [f32; 2],
+    /// An area light's triangle's edges (`AreaLight::edges`); zero for
+    /// the other kinds.
+    pub edges: [Vec3; 2],
 }
 
 impl TreeLight {
@@ -231,20 +287,31 @@ impl TreeLight {
     #[must_use]
     pub fn of(light: &Light) -> Self {
         match *light {
-            Light::Omni(l) => Self { point: l.position, normal: Vec3::ZERO, intensity: l.intensity, spread: [0.0; 2] },
-            Light::Area(l) | Light::Oriented(l) => {
-                Self { point: l.position, normal: l.normal, intensity: l.intensity, spread: [0.0; 2] }
+            Light::Omni(l) => Self::at(l.position, Vec3::ZERO, l.intensity),
+            Light::Area(l) => Self { edges: l.edges, ..Self::at(l.position, l.normal, l.intensity) },
+            Light::Oriented(l) => Self::at(l.position, l.normal, l.intensity),
+            Light::Directional(l) | Light::Environment(l) => Self::at(l.direction, Vec3::ZERO, l.irradiance),
+            Light::Spot(l) => {
+                Self { spread: [l.cos_inner, l.cos_outer], ..Self::at(l.position, l.direction, l.intensity) }
             }
-            Light::Directional(l) | Light::Environment(l) => {
-                Self { point: l.direction, normal: Vec3::ZERO, intensity: l.irradiance, spread: [0.0; 2] }
-            }
-            Light::Spot(l) => Self {
-                point: l.position,
-                normal: l.direction,
-                intensity: l.intensity,
-                spread: [l.cos_inner, l.cos_outer],
-            },
         }
+    }
+
+    /// A leaf at `point` with `normal` and `intensity`, no spread, no edges.
+    #[must_use]
+    pub fn at(point: Vec3, normal: Vec3, intensity: Vec3) -> Self {
+        Self { point, normal, intensity, spread: [0.0; 2], edges: [Vec3::ZERO; 2] }
+    }
+
+    /// The box the light can be anywhere in: its triangle's (an area
+    /// light's), else its point.
+    #[must_use]
+    pub fn bounds(&self) -> (Vec3, Vec3) {
+        if self.edges == [Vec3::ZERO; 2] {
+            return (self.point, self.point);
+        }
+        let [a, b, c] = triangle_corners(self.point, self.edges);
+        (a.min(b).min(c), a.max(b).max(c))
     }
 
     /// The light this leaf stands for, given its tree's kind.
@@ -252,9 +319,12 @@ impl TreeLight {
     pub fn light(&self, kind: LightKind) -> Light {
         match kind {
             LightKind::Omni => Light::Omni(OmniLight { position: self.point, intensity: self.intensity }),
-            LightKind::Area => {
-                Light::Area(OrientedLight { position: self.point, normal: self.normal, intensity: self.intensity })
-            }
+            LightKind::Area => Light::Area(AreaLight {
+                position: self.point,
+                normal: self.normal,
+                intensity: self.intensity,
+                edges: self.edges,
+            }),
             LightKind::Oriented => {
                 Light::Oriented(OrientedLight { position: self.point, normal: self.normal, intensity: self.intensity })
             }
@@ -279,8 +349,8 @@ impl TreeLight {
 #[derive(Debug, Clone, Default)]
 pub struct Lights {
     pub omni: Vec<OmniLight>,
-    /// Area lights' points (`LightKind::Area`).
-    pub area: Vec<OrientedLight>,
+    /// Area lights' triangles (`LightKind::Area`).
+    pub area: Vec<AreaLight>,
     pub oriented: Vec<OrientedLight>,
     pub directional: Vec<DirectionalLight>,
     /// The environment's directions (`LightKind::Environment`).
@@ -357,7 +427,7 @@ impl Lights {
                         .map(|t| emitters::EmitterTriangle { p: t.map(|i| mesh.positions[i as usize]) })
                         .collect();
                     let front = match &scene.materials[mesh.material].emissive_texture {
-                        None => emitters::sample_area_light(&triangles, radiance, samples as usize, 0.0, seed),
+                        None => emitters::sample_area_light(&triangles, radiance, samples as usize, 0.0),
                         Some(texture) => emitters::sample_textured_area_light(
                             &triangles,
                             |k, ab| radiance * texture.lookup(&mesh.tex_coords(k, ab.x, ab.y), &scene.textures),
@@ -366,9 +436,9 @@ impl Lights {
                             seed,
                         ),
                     };
-                    // The back: the same points, facing the other way.
+                    // The back: the same triangles, facing the other way.
                     let back: Vec<_> = if both_sides {
-                        front.iter().map(|l| OrientedLight { normal: -l.normal, ..*l }).collect()
+                        front.iter().map(|l| AreaLight { normal: -l.normal, ..*l }).collect()
                     } else {
                         Vec::new()
                     };
@@ -525,7 +595,8 @@ samples = 7
         // Grid lights sit at cell centres, row by row.
         let first = lights.omni[1].position;
         assert!((first - Vec3::new(-1.0 + 2.0 / 6.0, 3.0, -0.5)).length() < 1e-6, "{first}");
-        assert_eq!(lights.area.len(), 10);
+        // Two triangles, five samples' share each: 2 x 2 parts each.
+        assert_eq!(lights.area.len(), 8);
         assert_eq!(lights.directional, vec![DirectionalLight { direction: Vec3::Y, irradiance: Vec3::splat(3.0) }]);
         assert_eq!(lights.environment.len(), 7, "the environment's lights apart from the sun's");
         let mut kinds = Vec::new();
@@ -539,7 +610,12 @@ samples = 7
         let lights = [
             Light::Omni(OmniLight { position: Vec3::X, intensity: Vec3::ONE }),
             Light::Oriented(OrientedLight { position: Vec3::Y, normal: Vec3::Z, intensity: Vec3::ONE }),
-            Light::Area(OrientedLight { position: Vec3::Y, normal: Vec3::Z, intensity: Vec3::ONE }),
+            Light::Area(AreaLight {
+                position: Vec3::Y,
+                normal: Vec3::Z,
+                intensity: Vec3::ONE,
+                edges: [Vec3::X, Vec3::Y],
+            }),
             Light::Directional(DirectionalLight { direction: Vec3::Z, irradiance: Vec3::ONE }),
             Light::Spot(SpotLight {
                 position: Vec3::X,

@@ -142,6 +142,9 @@ pub struct CutTree {
     pub spots: Vec<SpotBlock>,
     /// The lights of a tree evaluated light by light (empty otherwise).
     pub lights: Vec<TreeLight>,
+    /// Area trees: each light's triangle's edges, by light index (a
+    /// representative draws its point on its triangle).
+    pub edges: Vec<[Vec3; 2]>,
     light_count: usize,
 }
 
@@ -185,6 +188,7 @@ impl CutTree {
             cones: Vec::new(),
             spots: Vec::new(),
             lights: Vec::new(),
+            edges: tree.light_edges.clone(),
             light_count: tree.light_count(),
         };
         let Some(root) = tree.root else { return layout };
@@ -231,7 +235,8 @@ impl CutTree {
             let exact = lo == hi && (!oriented || cone.half_angle == 0.0) && !spot;
             let (child, position, normal, (spread, min_cos_outer)) = if node.is_leaf() {
                 let spread = tree.light_spread.get(node.index()).copied().unwrap_or([0.0; 2]);
-                (Child::leaf(node.index() as u32), lo, tree.light_normal(node.index()), (spread, spread[1]))
+                let point = tree.leaves[node.index()].point;
+                (Child::leaf(node.index() as u32), point, tree.light_normal(node.index()), (spread, spread[1]))
             } else {
                 let n = node.index();
                 let normal = rep_normal.get(n).copied().unwrap_or(Vec3::ZERO);
@@ -316,7 +321,7 @@ impl CutTree {
     #[must_use]
     pub fn exhaustive(kind: LightKind, lights: Vec<TreeLight>) -> Self {
         let light_count = lights.len();
-        Self { kind, blocks: Vec::new(), cones: Vec::new(), spots: Vec::new(), lights, light_count }
+        Self { kind, blocks: Vec::new(), cones: Vec::new(), spots: Vec::new(), lights, edges: Vec::new(), light_count }
     }
 
     #[must_use]
@@ -335,7 +340,8 @@ impl CutTree {
         };
         let intensity = Vec3::new(block.intensity[0][k], block.intensity[1][k], block.intensity[2][k]);
         let spread = self.spots.get(b).map_or([0.0; 2], |s| [s.cos_inner[k], s.cos_outer[k]]);
-        TreeLight { point, normal, intensity, spread }
+        let edges = self.edges.get(block.representative[k] as usize).copied().unwrap_or([Vec3::ZERO; 2]);
+        TreeLight { point, normal, intensity, spread, edges }
     }
 
     /// Heap bytes of the layout.
@@ -345,6 +351,7 @@ impl CutTree {
             + self.cones.capacity() * std::mem::size_of::<ConeBlock>()
             + self.spots.capacity() * std::mem::size_of::<SpotBlock>()
             + self.lights.capacity() * std::mem::size_of::<TreeLight>()
+            + self.edges.capacity() * std::mem::size_of::<[Vec3; 2]>()
     }
 }
 
@@ -362,7 +369,7 @@ mod tests {
                 let normal = Vec3::new(rng.range_f32(-1.0, 1.0), -1.0, rng.range_f32(-1.0, 1.0)).normalize();
                 let point = if kind.at_infinity() { -normal } else { p };
                 let spread = if kind == LightKind::Spot { [0.9, 0.5 + 0.3 * rng.next_f32()] } else { [0.0; 2] };
-                TreeLight { point, normal, intensity: Vec3::new(1.0, rng.next_f32(), 0.5), spread }
+                TreeLight { spread, ..TreeLight::at(point, normal, Vec3::new(1.0, rng.next_f32(), 0.5)) }
             })
             .collect()
     }
@@ -420,7 +427,7 @@ mod tests {
 
     #[test]
     fn coincident_lights_are_one_exact_slot_and_boxes_are_widened_only_when_they_have_extent() {
-        let same = vec![TreeLight { point: Vec3::ONE, normal: Vec3::Y, intensity: Vec3::ONE, spread: [0.0; 2] }; 300];
+        let same = vec![TreeLight::at(Vec3::ONE, Vec3::Y, Vec3::ONE); 300];
         let layout = CutTree::from_tree(&ploc::build(LightKind::Oriented, &same, 1));
         assert!(layout.blocks[0].child[0].is_exact());
         assert_eq!(layout.blocks[0].half, [[0.0; 2]; 3]);

@@ -91,6 +91,8 @@ pub struct LightTree {
     pub light_normal: Vec<Vec3>,
     /// Spot trees only: each light's cosines of its inner and outer angles.
     pub light_spread: Vec<[f32; 2]>,
+    /// Area trees only: each light's triangle's edges (`AreaLight::edges`).
+    pub light_edges: Vec<[Vec3; 2]>,
     /// Internal nodes (n - 1 of them for n lights).
     pub nodes: Vec<Node>,
     /// Oriented only: each internal node's cone of normals.
@@ -115,7 +117,8 @@ impl LightTree {
     pub fn light(&self, i: usize) -> Light {
         let leaf = &self.leaves[i];
         let spread = self.light_spread.get(i).copied().unwrap_or([0.0; 2]);
-        TreeLight { point: leaf.point, normal: self.light_normal(i), intensity: leaf.intensity, spread }
+        let edges = self.light_edges.get(i).copied().unwrap_or([Vec3::ZERO; 2]);
+        TreeLight { point: leaf.point, normal: self.light_normal(i), intensity: leaf.intensity, spread, edges }
             .light(self.kind)
     }
 
@@ -128,12 +131,14 @@ impl LightTree {
         }
     }
 
-    /// (min, max) of the node's box (a point for a leaf).
+    /// (min, max) of the node's box (for a leaf, its light's point, or an
+    /// area light's triangle: wherever its drawn points can be).
     #[must_use]
     pub fn node_bounds(&self, node: NodeRef) -> (Vec3, Vec3) {
         if node.is_leaf() {
-            let p = self.leaves[node.index()].point;
-            (p, p)
+            let (i, leaf) = (node.index(), &self.leaves[node.index()]);
+            let edges = self.light_edges.get(i).copied().unwrap_or([Vec3::ZERO; 2]);
+            TreeLight { edges, ..TreeLight::at(leaf.point, Vec3::ZERO, leaf.intensity) }.bounds()
         } else {
             let n = &self.nodes[node.index()];
             (n.min, n.max)
@@ -178,6 +183,7 @@ impl LightTree {
         bytes(&self.leaves)
             + bytes(&self.light_normal)
             + bytes(&self.light_spread)
+            + bytes(&self.light_edges)
             + bytes(&self.nodes)
             + bytes(&self.cones)
     }
@@ -330,6 +336,7 @@ impl TreeBuilder {
                 Vec::new()
             },
             light_spread: if kind == LightKind::Spot { lights.iter().map(|l| l.spread).collect() } else { Vec::new() },
+            light_edges: if kind == LightKind::Area { lights.iter().map(|l| l.edges).collect() } else { Vec::new() },
             nodes: Vec::with_capacity(n.saturating_sub(1)),
             cones: Vec::with_capacity(if oriented { n.saturating_sub(1) } else { 0 }),
             root: None,
@@ -339,9 +346,10 @@ impl TreeBuilder {
 
     fn leaf_cluster(&self, light: usize) -> Cluster {
         let leaf = self.tree.leaves[light];
+        let (min, max) = self.tree.node_bounds(NodeRef::leaf(light as u32));
         Cluster {
-            min: leaf.point,
-            max: leaf.point,
+            min,
+            max,
             cone: self.tree.node_cone(NodeRef::leaf(light as u32)),
             intensity: leaf.intensity,
             weight: luminance(leaf.intensity),

@@ -26,6 +26,12 @@ fn random_lights(seed: u64, n: usize, kind: LightKind, clustered: bool) -> Vec<T
                 normal,
                 intensity,
                 spread: if kind == LightKind::Spot { [0.95, 0.7] } else { [0.0; 2] },
+                // Area lights are triangles up to 0.5 m across.
+                edges: if kind == LightKind::Area {
+                    [0; 2].map(|_| Vec3::new(rng.range_f32(-0.5, 0.5), 0.0, rng.range_f32(-0.5, 0.5)))
+                } else {
+                    [Vec3::ZERO; 2]
+                },
             }
         })
         .collect()
@@ -51,6 +57,15 @@ fn check_tree(tree: &LightTree, lights: &[TreeLight]) {
 fn check_node(tree: &LightTree, node: NodeRef, seen: &mut [u32]) -> Vec<u32> {
     if node.is_leaf() {
         seen[node.index()] += 1;
+        // A leaf's box holds every point its light can be drawn at (an
+        // area light's triangle).
+        let (lo, hi) = tree.node_bounds(node);
+        if let Light::Area(light) = tree.light(node.index()) {
+            for u in [[0.0, 0.0], [0.999, 0.0], [0.0, 0.999], [0.3, 0.3], [0.9, 0.8]] {
+                let p = light.point_at(u);
+                assert!(lo.cmple(p + 1e-6).all() && hi.cmpge(p - 1e-6).all(), "{p} outside the leaf's box");
+            }
+        }
         return vec![node.index() as u32];
     }
     let [a, b] = tree.node_children(node);
@@ -111,13 +126,12 @@ fn degenerate_light_sets_build_valid_trees() {
                 normal: Vec3::Y,
                 intensity: Vec3::splat(i as f32 % 3.0),
                 spread: [0.0; 2],
+                edges: [Vec3::ZERO; 2],
             })
             .collect();
         let dark: Vec<TreeLight> =
             random_lights(21, 400, kind, false).into_iter().map(|l| TreeLight { intensity: Vec3::ZERO, ..l }).collect();
-        let both: Vec<TreeLight> = (0..300)
-            .map(|_| TreeLight { point: Vec3::ZERO, normal: Vec3::Y, intensity: Vec3::ZERO, spread: [0.0; 2] })
-            .collect();
+        let both: Vec<TreeLight> = (0..300).map(|_| TreeLight::at(Vec3::ZERO, Vec3::Y, Vec3::ZERO)).collect();
         for lights in [&coincident, &dark, &both] {
             check_tree(&ploc::build(kind, lights, 5), lights);
             check_tree(&greedy::build(kind, &lights[..100], 5), &lights[..100]);
@@ -154,6 +168,7 @@ fn representatives_are_chosen_in_proportion_to_intensity() {
             normal: Vec3::Y,
             intensity: Vec3::splat(i as f32 + 1.0),
             spread: [0.0; 2],
+            edges: [Vec3::ZERO; 2],
         })
         .collect();
     let runs = 40_000;
@@ -200,9 +215,7 @@ fn depth(tree: &LightTree, node: NodeRef) -> usize {
 fn coincident_lights_build_a_shallow_tree_not_a_chain() {
     // All pair sizes are 0: ties must not make every cluster pick the same
     // neighbour (one merge per pass, a chain of depth n).
-    let lights: Vec<TreeLight> = (0..100_000)
-        .map(|_| TreeLight { point: Vec3::ONE, normal: Vec3::Y, intensity: Vec3::ONE, spread: [0.0; 2] })
-        .collect();
+    let lights: Vec<TreeLight> = (0..100_000).map(|_| TreeLight::at(Vec3::ONE, Vec3::Y, Vec3::ONE)).collect();
     let tree = ploc::build(LightKind::Omni, &lights, 1);
     let d = depth(&tree, tree.root.unwrap());
     assert!(d <= 64, "depth {d} for 100,000 coincident lights");

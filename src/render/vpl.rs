@@ -20,7 +20,7 @@ use glam::Vec3;
 use rayon::prelude::*;
 
 use crate::embree::Ray;
-use crate::light::{Light, Lights, OrientedLight, SpotLight};
+use crate::light::{AreaLight, Light, Lights, OrientedLight, SpotLight};
 use crate::scene::VplSettings;
 use crate::shading::Geometry;
 use crate::util::color::luminance;
@@ -40,6 +40,10 @@ enum Source {
     Oriented {
         position: Vec3,
         normal: Vec3,
+    },
+    /// An area light's triangle: from a point uniform on it.
+    Triangle {
+        light: AreaLight,
     },
     /// From infinity along -direction, through a disc covering the scene.
     Directional {
@@ -92,9 +96,8 @@ pub fn trace(geometry: &Geometry<'_>, groups: &[Lights], settings: VplSettings, 
         lights.for_each(|light| {
             sources.push(match light {
                 Light::Omni(l) => (Source::Omni { position: l.position }, 4.0 * PI * l.intensity),
-                Light::Area(l) | Light::Oriented(l) => {
-                    (Source::Oriented { position: l.position, normal: l.normal }, PI * l.intensity)
-                }
+                Light::Area(l) => (Source::Triangle { light: l }, PI * l.intensity),
+                Light::Oriented(l) => (Source::Oriented { position: l.position, normal: l.normal }, PI * l.intensity),
                 Light::Directional(l) | Light::Environment(l) => {
                     (Source::Directional { direction: l.direction }, PI * radius * radius * l.irradiance)
                 }
@@ -150,6 +153,10 @@ pub fn trace(geometry: &Geometry<'_>, groups: &[Lights], settings: VplSettings, 
                 }
                 Source::Oriented { position, normal } => {
                     (position + normal * eps, cosine_direction(normal, rng.next_f32(), rng.next_f32()))
+                }
+                Source::Triangle { light } => {
+                    let position = light.point_at([rng.next_f32(), rng.next_f32()]);
+                    (position + light.normal * eps, cosine_direction(light.normal, rng.next_f32(), rng.next_f32()))
                 }
                 Source::Spot { position, direction, cos_inner, cos_outer } => {
                     // Uniform in the cone's solid angle: the path carries the

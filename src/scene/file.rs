@@ -50,7 +50,7 @@ pub struct GltfSpec {
     /// Blender's exporter and importer use in their "Standard" mode.
     #[serde(default = "lumens_per_watt")]
     pub lumens_per_watt: f32,
-    /// Oriented lights each emissive mesh primitive becomes.
+    /// About how many triangle lights each emissive mesh primitive becomes.
     #[serde(default = "emitter_samples")]
     pub emitter_samples: u32,
     /// `[[gltf.groups]]`: which light group the file's lights join, by the
@@ -80,7 +80,7 @@ pub struct UsdSpec {
     /// The time code everything is read at; the stage's start time code
     /// when absent (0 when it has none).
     pub time: Option<f64>,
-    /// Oriented lights each emissive surface and area light becomes.
+    /// About how many triangle lights each emissive surface and area light becomes.
     #[serde(default = "emitter_samples")]
     pub emitter_samples: u32,
     /// The shutter `--shutter` gives, in the stage's time codes.
@@ -410,7 +410,8 @@ pub struct GridSpec {
 }
 
 /// A parallelogram emitter of radiance `radiance` (W/(m^2 sr)) from the side
-/// u x v points to, visible to the camera, as `samples` oriented lights.
+/// u x v points to, visible to the camera, as about `samples` triangle
+/// lights (docs/design.md §6.1).
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct AreaSpec {

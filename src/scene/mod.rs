@@ -69,7 +69,8 @@ pub enum LightSource {
     Grid { corner: Vec3, u: Vec3, v: Vec3, count: [u32; 2], intensity: Vec3 },
     /// An area emitter: the mesh `meshes[mesh]` (visible, emitting `radiance`
     /// W/(m^2 sr) from the side its winding faces, and from the other too when
-    /// `both_sides`) as `samples` oriented lights per side.
+    /// `both_sides`) as about `samples` triangle lights per side (a
+    /// textured one as `samples` points drawn with `seed`).
     Area { mesh: usize, radiance: Vec3, samples: u32, seed: u64, both_sides: bool },
     /// The sun: `irradiance` W/m^2 from `direction` (towards the sun, any length),
     /// as `samples` directional lights over a disc of `angular_radius_degrees`.

@@ -85,7 +85,7 @@ impl Choices {
         let k = quad.lanes.count & 3;
         quad.weights[k] = weight;
         quad.slots[k] = slot;
-        quad.lanes.push_point(light.point, light.normal, light.spread);
+        quad.lanes.push(light);
         self.len += 1;
     }
 

@@ -52,7 +52,7 @@ pub fn random_lights(kind: LightKind, n: usize, distribution: Distribution, seed
             let intensity =
                 Vec3::splat(rng.range_f32(0.5, 1.5)) * Vec3::new(1.0, rng.range_f32(0.8, 1.0), rng.range_f32(0.6, 1.0));
             match kind {
-                LightKind::Omni => TreeLight { point: position, normal: Vec3::ZERO, intensity, spread: [0.0; 2] },
+                LightKind::Omni => TreeLight::at(position, Vec3::ZERO, intensity),
                 LightKind::Area | LightKind::Oriented | LightKind::Spot => {
                     if direction.y > 0.0 {
                         direction.y = -direction.y;
@@ -64,11 +64,11 @@ pub fn random_lights(kind: LightKind, n: usize, distribution: Distribution, seed
                     } else {
                         [0.0; 2]
                     };
-                    TreeLight { point: position, normal: direction, intensity, spread }
+                    TreeLight { spread, ..TreeLight::at(position, direction, intensity) }
                 }
                 LightKind::Directional | LightKind::Environment => {
                     direction.y = direction.y.abs();
-                    TreeLight { point: direction, normal: Vec3::ZERO, intensity, spread: [0.0; 2] }
+                    TreeLight::at(direction, Vec3::ZERO, intensity)
                 }
             }
         })

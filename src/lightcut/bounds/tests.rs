@@ -50,7 +50,7 @@ fn cluster_bound(
 /// for a directional light) with `normal` (oriented lights; a spot's
 /// direction) and `spread` (a spot's inner and outer cosines).
 fn term(kind: LightKind, sp: &SurfacePoint<'_>, point: Vec3, normal: Vec3, spread: [f32; 2]) -> DVec3 {
-    light_term(&TreeLight { point, normal, intensity: Vec3::ONE, spread }.light(kind), sp)
+    light_term(&TreeLight { spread, ..TreeLight::at(point, normal, Vec3::ONE) }.light(kind), sp)
 }
 
 fn unit(rng: &mut Rng) -> Vec3 {

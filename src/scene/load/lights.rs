@@ -245,8 +245,9 @@ pub(crate) fn vpl_power_message(power: f64) -> String {
 }
 
 /// Adds an area emitter's geometry: visible, black, emitting `radiance` from
-/// the side its triangles' winding faces. Returns its light: `samples`
-/// oriented lights drawn with `seed`.
+/// the side its triangles' winding faces. Returns its light: about
+/// `samples` triangle lights (a textured emitter's `samples` points drawn
+/// with `seed`).
 fn add_emitter(
     meshes: &mut Vec<Mesh>,
     materials: &mut Vec<Material>,
