@@ -7,7 +7,7 @@ use std::f32::consts::PI;
 use glam::{Vec2, Vec3};
 
 use super::environment::{pixel_solid_angle, EnvironmentLight};
-use super::{AreaLight, DirectionalLight};
+use super::{fold, AreaLight, DirectionalLight};
 use crate::scene::EnvironmentMap;
 use crate::util::color::luminance;
 use crate::util::sampling::Rng;
@@ -62,10 +62,28 @@ impl EmitterTriangle {
     }
 }
 
+/// `count` shared among `n` triangles in proportion to `weight` of each
+/// (summing to `total`): largest-remainder apportionment, in order (each
+/// triangle gets the rounded running total less what went before; the last
+/// what is left).
+fn shares(n: usize, weight: impl Fn(usize) -> f64, total: f64, count: usize) -> Vec<usize> {
+    let mut assigned = 0usize;
+    let mut cumulative = 0.0f64;
+    (0..n)
+        .map(|k| {
+            cumulative += weight(k);
+            let until = if k + 1 == n { count } else { ((cumulative / total) * count as f64).round() as usize };
+            let share = until.saturating_sub(assigned);
+            assigned += share;
+            share
+        })
+        .collect()
+}
+
 /// `count` points on `triangles`, spread in proportion to `weight` of
-/// each triangle (summing to `total`; largest-remainder apportionment, in
-/// order) and stratified in each: the triangle's index and the point's
-/// barycentric coordinates (a, b), p = p0 + a (p1 - p0) + b (p2 - p0).
+/// each triangle (summing to `total`; [`shares`]) and stratified in each:
+/// the triangle's index and the point's barycentric coordinates (a, b),
+/// p = p0 + a (p1 - p0) + b (p2 - p0).
 fn points_by(
     triangles: &[EmitterTriangle],
     weight: impl Fn(usize) -> f64,
@@ -74,21 +92,9 @@ fn points_by(
     rng: &mut Rng,
 ) -> Vec<(usize, Vec2)> {
     let mut points = Vec::with_capacity(count);
-    let mut assigned = 0usize;
-    let mut cumulative = 0.0f64;
-    for k in 0..triangles.len() {
-        cumulative += weight(k);
-        let until =
-            if k + 1 == triangles.len() { count } else { ((cumulative / total) * count as f64).round() as usize };
-        let share = until.saturating_sub(assigned);
-        assigned += share;
+    for (k, share) in shares(triangles.len(), weight, total, count).into_iter().enumerate() {
         for uv in stratified_square(share, rng) {
-            // Fold the square onto the triangle (uniform in area).
-            let (mut a, mut b) = (uv.x, uv.y);
-            if a + b > 1.0 {
-                a = 1.0 - a;
-                b = 1.0 - b;
-            }
+            let (a, b) = fold([uv.x, uv.y]);
             points.push((k, Vec2::new(a, b)));
         }
     }
@@ -121,14 +127,8 @@ pub fn sample_area_light(triangles: &[EmitterTriangle], radiance: Vec3, samples:
         return Vec::new();
     }
     let mut lights = Vec::with_capacity(samples.max(triangles.len()));
-    let mut assigned = 0usize;
-    let mut cumulative = 0.0f64;
-    for (k, t) in triangles.iter().enumerate() {
-        cumulative += f64::from(t.area());
-        let until =
-            if k + 1 == triangles.len() { samples } else { ((cumulative / total) * samples as f64).round() as usize };
-        let share = until.saturating_sub(assigned);
-        assigned += share;
+    let shares = shares(triangles.len(), |k| f64::from(triangles[k].area()), total, samples);
+    for (t, share) in triangles.iter().zip(shares) {
         if t.area() <= 0.0 {
             continue;
         }

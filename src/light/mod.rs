@@ -150,8 +150,7 @@ impl AreaLight {
     /// = position - (e1 + e2) / 3.
     #[must_use]
     pub fn point_at(&self, u: [f32; 2]) -> Vec3 {
-        let (a, b) = fold(u);
-        self.position + (a - 1.0 / 3.0) * self.edges[0] + (b - 1.0 / 3.0) * self.edges[1]
+        point_on_triangle(self.position, self.edges, u)
     }
 
     /// The triangle's corners (three times its position for a point).
@@ -159,6 +158,15 @@ impl AreaLight {
     pub fn corners(&self) -> [Vec3; 3] {
         triangle_corners(self.position, self.edges)
     }
+}
+
+/// The point at the numbers `u` in [0, 1)^2 on the triangle of centroid
+/// `centroid` and edges `edges`, uniform by area ([`AreaLight::point_at`]).
+#[must_use]
+#[inline(always)]
+pub fn point_on_triangle(centroid: Vec3, edges: [Vec3; 2], u: [f32; 2]) -> Vec3 {
+    let (a, b) = fold(u);
+    centroid + (a - 1.0 / 3.0) * edges[0] + (b - 1.0 / 3.0) * edges[1]
 }
 
 /// The corners of the triangle of centroid `centroid` and edges `edges`.

@@ -17,7 +17,7 @@ use super::lobes::Lobes;
 use super::pbr::PbrLanes;
 use super::surface::SurfacePoint;
 use crate::embree::{Ray, ShadowRay};
-use crate::light::{AreaLight, Light, LightKind, SpotLight, TreeLight};
+use crate::light::{point_on_triangle, Light, LightKind, SpotLight, TreeLight};
 use crate::scene::material::phong_normalisation;
 use crate::util::sampling::mix64;
 use crate::util::simd::{dot3, pow, splat3, V3};
@@ -77,7 +77,7 @@ impl Lanes {
             let bits = centroid.to_array().map(|c| u64::from(c.to_bits()));
             let h = mix64(mix64(key ^ bits[0] ^ (bits[1] << 32)) ^ bits[2]);
             let u = [(h >> 40) as f32 * UNIT_24, ((h >> 16) & 0xff_ffff) as f32 * UNIT_24];
-            let at = AreaLight { position: centroid, normal: Vec3::ZERO, intensity: Vec3::ZERO, edges }.point_at(u);
+            let at = point_on_triangle(centroid, edges, u);
             for axis in 0..3 {
                 point[axis][k] = at[axis];
             }
@@ -170,9 +170,6 @@ pub struct LightEvaluator<'a, 'p> {
     /// Where shadow rays start (lifted off the surface).
     origin: V3,
     origin_point: Vec3,
-    /// The shading point's key for the points drawn on area lights'
-    /// triangles: its position's bits, mixed.
-    triangle_key: u64,
 }
 
 impl<'a, 'p> LightEvaluator<'a, 'p> {
@@ -180,16 +177,7 @@ impl<'a, 'p> LightEvaluator<'a, 'p> {
     #[inline(always)]
     pub fn new(sp: &'a SurfacePoint<'p>) -> Self {
         let origin = sp.offset_origin();
-        let bits = sp.p.to_array().map(|c| u64::from(c.to_bits()));
-        let triangle_key = mix64(mix64(bits[0] ^ (bits[1] << 32) ^ TRIANGLE_STREAM) ^ bits[2]);
-        Self {
-            sp,
-            p: splat3(sp.p),
-            material: MaterialLanes::new(sp),
-            origin: splat3(origin),
-            origin_point: origin,
-            triangle_key,
-        }
+        Self { sp, p: splat3(sp.p), material: MaterialLanes::new(sp), origin: splat3(origin), origin_point: origin }
     }
 
     /// The material term of a light of `kind` in directions `wi`: every
@@ -245,7 +233,12 @@ impl<'a, 'p> LightEvaluator<'a, 'p> {
             return;
         }
         let point = if kind == LightKind::Area {
-            let [x, y, z] = lanes.points_on_triangles(self.triangle_key);
+            // The shading point's key for the points drawn on triangles:
+            // its position's bits, mixed (here, not per shading point: only
+            // area lights need it).
+            let bits = self.sp.p.to_array().map(|c| u64::from(c.to_bits()));
+            let key = mix64(mix64(bits[0] ^ (bits[1] << 32) ^ TRIANGLE_STREAM) ^ bits[2]);
+            let [x, y, z] = lanes.points_on_triangles(key);
             [f32x4::new(x), f32x4::new(y), f32x4::new(z)]
         } else {
             point
@@ -349,27 +342,12 @@ mod tests {
 
     use super::*;
     use crate::light::emitters::{sample_area_light, EmitterTriangle};
+    use crate::light::AreaLight;
     use crate::scene::material::{Albedo, Material};
 
     /// A white Lambertian floor point at `p` (normal +z, seen from above).
     fn floor_point(material: &Material, p: Vec3) -> SurfacePoint<'_> {
-        SurfacePoint {
-            p,
-            n: Vec3::Z,
-            ng: Vec3::Z,
-            wo: Vec3::Z,
-            r: Vec3::Z,
-            kd: Vec3::ONE,
-            material,
-            pbr: None,
-            distance: 1.0,
-            time: 0.0,
-            emitted: Vec3::ZERO,
-            mirror: Vec3::ZERO,
-            epsilon: 1e-4,
-            min_distance: 1e-4,
-            emitter_lobes: Lobes::ALL,
-        }
+        SurfacePoint::bare(material, p, Vec3::Z, Vec3::Z, Vec3::ONE)
     }
 
     /// Lambert's irradiance at `p` (normal +z) from a polygon of unit

@@ -51,6 +51,34 @@ pub struct SurfacePoint<'s> {
     pub emitter_lobes: Lobes,
 }
 
+impl<'m> SurfacePoint<'m> {
+    /// A point at `p` of `material` with shading and geometric normal `n`,
+    /// seen from `wo`, diffuse albedo `kd` and no glTF lobes: nothing
+    /// emitted or mirrored, at 1 m from the eye, offsets of 0.1 mm, every
+    /// lobe lighting every light. What benchmarks and tests shade without
+    /// a scene (each sets what it needs otherwise).
+    #[must_use]
+    pub fn bare(material: &'m Material, p: Vec3, n: Vec3, wo: Vec3, kd: Vec3) -> Self {
+        SurfacePoint {
+            p,
+            n,
+            ng: n,
+            wo,
+            r: crate::scene::material::reflect(wo, n),
+            kd,
+            material,
+            pbr: None,
+            distance: 1.0,
+            time: 0.0,
+            emitted: Vec3::ZERO,
+            mirror: Vec3::ZERO,
+            epsilon: 1e-4,
+            min_distance: 1e-4,
+            emitter_lobes: Lobes::ALL,
+        }
+    }
+}
+
 impl SurfacePoint<'_> {
     /// Origin for rays leaving the surface on the viewer's side.
     #[must_use]
@@ -130,28 +158,12 @@ mod tests {
     use glam::Vec3;
 
     use super::*;
-    use crate::scene::material::{reflect, Albedo, Material};
+    use crate::scene::material::{Albedo, Material};
 
     /// On the plane z = 0 (geometric normal +z), seen from `wo`, with the
     /// shading normal `n`.
     fn point(material: &Material, n: Vec3, wo: Vec3) -> SurfacePoint<'_> {
-        SurfacePoint {
-            p: Vec3::ZERO,
-            n,
-            ng: Vec3::Z,
-            wo,
-            r: reflect(wo, n),
-            kd: Vec3::ZERO,
-            material,
-            pbr: None,
-            distance: 1.0,
-            time: 0.0,
-            emitted: Vec3::ZERO,
-            mirror: Vec3::ONE,
-            epsilon: 1e-4,
-            min_distance: 1e-4,
-            emitter_lobes: Lobes::ALL,
-        }
+        SurfacePoint { ng: Vec3::Z, mirror: Vec3::ONE, ..SurfacePoint::bare(material, Vec3::ZERO, n, wo, Vec3::ZERO) }
     }
 
     #[test]

@@ -13,7 +13,7 @@ use crate::light::{LightKind, TreeLight};
 use crate::light_tree::layout::CutTree;
 use crate::light_tree::{greedy, ploc, LightTree, LightTrees};
 use crate::lightcut::{evaluate, CutScratch, CutSettings};
-use crate::scene::material::{reflect, Albedo, Material};
+use crate::scene::material::{Albedo, Material};
 use crate::shading::SurfacePoint;
 use crate::util::sampling::Rng;
 
@@ -153,23 +153,7 @@ fn shading_points(material: &Material, count: usize) -> Vec<SurfacePoint<'_>> {
         .map(|_| {
             let p = Vec3::new(rng.range_f32(-12.0, 12.0), 0.0, rng.range_f32(-12.0, 12.0));
             let wo = Vec3::new(rng.range_f32(-1.0, 1.0), rng.range_f32(0.2, 1.0), rng.range_f32(-1.0, 1.0)).normalize();
-            SurfacePoint {
-                p,
-                n: Vec3::Y,
-                ng: Vec3::Y,
-                wo,
-                r: reflect(wo, Vec3::Y),
-                kd: Vec3::splat(0.5),
-                material,
-                pbr: None,
-                distance: 1.0,
-                time: 0.0,
-                emitted: Vec3::ZERO,
-                mirror: Vec3::ZERO,
-                epsilon: 1e-4,
-                min_distance: 1e-4,
-                emitter_lobes: crate::shading::Lobes::ALL,
-            }
+            SurfacePoint::bare(material, p, Vec3::Y, wo, Vec3::splat(0.5))
         })
         .collect()
 }

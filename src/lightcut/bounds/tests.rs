@@ -130,25 +130,13 @@ fn surface<'m>(rng: &mut Rng, material: &'m Material) -> SurfacePoint<'m> {
         Albedo::Texture(_) => unreachable!(),
     };
     let pbr = material.pbr.as_ref().map(|m| crate::shading::pbr::Pbr::of(m, base, &[glam::Vec2::ZERO; 2], &[]));
-    SurfacePoint {
-        p: Vec3::new(rng.range_f32(-3.0, 3.0), rng.range_f32(-3.0, 3.0), rng.range_f32(-3.0, 3.0)),
-        n,
-        ng,
-        wo,
-        r: reflect(wo, n),
-        kd: pbr.map_or(base, |p| p.diffuse_albedo()),
-        material,
-        pbr,
-        distance: 1.0,
-        time: 0.0,
-        emitted: Vec3::ZERO,
-        mirror: Vec3::ZERO,
-        epsilon: 1e-4,
-        min_distance: 1e-4,
-        // Half the time the environment's lights see the diffuse lobe alone
-        // (a glossy lobe too sharp for them), which the bounds must follow.
-        emitter_lobes: if rng.next_f32() < 0.5 { crate::shading::Lobes::DIFFUSE } else { crate::shading::Lobes::ALL },
-    }
+    // Drawn in this order, as the random stream always has.
+    let p = Vec3::new(rng.range_f32(-3.0, 3.0), rng.range_f32(-3.0, 3.0), rng.range_f32(-3.0, 3.0));
+    // Half the time the environment's lights see the diffuse lobe alone
+    // (a glossy lobe too sharp for them), which the bounds must follow.
+    let emitter_lobes = if rng.next_f32() < 0.5 { crate::shading::Lobes::DIFFUSE } else { crate::shading::Lobes::ALL };
+    let kd = pbr.map_or(base, |p| p.diffuse_albedo());
+    SurfacePoint { ng, pbr, emitter_lobes, ..SurfacePoint::bare(material, p, n, wo, kd) }
 }
 
 #[test]

@@ -21,24 +21,8 @@ fn point(material: &Material, wo: Vec3) -> SurfacePoint<'_> {
         Albedo::Texture(_) => unreachable!(),
     };
     let pbr = material.pbr.as_ref().map(|m| Pbr::of(m, base, &[glam::Vec2::ZERO; 2], &[]));
-    let n = Vec3::Z;
-    SurfacePoint {
-        p: Vec3::ZERO,
-        n,
-        ng: n,
-        wo,
-        r: crate::scene::material::reflect(wo, n),
-        kd: pbr.map_or(base, |p| p.diffuse_albedo()),
-        material,
-        pbr,
-        distance: 1.0,
-        time: 0.0,
-        emitted: Vec3::ZERO,
-        mirror: Vec3::ZERO,
-        epsilon: 1e-4,
-        min_distance: 1e-4,
-        emitter_lobes: Lobes::ALL,
-    }
+    let kd = pbr.map_or(base, |p| p.diffuse_albedo());
+    SurfacePoint { pbr, ..SurfacePoint::bare(material, Vec3::ZERO, Vec3::Z, wo, kd) }
 }
 
 fn lambert(albedo: f32) -> Material {
