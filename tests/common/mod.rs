@@ -235,22 +235,42 @@ pub fn assert_same_bits_for_any_threads_and_window(dir: &TempDir, scene: &Path, 
     }
 }
 
+/// Which pixels a comparison with a peer covers: its mean over them and
+/// its 8x8 blocks that they fill.
+#[derive(Clone, Copy, Debug)]
+pub enum Part {
+    /// Every pixel.
+    Image,
+    /// The pixels an object covers (by the render's depth): the background
+    /// alone is easy to match.
+    Objects,
+    /// The pixels a metal covers (an object whose diffuse albedo is 0):
+    /// where two renderers whose dielectrics differ by definition define
+    /// the same BRDF.
+    Metals,
+}
+
 /// Renders `scene` with each of `flags` and compares its luminance with
 /// a peer's converged render `reference` (both under scenes/`dir`/):
 /// the mean within 1% and the 8x8 blocks within 2% on average, over the
-/// whole image and again over the objects alone (the blocks they cover
-/// whole, by the render's depth: the background alone is easy to match).
+/// whole image and again over the objects alone.
 pub fn matches_peer(name: &str, dir: &str, scene: &str, reference: &str, flags: &[&[&str]]) {
+    matches_peers(name, dir, scene, &[(reference, &[Part::Image, Part::Objects])], flags);
+}
+
+/// [`matches_peer`] against several peers' references, each over its
+/// parts of the image: each render compared with every one of them.
+pub fn matches_peers(name: &str, dir: &str, scene: &str, references: &[(&str, &[Part])], flags: &[&[&str]]) {
     let scenes = scenes().join(dir);
     let dir = TempDir::new(name);
     let scene = scenes.join(scene);
-    let reference = read_exr(&scenes.join(reference)).unwrap();
     let luminance = |image: &ExrImage| -> Vec<f64> {
         let [r, g, b] = ["R", "G", "B"].map(|c| channel(image, c));
         (0..r.len()).map(|p| 0.2126 * f64::from(r[p]) + 0.7152 * f64::from(g[p]) + 0.0722 * f64::from(b[p])).collect()
     };
-    let want = luminance(&reference);
-    let (width, height) = (reference.width, reference.height);
+    let references: Vec<(&str, &[Part], ExrImage)> =
+        references.iter().map(|&(path, parts)| (path, parts, read_exr(&scenes.join(path)).unwrap())).collect();
+    let (width, height) = (references[0].2.width, references[0].2.height);
     let blocks = |values: &[f64]| -> Vec<f64> {
         let mut sums = vec![0.0; (width / 8) * (height / 8)];
         for y in 0..height / 8 * 8 {
@@ -263,24 +283,42 @@ pub fn matches_peer(name: &str, dir: &str, scene: &str, reference: &str, flags: 
     let mut failures = Vec::new();
     for &flags in flags {
         let image = render(&scene, &dir.path("render.exr"), flags);
-        assert_eq!((image.width, image.height), (width, height));
         let got = luminance(&image);
-        let object: Vec<f64> = channel(&image, "Z").iter().map(|&z| f64::from(u8::from(z < 1e9))).collect();
-        let covered: Vec<bool> = blocks(&object).iter().map(|&n| n == 64.0).collect();
-        let on_objects = |values: &[f64]| -> f64 { values.iter().zip(&object).map(|(v, o)| v * o).sum() };
-        let (g, w) = (blocks(&got), blocks(&want));
-        let block_error = |keep: &dyn Fn(usize) -> bool| {
-            let errors: Vec<f64> = (0..w.len()).filter(|&k| keep(k)).map(|k| (g[k] - w[k]).abs() / w[k]).collect();
-            assert!(errors.len() >= 30, "only {} blocks to compare", errors.len());
-            errors.iter().sum::<f64>() / errors.len() as f64
+        let depth = channel(&image, "Z");
+        let albedo = ["albedo.R", "albedo.G", "albedo.B"].map(|c| channel(&image, c));
+        let mask = |part: Part| -> Vec<f64> {
+            (0..got.len())
+                .map(|p| match part {
+                    Part::Image => 1.0,
+                    Part::Objects => f64::from(u8::from(depth[p] < 1e9)),
+                    Part::Metals => f64::from(u8::from(depth[p] < 1e9 && albedo.iter().all(|a| a[p] == 0.0))),
+                })
+                .collect()
         };
-        for (part, ratio, blocks) in [
-            ("image", got.iter().sum::<f64>() / want.iter().sum::<f64>(), block_error(&|_| true)),
-            ("objects", on_objects(&got) / on_objects(&want), block_error(&|k| covered[k])),
-        ] {
-            eprintln!("{name} {flags:?}, {part}: mean ratio {ratio:.4}, mean 8x8 block error {:.2}%", 100.0 * blocks);
-            if (ratio - 1.0).abs() > 0.01 || blocks > 0.02 {
-                failures.push(format!("{flags:?}, {part}: ratio {ratio:.4}, blocks {:.2}%", 100.0 * blocks));
+        for (path, parts, reference) in &references {
+            assert_eq!((image.width, image.height), (reference.width, reference.height), "{path}");
+            let want = luminance(reference);
+            let (g, w) = (blocks(&got), blocks(&want));
+            for &part in *parts {
+                let mask = mask(part);
+                let covered: Vec<bool> = blocks(&mask).iter().map(|&n| n == 64.0).collect();
+                let on_part = |values: &[f64]| -> f64 { values.iter().zip(&mask).map(|(v, m)| v * m).sum() };
+                let errors: Vec<f64> =
+                    (0..w.len()).filter(|&k| covered[k]).map(|k| (g[k] - w[k]).abs() / w[k]).collect();
+                assert!(errors.len() >= 20, "{part:?}: only {} blocks to compare", errors.len());
+                let blocks = errors.iter().sum::<f64>() / errors.len() as f64;
+                let ratio = on_part(&got) / on_part(&want);
+                eprintln!(
+                    "{name} {flags:?} vs {path}, {part:?}: mean ratio {ratio:.4}, mean 8x8 block error {:.2}% ({} blocks)",
+                    100.0 * blocks,
+                    errors.len()
+                );
+                if (ratio - 1.0).abs() > 0.01 || blocks > 0.02 {
+                    failures.push(format!(
+                        "{flags:?} vs {path}, {part:?}: ratio {ratio:.4}, blocks {:.2}%",
+                        100.0 * blocks
+                    ));
+                }
             }
         }
     }
