@@ -8,7 +8,11 @@ off, a box pixel filter one pixel wide, "Standard" view transform, the
 resolution of lobby.toml.
 
     python3 -m venv venv && venv/bin/pip install bpy==5.0.1
-    venv/bin/python scenes/lobby/make_cycles_indirect.py [SAMPLES] [BOUNCES] [OUT.exr]
+    venv/bin/python scenes/lobby/make_cycles_indirect.py [SAMPLES] [BOUNCES] [OUT.exr] [SEED]
+
+BOUNCES 0 is direct light only, as cycles_2048.exr; SEED (default 1) other
+than a reference's gives an estimate independent of it (to time Cycles at
+fewer samples against it).
 
 Writes OUT.exr, by default scenes/lobby/cycles-bounces{BOUNCES}-{SAMPLES}.exr
 (channels R, G, B, A; linear Rec. 709).
@@ -47,7 +51,7 @@ def main():
     cycles.caustics_refractive = True
     cycles.pixel_filter_type = "BOX"
     cycles.filter_width = 1.0
-    cycles.seed = 1
+    cycles.seed = int(sys.argv[4]) if len(sys.argv) > 4 else 1
     scene.render.resolution_x = 160
     scene.render.resolution_y = 120
     scene.render.resolution_percentage = 100
