@@ -154,6 +154,11 @@ pub struct ModeArgs {
     /// groups' layers less accurate). Both cut modes.
     #[arg(long, value_name = "group|pixel", value_parser = parse_group_error, conflicts_with = "exact")]
     pub group_error: Option<GroupError>,
+    /// Stochastic mode: shadow rays per cut, resampled among the cut's
+    /// drawn lights by their unoccluded contributions (resampled importance
+    /// sampling; unbiased). 0 (the default) traces every cut node's light.
+    #[arg(long, value_name = "N")]
+    pub resampled_rays: Option<usize>,
 }
 
 /// Parses `--group-error`.
@@ -168,6 +173,25 @@ pub fn parse_group_error(s: &str) -> Result<GroupError, String> {
 impl ModeArgs {
     /// The mode these flags ask for, at `spp` samples per pixel.
     pub fn mode(&self, spp: u32) -> Result<Mode, CliError> {
+        let mode = self.mode_without_resampling(spp)?;
+        match (mode, self.resampled_rays) {
+            (Mode::Stochastic(mut cut), Some(rays)) => {
+                cut.resampled_rays = rays;
+                Ok(Mode::Stochastic(cut))
+            }
+            (Mode::Stochastic(_), None) => Ok(mode),
+            (_, Some(_)) => Err(CliError::Usage {
+                flag: "--resampled-rays",
+                message: format!(
+                    "applies to the stochastic mode only; this render is {}: add --stochastic",
+                    mode.describe()
+                ),
+            }),
+            (_, None) => Ok(mode),
+        }
+    }
+
+    fn mode_without_resampling(&self, spp: u32) -> Result<Mode, CliError> {
         let stochastic = if self.exact {
             return Ok(Mode::Exact);
         } else if self.multidimensional {

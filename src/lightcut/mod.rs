@@ -58,11 +58,22 @@ pub struct CutSettings {
     /// ([`EXHAUSTIVE_LIGHTS`]; `lightcuts bench switch` sets it to measure
     /// the break-even).
     pub exhaustive_lights: usize,
+    /// The stochastic cut's shadow rays per cut (`--resampled-rays`): 0
+    /// traces every cut node's light; N > 0 traces N of them resampled by
+    /// their unoccluded contributions (docs/design.md §10.3) when the cut
+    /// has more. The other modes ignore it.
+    pub resampled_rays: usize,
 }
 
 impl Default for CutSettings {
     fn default() -> Self {
-        Self { error: 0.02, max_cut: 1000, group_error: GroupError::Group, exhaustive_lights: EXHAUSTIVE_LIGHTS }
+        Self {
+            error: 0.02,
+            max_cut: 1000,
+            group_error: GroupError::Group,
+            exhaustive_lights: EXHAUSTIVE_LIGHTS,
+            resampled_rays: 0,
+        }
     }
 }
 

@@ -36,8 +36,13 @@ const MAX_PAIRS: usize = 1 << 28;
 /// The defaults of `render --multidimensional`: the threshold is relative to
 /// the pixel's whole direct light, and a pixel's cut holds all its gather
 /// points' pairs, so its largest cut is larger than one point's.
-pub const MULTIDIMENSIONAL_DEFAULTS: CutSettings =
-    CutSettings { error: 0.02, max_cut: 8192, group_error: super::GroupError::Group, exhaustive_lights: 0 };
+pub const MULTIDIMENSIONAL_DEFAULTS: CutSettings = CutSettings {
+    error: 0.02,
+    max_cut: 8192,
+    group_error: super::GroupError::Group,
+    exhaustive_lights: 0,
+    resampled_rays: 0,
+};
 
 /// One shading point of a pixel's camera paths, with its strength: the
 /// throughput of the path that reached it (mirror reflectances), the

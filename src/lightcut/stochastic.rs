@@ -24,7 +24,9 @@ use super::{by_group, exhaustive_part, CutResult, CutSettings, GroupError};
 use crate::embree::{PacketWidth, Scene as EmbreeScene};
 use crate::light_tree::layout::{Child, CutTree};
 use crate::light_tree::{LightTrees, TreeIndex};
-use crate::shading::{evaluate_and_trace, BatchBuffers, Choices, Evaluations, LightEvaluator, SurfacePoint};
+use crate::shading::{
+    evaluate_and_trace, resample_and_trace, BatchBuffers, Choices, Evaluations, LightEvaluator, SurfacePoint,
+};
 use crate::util::color::luminance;
 use crate::util::sampling::Rng;
 
@@ -35,6 +37,7 @@ pub const STOCHASTIC_DEFAULTS: CutSettings = CutSettings {
     max_cut: 1000,
     group_error: GroupError::Group,
     exhaustive_lights: super::EXHAUSTIVE_LIGHTS,
+    resampled_rays: 0,
 };
 
 /// From this many samples per pixel on, a render without a mode flag is
@@ -183,8 +186,14 @@ fn cut_through(
         scratch.chosen.push(tree.kind, &light, d.weight, trees.group_of_tree[d.tree as usize] as u32);
     }
     let evaluator = LightEvaluator::new(sp);
-    let (values, rays) =
-        evaluate_and_trace(&evaluator, embree, PacketWidth::Sixteen, &scratch.chosen, &mut scratch.evaluations);
+    let (values, rays) = if settings.resampled_rays > 0 {
+        // The stratified draws' number comes after the walks' streams.
+        let xi = rng.next_f64();
+        let (chosen, evaluations) = (&scratch.chosen, &mut scratch.evaluations);
+        resample_and_trace(&evaluator, embree, PacketWidth::Sixteen, chosen, evaluations, settings.resampled_rays, xi)
+    } else {
+        evaluate_and_trace(&evaluator, embree, PacketWidth::Sixteen, &scratch.chosen, &mut scratch.evaluations)
+    };
     result.shadow_rays += rays;
     let mut radiance = fixed;
     for (slot, value) in scratch.chosen.slots().zip(values) {

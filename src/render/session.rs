@@ -37,13 +37,17 @@ impl Mode {
         }
     }
 
-    /// A cut's settings as the header shows them (`group_error` only when
-    /// it is not the default).
+    /// A cut's settings as the header shows them (`group_error` and
+    /// `resampled_rays` only when they are not the default).
     fn settings(c: &CutSettings) -> String {
-        match c.group_error {
-            crate::lightcut::GroupError::Group => format!("error={} max_cut={}", c.error, c.max_cut),
-            crate::lightcut::GroupError::Pixel => format!("error={} max_cut={} group_error=pixel", c.error, c.max_cut),
+        let mut text = format!("error={} max_cut={}", c.error, c.max_cut);
+        if c.group_error == crate::lightcut::GroupError::Pixel {
+            text += " group_error=pixel";
         }
+        if c.resampled_rays > 0 {
+            text += &format!(" resampled_rays={}", c.resampled_rays);
+        }
+        text
     }
 
     /// The mode as the EXR header and the reports name it.

@@ -11,6 +11,7 @@ use super::direct::{Lanes, LightEvaluator};
 use super::surface::SurfacePoint;
 use crate::embree::{PacketWidth, Scene as EmbreeScene, ShadowRay};
 use crate::light::{Light, LightKind, TreeLight};
+use crate::util::color::luminance64;
 
 /// Shadow rays handed to Embree per call: large enough to amortise the FFI
 /// crossing, small enough to stay in L1/L2 (256 rays x 32 bytes = 8 KiB).
@@ -103,6 +104,10 @@ pub struct Evaluations {
     rays: Vec<ShadowRay>,
     ray_entry: Vec<u32>,
     occluded: Vec<bool>,
+    /// [`resample_and_trace`]'s weight of each ray's term, and how many of
+    /// its draws took it.
+    weights: Vec<f64>,
+    picks: Vec<u32>,
 }
 
 /// The value of each of `chosen` at `evaluator`'s shading point, in order:
@@ -146,6 +151,7 @@ impl Evaluations {
         self.values.clear();
         self.rays.clear();
         self.ray_entry.clear();
+        self.picks.clear();
     }
 }
 
@@ -159,7 +165,7 @@ pub fn trace_evaluations<'b>(
     width: PacketWidth,
     buffers: &'b mut Evaluations,
 ) -> (&'b [DVec3], u64) {
-    let Evaluations { values, rays, ray_entry, occluded } = buffers;
+    let Evaluations { values, rays, ray_entry, occluded, .. } = buffers;
     embree.occluded_packets(rays, occluded, width);
     for (&entry, &blocked) in ray_entry.iter().zip(occluded.iter()) {
         if blocked {
@@ -167,6 +173,92 @@ pub fn trace_evaluations<'b>(
         }
     }
     (values, rays.len() as u64)
+}
+
+/// [`evaluate_and_trace`] with resampled importance sampling over the
+/// terms (docs/design.md §10.3; Talbot, Cline and Egbert 2005): when more
+/// than `rays` of `chosen` need a shadow ray, `rays` draws pick among them
+/// in proportion to the luminance w_i of their unoccluded values X_i,
+/// stratified by one uniform number `xi` (draw m at (m + xi) / rays of the
+/// summed w), and only the picked rays are traced. A term picked c_i times
+/// is worth X_i V_i c_i W / (rays w_i), W the summed w; the others 0. Each
+/// draw takes term i with probability w_i / W (a term that can contribute
+/// has w_i > 0), so the expected value of every entry is X_i V_i: the sum
+/// stays an unbiased estimate of the terms' sum, entry by entry (so of each
+/// light group's too), and a term's visibility is all that is sampled.
+/// Returns every value, in the order appended, and the shadow rays cast.
+#[inline(always)]
+pub fn resample_and_trace<'b>(
+    evaluator: &LightEvaluator<'_, '_>,
+    embree: &EmbreeScene,
+    width: PacketWidth,
+    chosen: &Choices,
+    buffers: &'b mut Evaluations,
+    rays_kept: usize,
+    xi: f64,
+) -> (&'b [DVec3], u64) {
+    resample_and_trace_by(evaluator, embree, width, chosen, buffers, rays_kept, xi, |_, value| luminance64(value))
+}
+
+/// [`resample_and_trace`] with the resampling weight of the k-th term that
+/// needs a ray, of unoccluded value X_k, given as `weight(k, X_k)` (>= 0):
+/// the renderer's is X_k's luminance; tests pass wrong ones.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+pub(crate) fn resample_and_trace_by<'b>(
+    evaluator: &LightEvaluator<'_, '_>,
+    embree: &EmbreeScene,
+    width: PacketWidth,
+    chosen: &Choices,
+    buffers: &'b mut Evaluations,
+    rays_kept: usize,
+    xi: f64,
+    weight: impl Fn(usize, DVec3) -> f64,
+) -> (&'b [DVec3], u64) {
+    buffers.clear();
+    evaluate_into(evaluator, chosen, buffers);
+    let Evaluations { values, rays, ray_entry, weights, picks, .. } = buffers;
+    weights.clear();
+    weights.extend(ray_entry.iter().enumerate().map(|(k, &e)| weight(k, values[e as usize])));
+    let total: f64 = weights.iter().sum();
+    if rays.len() <= rays_kept || !(total > 0.0 && total.is_finite()) {
+        return trace_evaluations(embree, width, buffers);
+    }
+    // The stratified draws walk the running sum once.
+    picks.clear();
+    let (mut below, mut draw) = (0.0, 0usize);
+    for &w in weights.iter() {
+        below += w;
+        let mut count = 0;
+        while draw < rays_kept && (draw as f64 + xi) / rays_kept as f64 * total < below {
+            count += 1;
+            draw += 1;
+        }
+        picks.push(count);
+    }
+    // Rounding can leave the last draws past the sum: they take the last
+    // term with a weight (its interval ends at the sum).
+    if draw < rays_kept {
+        let last = weights.iter().rposition(|&w| w > 0.0).expect("the weights sum to more than 0");
+        picks[last] += (rays_kept - draw) as u32;
+    }
+    // Keep the picked rays, each entry scaled by its share of the draws.
+    let mut kept = 0;
+    for k in 0..rays.len() {
+        let entry = ray_entry[k] as usize;
+        if picks[k] == 0 {
+            values[entry] = DVec3::ZERO;
+            continue;
+        }
+        let share = f64::from(picks[k]) * total / (rays_kept as f64 * weights[k]);
+        values[entry] *= share;
+        rays[kept] = rays[k];
+        ray_entry[kept] = entry as u32;
+        kept += 1;
+    }
+    rays.truncate(kept);
+    ray_entry.truncate(kept);
+    trace_evaluations(embree, width, buffers)
 }
 
 /// Reusable buffers for [`LightBatch`].

@@ -13,9 +13,11 @@ pub mod surface;
 
 pub use bsdf::{Bsdf, BsdfSample};
 pub use direct::{light_sample, light_term, Lanes, LightEvaluator, LightTerm, MaterialLanes};
+#[cfg(test)]
+pub(crate) use evaluate::resample_and_trace_by;
 pub use evaluate::{
-    evaluate_and_trace, evaluate_into, trace_evaluations, BatchBuffers, BatchResult, Choices, Evaluations, LightBatch,
-    SHADOW_BATCH, SHADOW_PACKET,
+    evaluate_and_trace, evaluate_into, resample_and_trace, trace_evaluations, BatchBuffers, BatchResult, Choices,
+    Evaluations, LightBatch, SHADOW_BATCH, SHADOW_PACKET,
 };
 pub use geometry::{Geometry, GeometryError};
 pub use lobes::Lobes;
