@@ -60,7 +60,7 @@ pub struct CutSettings {
     pub exhaustive_lights: usize,
     /// The stochastic cut's shadow rays per cut (`--resampled-rays`): 0
     /// traces every cut node's light; N > 0 traces N of them resampled by
-    /// their unoccluded contributions (docs/design.md §10.3) when the cut
+    /// their unoccluded contributions (docs/design.md §10.7) when the cut
     /// has more. The other modes ignore it.
     pub resampled_rays: usize,
 }

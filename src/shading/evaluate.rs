@@ -176,12 +176,12 @@ pub fn trace_evaluations<'b>(
 }
 
 /// [`evaluate_and_trace`] with resampled importance sampling over the
-/// terms (docs/design.md §10.3; Talbot, Cline and Egbert 2005): when more
-/// than `rays` of `chosen` need a shadow ray, `rays` draws pick among them
-/// in proportion to the luminance w_i of their unoccluded values X_i,
-/// stratified by one uniform number `xi` (draw m at (m + xi) / rays of the
+/// terms (docs/design.md §10.7; Talbot, Cline and Egbert 2005): when more
+/// than R = `rays_kept` of `chosen` need a shadow ray, R draws pick among
+/// them in proportion to the luminance w_i of their unoccluded values X_i,
+/// stratified by one uniform number `xi` (draw m at (m + xi) / R of the
 /// summed w), and only the picked rays are traced. A term picked c_i times
-/// is worth X_i V_i c_i W / (rays w_i), W the summed w; the others 0. Each
+/// is worth X_i V_i c_i W / (R w_i), W the summed w; the others 0. Each
 /// draw takes term i with probability w_i / W (a term that can contribute
 /// has w_i > 0), so the expected value of every entry is X_i V_i: the sum
 /// stays an unbiased estimate of the terms' sum, entry by entry (so of each
