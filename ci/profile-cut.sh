@@ -32,5 +32,5 @@ callgrind_annotate "$out/cg" >"$out/annotated" 2>/dev/null
 total=$(awk '/PROGRAM TOTALS/ { gsub(",", "", $1); print $1 }' "$out/annotated")
 embree=$(awk '/libembree/ { gsub(",", "", $1); s += $1 } END { print s + 0 }' "$out/annotated")
 awk -v t="$total" -v e="$embree" -v n="$nodes" 'BEGIN {
-    printf "cut nodes %d, instructions in the cut %d, of which in Embree %d: %.0f instructions per cut node outside Embree\n", n, t, e, (t - e) / n
+    printf "cut nodes %d, instructions in the cut %.0f, of which in Embree %.0f: %.0f instructions per cut node outside Embree\n", n, t, e, (t - e) / n
 }'

@@ -10,10 +10,17 @@
 //! child's importance is 0 only when none of its lights can reach the point
 //! (every cosine bound, or the intensity, is 0), so every light that can
 //! contribute has a non-zero probability. E[estimate of node C] = sum over
-//! C's lights of M G V I. The error falls as 1 / sqrt(samples).
+//! C's lights of M G V I. The error falls as 1 / sqrt(samples), or faster
+//! where a pixel's samples share cut nodes (below).
 //!
 //! Deterministic: every choice comes from the caller's random stream (the
-//! sample's), so images are bit-identical for any thread count and window.
+//! sample's) and the shading point's pixel sample, so images are
+//! bit-identical for any thread count and window.
+//!
+//! Stratified over a pixel's samples (docs/design.md §10.8): a walk is
+//! driven by one uniform number, rescaled at each step (inversion of the
+//! subtree's distribution), and the numbers a cut node gets at a pixel's
+//! samples fall one in each of as many strata as the pixel has samples.
 
 use std::collections::BinaryHeap;
 
@@ -28,7 +35,7 @@ use crate::shading::{
     evaluate_and_trace, resample_and_trace, BatchBuffers, Choices, Evaluations, LightEvaluator, SurfacePoint,
 };
 use crate::util::color::luminance;
-use crate::util::sampling::Rng;
+use crate::util::sampling::{PixelSample, Rng, ONE_BELOW};
 
 /// The stochastic mode's default cut settings (chosen by measurement: see
 /// the README's "Stochastic lightcuts" section).
@@ -43,6 +50,13 @@ pub const STOCHASTIC_DEFAULTS: CutSettings = CutSettings {
 /// From this many samples per pixel on, a render without a mode flag is
 /// stochastic (measured: see the README).
 pub const STOCHASTIC_FROM_SPP: u32 = 64;
+
+/// A cut node's key for [`PixelSample::number`]: the same node of the same tree
+/// at every sample of a pixel.
+#[inline(always)]
+fn node_key(tree: TreeIndex, block: u32, slot: u8) -> u64 {
+    (u64::from(tree) << 40) | (u64::from(block) << 8) | u64::from(slot)
+}
 
 /// One node of the cut being chosen: slot `slot` of block `block`.
 #[derive(Debug, Clone, Copy)]
@@ -175,7 +189,7 @@ fn cut_through(
     let cut_nodes = choose_cut(trees, range, settings, bounds, scratch);
     result.nodes += cut_nodes as u64;
 
-    draw(trees, rng, scratch, importance);
+    draw(trees, rng, sp.sample.unwrap_or(PixelSample::ALONE), scratch, importance);
     // Group the draws by tree (the walks finish in any order).
     scratch.drawn.sort_by_key(|d| d.tree);
     // Evaluated by the evaluate-and-trace step, each credited to its tree's group.
@@ -187,7 +201,7 @@ fn cut_through(
     }
     let evaluator = LightEvaluator::new(sp);
     let (values, rays) = if settings.resampled_rays > 0 {
-        // The stratified draws' number comes after the walks' streams.
+        // The stratified draws' number comes after the walks' numbers.
         let xi = rng.next_f64();
         let (chosen, evaluations) = (&scratch.chosen, &mut scratch.evaluations);
         resample_and_trace(&evaluator, embree, PacketWidth::Sixteen, chosen, evaluations, settings.resampled_rays, xi)
@@ -206,9 +220,16 @@ fn cut_through(
 /// Draws one light per cut node of `scratch.nodes` into `scratch.drawn`,
 /// its weight the light's intensity over the probability of drawing it:
 /// all walks step down together, level by level, so that their reads of
-/// the tree overlap in memory. Each walk draws from its own stream, split
-/// off `rng` in the order of the cut's nodes.
-fn draw(trees: &LightTrees, rng: &mut Rng, scratch: &mut StochasticScratch, importance: &impl Importance) {
+/// the tree overlap in memory. Each walk is driven by one number: the
+/// pixel sample's for its node, from the next of `rng`'s in the order of
+/// the cut's nodes.
+fn draw(
+    trees: &LightTrees,
+    rng: &mut Rng,
+    sample: PixelSample,
+    scratch: &mut StochasticScratch,
+    importance: &impl Importance,
+) {
     scratch.drawn.clear();
     scratch.walks.clear();
     for node in scratch.nodes.iter().filter(|n| n.in_cut) {
@@ -225,9 +246,8 @@ fn draw(trees: &LightTrees, rng: &mut Rng, scratch: &mut StochasticScratch, impo
                 tree: node.tree,
             });
         } else {
-            // Each walk draws from its own stream, split off the sample's.
-            let stream = Rng::from_key(&[rng.next_u64()]);
-            scratch.walks.push(Walk { below: child.index() as u32, probability: 1.0, stream, tree: node.tree });
+            let u = sample.number(node_key(node.tree, node.block, node.slot), rng.next_f64());
+            scratch.walks.push(Walk { below: child.index() as u32, probability: 1.0, u, tree: node.tree });
         }
     }
     while !scratch.walks.is_empty() {
@@ -347,7 +367,9 @@ struct Walk {
     below: u32,
     /// The probability of the path so far.
     probability: f64,
-    stream: Rng,
+    /// The number that drives the walk, uniform on [0, 1) given the path
+    /// so far (rescaled at each step).
+    u: f64,
     tree: TreeIndex,
 }
 
@@ -361,13 +383,19 @@ enum Step {
 }
 
 /// One step of a walk: takes child k with probability w_k / (w_0 + w_1),
-/// the weights of the block the walk is at.
+/// the weights of the block the walk is at: child 0 when u < p0. Given
+/// that choice u is uniform on the child's interval ([0, p0) or [p0, 1)),
+/// so mapped back onto [0, 1) it drives the next step (design §10.8): the
+/// walk inverts the subtree's distribution with one number.
 fn step(tree: &CutTree, walk: &mut Walk, weights: [f32; 2]) -> Step {
     let b = walk.below as usize;
     let Some(p0) = first_child_probability(tree, b, weights) else { return Step::Nothing };
-    // No branch on the random number: it would be mispredicted half of the time.
-    let k = usize::from(walk.stream.next_f64() >= p0);
-    walk.probability *= [p0, 1.0 - p0][k];
+    let k = usize::from(walk.u >= p0);
+    // The probability of the choice made (p0 > 0 when u < p0; 1 - p0 > 0
+    // when p0 <= u < 1).
+    let p = [p0, 1.0 - p0][k];
+    walk.probability *= p;
+    walk.u = ((walk.u - [0.0, p0][k]) / p).clamp(0.0, ONE_BELOW);
     let child = tree.blocks[b].child[k];
     if child.is_exact() {
         let weight = slot_intensity(tree, b, k).as_dvec3() / walk.probability;
@@ -378,8 +406,8 @@ fn step(tree: &CutTree, walk: &mut Walk, weights: [f32; 2]) -> Step {
 }
 
 /// The probability that a walk at block `b` takes child 0, w_0 / (w_0 +
-/// w_1) of the block's weights; child 1's is 1 - p0 exactly (u is uniform
-/// on a 2^-53 grid), whatever w_1 / (w_0 + w_1) rounds to. None when no
+/// w_1) of the block's weights; child 1's is taken as 1 - p0, whatever
+/// w_1 / (w_0 + w_1) rounds to. None when no
 /// child can be taken (both weights 0).
 fn first_child_probability(tree: &CutTree, b: usize, weights: [f32; 2]) -> Option<f64> {
     let [w0, w1] = finite_weights(tree, b, weights);

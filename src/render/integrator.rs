@@ -17,7 +17,7 @@ use crate::lightcut::multidimensional::{GatherPoint, GatherScratch};
 use crate::lightcut::{self, CutResult, CutScratch, CutSettings, StochasticScratch};
 use crate::shading::{BatchBuffers, Bsdf, Geometry, LightBatch, Lobes, SurfacePoint};
 use crate::util::color::luminance;
-use crate::util::sampling::Rng;
+use crate::util::sampling::{PixelSample, Rng};
 
 /// How direct light is computed at each shading point.
 #[derive(Clone, Copy)]
@@ -41,6 +41,10 @@ pub type SampleKey = [u64; 4];
 /// Keeps the stochastic cut's stream apart from the camera's jitter, which
 /// is keyed by the same sample.
 const STOCHASTIC_STREAM: u64 = 0x5107_c4a5;
+
+/// The key of a pixel's shifts (`PixelSample`), apart from every stream of
+/// its samples.
+const PIXEL_SAMPLE_STREAM: u64 = 0x91c5_e15a;
 
 /// Keeps the suns' directions apart from the other streams of a sample's
 /// shading point.
@@ -255,6 +259,10 @@ impl<'a> Integrator<'a> {
                 break;
             };
             let mut sp = self.geometry.surface(&ray, &hit);
+            // What the point draws (the stochastic cut's lights, points on
+            // triangle lights) is stratified over the pixel's samples
+            // (docs/design.md §10.8); keyed by the bounce too.
+            sp.sample = Some(self.pixel_sample(sample, depth));
             result.stats.path_vertices += 1;
             // A glossy lobe too sharp for some emitter's stand-in lights:
             // they light the diffuse lobe, and the glossy one's light from
@@ -294,6 +302,14 @@ impl<'a> Integrator<'a> {
             ray = bounce.ray;
         }
         result
+    }
+
+    /// The pixel sample of a camera path's `depth`-th vertex: its pixel's
+    /// key (the seed, the pixel and the bounce) and its index among the
+    /// pixel's samples.
+    fn pixel_sample(&self, [seed, x, y, s]: SampleKey, depth: u32) -> PixelSample {
+        let pixel = Rng::from_key(&[seed, x, y, u64::from(depth), PIXEL_SAMPLE_STREAM]).next_u64();
+        PixelSample { pixel, index: s as u32, count: self.spp.max(1) }
     }
 
     /// Lights `sp`, the `depth`-th vertex of a camera path of `throughput`,

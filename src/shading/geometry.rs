@@ -201,6 +201,7 @@ impl<'s> Geometry<'s> {
             epsilon: self.ray_epsilon,
             min_distance: self.ray_epsilon.max(self.distance_clamp),
             emitter_lobes: super::Lobes::ALL,
+            sample: None,
             mirror: match pbr {
                 Some(p) if p.is_smooth() => p.mirror_reflectance(n.dot(wo)),
                 _ => material.mirror,

@@ -7,6 +7,7 @@ use super::lobes::Lobes;
 use super::pbr::Pbr;
 use crate::embree::{Ray, ShadowRay};
 use crate::scene::material::Material;
+use crate::util::sampling::PixelSample;
 
 /// A shading point: position, normals (facing the viewer), outgoing direction.
 #[derive(Debug, Clone)]
@@ -49,6 +50,11 @@ pub struct SurfacePoint<'s> {
     /// environment's sampling then lights (set by the integrator;
     /// docs/design.md §6.2).
     pub emitter_lobes: Lobes,
+    /// The pixel sample of a camera path's point (set by the integrator):
+    /// the stochastic cut's walks and the points drawn on triangle lights
+    /// are stratified over the pixel's samples (docs/design.md §10.8).
+    /// None: each point draws on its own.
+    pub sample: Option<PixelSample>,
 }
 
 impl<'m> SurfacePoint<'m> {
@@ -75,6 +81,7 @@ impl<'m> SurfacePoint<'m> {
             epsilon: 1e-4,
             min_distance: 1e-4,
             emitter_lobes: Lobes::ALL,
+            sample: None,
         }
     }
 }

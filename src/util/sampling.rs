@@ -87,6 +87,60 @@ fn rotated(x: f64, shift: f32) -> f32 {
     }
 }
 
+/// Which sample of which pixel a shading point belongs to, so that what it
+/// draws is stratified over the pixel's samples (docs/design.md §10.8):
+/// each draw keyed by `key` (a cut node, a triangle light) gets a
+/// uniform shift that is a hash of `pixel` and `key` (a Cranley-Patterson
+/// rotation, one per key), and sample `index` of the pixel's `count` takes
+/// its stratum of the rotated set. Each sample's number is uniform whatever
+/// its index, so every sample's estimate stays unbiased; the pixel's
+/// samples together cover each key's distribution evenly.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct PixelSample {
+    /// The pixel's key (a hash of the seed, the pixel and the bounce).
+    pub pixel: u64,
+    /// The sample's index among the pixel's `count` (taken modulo `count`).
+    pub index: u32,
+    /// The pixel's samples (at least 1).
+    pub count: u32,
+}
+
+impl PixelSample {
+    /// A point that is its pixel's only sample.
+    pub const ALONE: Self = Self { pixel: 0, index: 0, count: 1 };
+
+    /// The key's uniform shift in [0, 1)^2 at this pixel, 53 and 24 bits.
+    #[inline(always)]
+    fn shift(self, key: u64) -> (f64, f32) {
+        let h = mix64(self.pixel ^ mix64(key));
+        ((h >> 11) as f64 * (1.0 / 9_007_199_254_740_992.0), (h & 0xff_ffff) as f32 * (1.0 / 16_777_216.0))
+    }
+
+    /// A number in [0, 1) for `key` from the sample's own uniform `xi`:
+    /// frac((index + xi) / count + r), r the key's shift. The pixel's
+    /// `count` samples put one number in each stratum of the rotated grid.
+    #[inline(always)]
+    #[must_use]
+    pub fn number(self, key: u64, xi: f64) -> f64 {
+        let count = self.count.max(1);
+        let u = (f64::from(self.index % count) + xi) / f64::from(count) + self.shift(key).0;
+        (u - u.floor()).clamp(0.0, ONE_BELOW)
+    }
+
+    /// A point in [0, 1)^2 for `key`: point `index` of the pixel's `count`
+    /// of a Hammersley set rotated by the key's shift ([`hammersley`]).
+    #[inline(always)]
+    #[must_use]
+    pub fn point(self, key: u64) -> [f32; 2] {
+        let count = self.count.max(1);
+        let (a, b) = self.shift(key);
+        hammersley(self.index % count, count, [a as f32, b])
+    }
+}
+
+/// The largest f64 below 1.
+pub const ONE_BELOW: f64 = 1.0 - 1.0 / 9_007_199_254_740_992.0;
+
 /// Roberts' R_6 generators: alpha_j = phi^-(j+1), phi the positive root of
 /// x^7 = x + 1 (Roberts 2018, "The unreasonable effectiveness of
 /// quasirandom sequences").

@@ -9,6 +9,7 @@ use crate::scene::builder::SceneText;
 use crate::scene::Scene;
 use crate::shading::{Geometry, LightBatch, SurfacePoint};
 use crate::util::color::luminance64;
+use crate::util::sampling::mix64;
 
 // 256 seeds were too few for the spots: near a cone's edge the falloff
 // makes the estimate heavy-tailed and its standard error underestimated
@@ -313,7 +314,7 @@ fn check_pmf(lights: &str) {
                     tree: t as crate::light_tree::TreeIndex,
                     in_cut: true,
                 });
-                draw(trees, &mut rng, &mut scratch, &importance);
+                draw(trees, &mut rng, PixelSample::ALONE, &mut scratch, &importance);
                 let Some(d) = scratch.drawn.first() else {
                     *counts.entry((usize::MAX, 0)).or_default() += 1;
                     continue;
@@ -358,4 +359,99 @@ fn the_walk_draws_with_its_pmf_for_every_kind() {
     for lights in [OMNI, ORIENTED, &directional(), &spots()] {
         check_pmf(lights);
     }
+}
+
+/// [`PixelSample::number`]: at every pixel, the numbers a node gets at the
+/// pixel's `count` samples fall one in each stratum of the grid rotated by
+/// the node's shift, whatever the samples' own numbers; over pixels, each
+/// sample's number is uniform (a histogram of 64 bins within 5 standard
+/// errors), so every sample's estimate stays unbiased. Without the shift
+/// (every pixel's strata the same) sample 0 would only see [0, 1/count).
+#[test]
+fn stratified_numbers_are_uniform_and_one_per_stratum() {
+    const PIXELS: u64 = 65_536;
+    const BINS: usize = 64;
+    let count = 16u32;
+    let mut xi = Rng::seeded(5);
+    let mut histograms = vec![[0u64; BINS]; count as usize];
+    for pixel in 0..PIXELS {
+        let key = mix64(pixel);
+        for node in [node_key(0, 0, 0), node_key(3, 12_345, 1)] {
+            let shift = PixelSample { pixel: key, index: 0, count: 1 }.number(node, 0.0);
+            let mut strata = vec![false; count as usize];
+            for index in 0..count {
+                let u = PixelSample { pixel: key, index, count }.number(node, xi.next_f64());
+                assert!((0.0..1.0).contains(&u), "{u}");
+                let stratum = ((u - shift).rem_euclid(1.0) * f64::from(count)) as usize;
+                assert!(!strata[stratum.min(count as usize - 1)], "pixel {pixel}: stratum {stratum} twice");
+                strata[stratum.min(count as usize - 1)] = true;
+                histograms[index as usize][(u * BINS as f64) as usize] += 1;
+            }
+        }
+    }
+    let expected = (2 * PIXELS) as f64 / BINS as f64;
+    for (index, histogram) in histograms.iter().enumerate() {
+        for (bin, &n) in histogram.iter().enumerate() {
+            let deviation = (n as f64 - expected) / expected.sqrt();
+            assert!(deviation.abs() < 5.0, "sample {index}, bin {bin}: {n} against {expected}");
+        }
+    }
+}
+
+/// The pixel's mean over 16 stratified samples at one shading point is
+/// the exact sum on average over pixels (unbiased), and its variance is
+/// below the independent samples' (a sixteenth of one sample's): the
+/// stratification is what makes the pixel's error fall faster than
+/// 1 / sqrt(spp) where its samples see the same lights. Independent
+/// numbers (a new pixel key per sample) give the sixteenth, and are caught.
+#[test]
+fn stratified_samples_of_a_pixel_are_unbiased_and_less_noisy() {
+    const PIXELS: u64 = 512;
+    const SPP: u32 = 16;
+    let settings = CutSettings { error: 0.1, max_cut: 8, ..CutSettings::default() };
+    let mut scratch = StochasticScratch::default();
+    let mut batch = BatchBuffers::default();
+    let mut ratios = Vec::new();
+    with_points(&scene(OMNI), 8, |lights, geometry, trees, sp| {
+        let mut exact = LightBatch::new(&geometry.embree, sp, &mut batch);
+        lights.for_each(|light| exact.add(&light));
+        let exact = luminance64(exact.finish().radiance);
+        let variance_of = |stratified: bool, scratch: &mut StochasticScratch| {
+            let means: Vec<f64> = (0..PIXELS)
+                .map(|pixel| {
+                    (0..SPP)
+                        .map(|index| {
+                            let mut rng = Rng::from_key(&[pixel, u64::from(index)]);
+                            let key = if stratified { pixel } else { mix64(pixel * 64 + u64::from(index)) };
+                            let count = if stratified { SPP } else { 1 };
+                            let sp =
+                                SurfacePoint { sample: Some(PixelSample { pixel: key, index, count }), ..sp.clone() };
+                            let found = evaluate(trees, &sp, &geometry.embree, &settings, &mut rng, scratch, 0);
+                            luminance64(found.radiance)
+                        })
+                        .sum::<f64>()
+                        / f64::from(SPP)
+                })
+                .collect();
+            let mean = means.iter().sum::<f64>() / PIXELS as f64;
+            let variance = means.iter().map(|m| (m - mean).powi(2)).sum::<f64>() / (PIXELS - 1) as f64;
+            (mean, variance)
+        };
+        let (mean, variance) = variance_of(true, &mut scratch);
+        let (independent_mean, independent) = variance_of(false, &mut scratch);
+        if independent == 0.0 {
+            return; // every light of this point is in exact nodes
+        }
+        for (m, v) in [(mean, variance), (independent_mean, independent)] {
+            let se = (v / PIXELS as f64).sqrt();
+            assert!((m - exact).abs() <= 4.0 * se + 1e-9 * exact, "mean {m} against {exact} (standard error {se})");
+        }
+        ratios.push(variance / independent);
+    });
+    assert!(ratios.len() >= 4, "most points must be sampled: {ratios:?}");
+    // Pooled over the points: the stratified pixels' variance is well below
+    // the independent ones'.
+    let pooled = ratios.iter().sum::<f64>() / ratios.len() as f64;
+    eprintln!("variance of stratified over independent pixels: mean {pooled:.3}, per point {ratios:.3?}");
+    assert!(pooled < 0.5, "variance of stratified over independent pixels, per point: {ratios:?}");
 }
