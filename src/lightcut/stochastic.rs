@@ -48,8 +48,11 @@ pub const STOCHASTIC_DEFAULTS: CutSettings = CutSettings {
 };
 
 /// From this many samples per pixel on, a render without a mode flag is
-/// stochastic (measured: see the README).
-pub const STOCHASTIC_FROM_SPP: u32 = 64;
+/// stochastic: at 16 spp the stochastic cut (its draws stratified over the
+/// pixel's samples) had the smaller error on every scene measured, at
+/// about the bounded cut's time; at 4 the bounded cut still won on the
+/// atrium (docs/measurements.md, "Stratified over a pixel's samples").
+pub const STOCHASTIC_FROM_SPP: u32 = 16;
 
 /// A cut node's key for [`PixelSample::number`]: the same node of the same tree
 /// at every sample of a pixel.
