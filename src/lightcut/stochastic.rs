@@ -54,8 +54,8 @@ pub const STOCHASTIC_DEFAULTS: CutSettings = CutSettings {
 /// atrium (docs/measurements.md, "Stratified over a pixel's samples").
 pub const STOCHASTIC_FROM_SPP: u32 = 16;
 
-/// A cut node's key for [`PixelSample::number`]: the same node of the same tree
-/// at every sample of a pixel.
+/// A cut node's key for [`PixelSample::number`]: the same node of the
+/// same tree at every sample of a pixel.
 #[inline(always)]
 fn node_key(tree: TreeIndex, block: u32, slot: u8) -> u64 {
     (u64::from(tree) << 40) | (u64::from(block) << 8) | u64::from(slot)
@@ -410,8 +410,8 @@ fn step(tree: &CutTree, walk: &mut Walk, weights: [f32; 2]) -> Step {
 
 /// The probability that a walk at block `b` takes child 0, w_0 / (w_0 +
 /// w_1) of the block's weights; child 1's is taken as 1 - p0, whatever
-/// w_1 / (w_0 + w_1) rounds to. None when no
-/// child can be taken (both weights 0).
+/// w_1 / (w_0 + w_1) rounds to. None when no child can be taken (both
+/// weights 0).
 fn first_child_probability(tree: &CutTree, b: usize, weights: [f32; 2]) -> Option<f64> {
     let [w0, w1] = finite_weights(tree, b, weights);
     let sum = f64::from(w0) + f64::from(w1);
