@@ -371,6 +371,24 @@ mod tests {
         0.5 * sum.abs()
     }
 
+    /// A 1 m square of unit radiance 0.1 m above the floor (z = 0), facing
+    /// it, as its 18 triangle lights (0.33 m across), and its corners.
+    fn square_of_triangle_lights() -> (Vec<AreaLight>, [DVec3; 4]) {
+        let corners = [Vec3::new(-0.5, -0.5, 0.1), Vec3::new(-0.5, 0.5, 0.1), Vec3::new(0.5, 0.5, 0.1)];
+        let quad = [
+            EmitterTriangle { p: [corners[0], corners[1], corners[2]] },
+            EmitterTriangle { p: [corners[0], corners[2], Vec3::new(0.5, -0.5, 0.1)] },
+        ];
+        let square = [[-0.5, -0.5], [-0.5, 0.5], [0.5, 0.5], [0.5, -0.5]].map(|[x, y]| DVec3::new(x, y, 0.1));
+        (sample_area_light(&quad, Vec3::ONE, 16, 0.0), square)
+    }
+
+    /// The irradiance at `sp` from `lights` (unit radiance): pi times the
+    /// floor's radiance under them with albedo 1.
+    fn irradiance_at(lights: &[AreaLight], sp: &SurfacePoint<'_>) -> f64 {
+        lights.iter().map(|l| light_term(&Light::Area(*l), sp).x * f64::from(l.intensity.x) * PI64).sum()
+    }
+
     /// A floor 0.1 m under a 1 m square of unit radiance split into 18
     /// triangles (0.33 m across, 3 times the height): along a line under
     /// it, the irradiance averaged over 32,768 shading points at each place
@@ -380,16 +398,10 @@ mod tests {
     /// the floor sees each point as a spike.
     #[test]
     fn triangle_lights_close_to_a_surface_give_the_polygons_irradiance() {
-        let (h, corners) = (0.1f32, [Vec3::new(-0.5, -0.5, 0.1), Vec3::new(-0.5, 0.5, 0.1), Vec3::new(0.5, 0.5, 0.1)]);
-        let quad = [
-            EmitterTriangle { p: [corners[0], corners[1], corners[2]] },
-            EmitterTriangle { p: [corners[0], corners[2], Vec3::new(0.5, -0.5, h)] },
-        ];
-        let triangles = sample_area_light(&quad, Vec3::ONE, 16, 0.0);
+        let (triangles, square) = square_of_triangle_lights();
         assert_eq!(triangles.len(), 18);
         assert!(triangles.iter().all(|t| t.normal.z < -0.99), "the square faces the floor");
         let points: Vec<AreaLight> = triangles.iter().map(|t| AreaLight { edges: [Vec3::ZERO; 2], ..*t }).collect();
-        let square = [[-0.5, -0.5], [-0.5, 0.5], [0.5, 0.5], [0.5, -0.5]].map(|[x, y]| DVec3::new(x, y, 0.1));
         let material = Material::diffuse("white", Albedo::Constant(Vec3::ONE));
         let irradiance = |lights: &[AreaLight], at: Vec3, jitter: usize| -> f64 {
             let sum: f64 = (0..jitter)
@@ -397,11 +409,7 @@ mod tests {
                     // Shading points k units in the last place apart (within
                     // 40 um): each its own key.
                     let y = f32::from_bits(at.y.to_bits() + k as u32);
-                    let sp = floor_point(&material, Vec3::new(at.x, y, at.z));
-                    lights
-                        .iter()
-                        .map(|l| light_term(&Light::Area(*l), &sp).x * f64::from(l.intensity.x) * PI64)
-                        .sum::<f64>()
+                    irradiance_at(lights, &floor_point(&material, Vec3::new(at.x, y, at.z)))
                 })
                 .sum();
             sum / jitter as f64
@@ -427,13 +435,7 @@ mod tests {
     /// equal if the strata were dropped.
     #[test]
     fn points_on_triangle_lights_are_stratified_over_a_pixels_samples() {
-        let corners = [Vec3::new(-0.5, -0.5, 0.1), Vec3::new(-0.5, 0.5, 0.1), Vec3::new(0.5, 0.5, 0.1)];
-        let quad = [
-            EmitterTriangle { p: [corners[0], corners[1], corners[2]] },
-            EmitterTriangle { p: [corners[0], corners[2], Vec3::new(0.5, -0.5, 0.1)] },
-        ];
-        let triangles = sample_area_light(&quad, Vec3::ONE, 16, 0.0);
-        let square = [[-0.5, -0.5], [-0.5, 0.5], [0.5, 0.5], [0.5, -0.5]].map(|[x, y]| DVec3::new(x, y, 0.1));
+        let (triangles, square) = square_of_triangle_lights();
         let material = Material::diffuse("white", Albedo::Constant(Vec3::ONE));
         const PIXELS: u64 = 4096;
         const SPP: u32 = 16;
@@ -451,11 +453,10 @@ mod tests {
                             } else {
                                 PixelSample { pixel: mix64(pixel * 64 + u64::from(index)), index: 0, count: 1 }
                             };
-                            let sp = SurfacePoint { sample: Some(sample), ..floor_point(&material, at) };
-                            triangles
-                                .iter()
-                                .map(|l| light_term(&Light::Area(*l), &sp).x * f64::from(l.intensity.x) * PI64)
-                                .sum::<f64>()
+                            irradiance_at(
+                                &triangles,
+                                &SurfacePoint { sample: Some(sample), ..floor_point(&material, at) },
+                            )
                         })
                         .sum();
                     sum / f64::from(SPP)
