@@ -458,18 +458,8 @@ fn triangle_lights_compose_with_instances_motion_groups_cryptomatte_and_tiles() 
         assert!(((ml + mr) / (al + ar) - 1.0).abs() < 0.05, "{mode}: the moving panel is a panel");
 
         // Cryptomatte: each panel's matte, on its side of the image.
-        let id_channels = lightcuts::render::cryptomatte::CryptoType::Object.channels();
         for (name, left) in [("panel_a", true), ("panel_b", false), ("panel_moving", true)] {
-            let id = lightcuts::render::cryptomatte::id_of(name);
-            let coverage: Vec<f32> = (0..width * height)
-                .map(|i| {
-                    id_channels
-                        .chunks(2)
-                        .filter(|p| image.channels[&p[0]][i].to_bits() == id.to_bits())
-                        .map(|p| image.channels[&p[1]][i])
-                        .sum()
-                })
-                .collect();
+            let coverage = common::matte(&image, lightcuts::render::cryptomatte::CryptoType::Object, name);
             let total: f32 = coverage.iter().sum();
             let on_side: f32 =
                 coverage.iter().enumerate().filter(|(i, _)| (i % width < width / 2) == left).map(|(_, c)| c).sum();
@@ -529,10 +519,10 @@ fn a_textured_emitter_stays_sharp_in_a_glossy_reflection() {
     g.node(json!({ "camera": camera, "translation": [eye.x, eye.y, eye.z], "rotation": rotation }), true);
     let file = dir.write("panel.gltf", &g.embedded());
 
-    // Each pixel's centre: the floor point it sees, and whether the mirror
-    // direction from there meets the inside of the red half (+1) or the
-    // black half (-1), 0.1 m from every edge and the seam (a pixel is about
-    // 3.5 cm there), or neither (0).
+    // The pixels whose centre sees, in the mirror direction from the floor,
+    // the inside of the red or the black half (0.1 m from every edge and
+    // the seam; a pixel is about 3.5 cm there): each with which half and
+    // the lobe's integral of the texture's red there (per unit radiance).
     let tan = (yfov / 2.0).tan();
     let red_radiance = |p: DVec3, l: DVec3| {
         let q = p + l * ((1.0 - p.y) / l.y);
@@ -560,7 +550,8 @@ fn a_textured_emitter_stays_sharp_in_a_glossy_reflection() {
     let red = seen.iter().filter(|s| s.1).count();
     assert!(red > 200 && seen.len() - red > 200, "the reflection is in view: {red} of {} pixels", seen.len());
     for mode in ["--bounded", "--stochastic"] {
-        let image = render(&file, &dir.path("out.exr"), &["--resolution", "96x64", "--spp", "16", mode]);
+        let resolution = format!("{width}x{height}");
+        let image = render(&file, &dir.path("out.exr"), &["--resolution", &resolution, "--spp", "16", mode]);
         let r = channel(&image, "R");
         let (mut worst, mut sum, mut expected_sum) = ([0.0f64; 2], 0.0, 0.0);
         for &(i, is_red, expected) in &seen {

@@ -6,7 +6,7 @@
 mod common;
 use common::*;
 
-use lightcuts::render::cryptomatte::{id_of, CryptoType};
+use lightcuts::render::cryptomatte::CryptoType;
 
 const WIDTH: usize = 96;
 const HEIGHT: usize = 64;
@@ -62,22 +62,6 @@ fn render(dir: &TempDir, name: &str, extra: &[&str]) -> ExrImage {
     common::render(&scene, &dir.path(name), &[&["--exact", "--spp", "16", "--cryptomatte"][..], extra].concat())
 }
 
-/// The object matte of `name`: the coverages of the ranks holding its ID
-/// (Cryptomatte's decoding).
-fn matte(image: &ExrImage, name: &str) -> Vec<f32> {
-    let channels = CryptoType::Object.channels();
-    let id = id_of(name);
-    (0..WIDTH * HEIGHT)
-        .map(|i| {
-            channels
-                .chunks(2)
-                .filter(|pair| image.channels[&pair[0]][i].to_bits() == id.to_bits())
-                .map(|pair| image.channels[&pair[1]][i])
-                .sum()
-        })
-        .collect()
-}
-
 fn project(m: &[f32; 16], p: [f32; 3]) -> [f32; 3] {
     let column = |c: usize| p[0] * m[c] + p[1] * m[4 + c] + p[2] * m[8 + c] + m[12 + c];
     let w = column(3);
@@ -90,7 +74,7 @@ fn world_to_ndc_puts_each_object_where_its_matte_is() {
     let image = render(&dir, "ndc.exr", &[]);
     let ndc = image.world_to_ndc.expect("worldToNDC is written");
     for (name, centre) in SPHERES {
-        let m = matte(&image, name);
+        let m = matte(&image, CryptoType::Object, name);
         let total: f32 = m.iter().sum();
         assert!(total > 20.0, "{name} covers {total} pixels");
         let (mut cx, mut cy) = (0.0, 0.0);
@@ -115,11 +99,11 @@ fn the_background_is_far_and_opaque_by_default_and_empty_when_transparent() {
     let dir = TempDir::new("background");
     let opaque = render(&dir, "opaque.exr", &[]);
     let transparent = render(&dir, "transparent.exr", &["--transparent"]);
-    let mattes: Vec<Vec<f32>> = SPHERES.iter().map(|(name, _)| matte(&opaque, name)).collect();
+    let mattes: Vec<Vec<f32>> = SPHERES.iter().map(|(name, _)| matte(&opaque, CryptoType::Object, name)).collect();
     let coverage: Vec<f32> = (0..WIDTH * HEIGHT).map(|i| mattes.iter().map(|m| m[i]).sum()).collect();
 
     let (mut background, mut mirrored) = (0, 0);
-    let mirror = matte(&opaque, "mirror");
+    let mirror = matte(&opaque, CryptoType::Object, "mirror");
     for i in 0..WIDTH * HEIGHT {
         for image in [&opaque, &transparent] {
             let z = channel(image, "Z")[i];

@@ -1246,18 +1246,7 @@ fn instanced_meshes_render_as_their_copies_and_are_named_by_node() {
     }
     // Each node's name has its matte, the instances' as the copy's.
     let covered = |image: &lightcuts::output::read::ExrImage, name: &str| {
-        let id = lightcuts::render::cryptomatte::id_of(name);
-        let channels = lightcuts::render::cryptomatte::CryptoType::Object.channels();
-        let pairs: Vec<&[String]> = channels.chunks(2).collect();
-        (0..96 * 64)
-            .map(|i| {
-                pairs
-                    .iter()
-                    .filter(|p| image.channels[&p[0]][i].to_bits() == id.to_bits())
-                    .map(|p| image.channels[&p[1]][i])
-                    .sum::<f32>()
-            })
-            .sum::<f32>()
+        matte(image, lightcuts::render::cryptomatte::CryptoType::Object, name).iter().sum::<f32>()
     };
     for name in ["left", "right", "mirrored"] {
         let (ca, cb) = (covered(&a, name), covered(&b, name));

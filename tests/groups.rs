@@ -5,7 +5,7 @@
 
 mod common;
 
-use common::{channel, lightcuts, lightcuts_fails, lightcuts_ok, read_exr, s, ExrImage, TempDir};
+use common::{channel, lightcuts, lightcuts_fails, lightcuts_ok, matte, read_exr, s, ExrImage, TempDir};
 use lightcuts::render::cryptomatte::{id_of, CryptoType};
 
 /// A floor and a wall under a bright warm key (a point light), a dim cool
@@ -180,22 +180,6 @@ fn a_bad_group_is_an_error_naming_the_file_and_field() {
     assert!(e.contains("lights[0].group") && e.contains("string"), "{e}");
 }
 
-/// The matte of `id` in `image` by the specification's decoding: the sum of
-/// the coverages of the ranks whose ID is `id`.
-fn matte(image: &ExrImage, kind: CryptoType, id: f32) -> Vec<f32> {
-    let channels = kind.channels();
-    let n = channel(image, &channels[0]).len();
-    (0..n)
-        .map(|i| {
-            channels
-                .chunks(2)
-                .filter(|pair| channel(image, &pair[0])[i].to_bits() == id.to_bits())
-                .map(|pair| channel(image, &pair[1])[i])
-                .sum()
-        })
-        .collect()
-}
-
 #[test]
 fn cryptomatte_decodes_to_each_objects_silhouette() {
     let dir = TempDir::new("cryptomatte");
@@ -219,7 +203,7 @@ fn cryptomatte_decodes_to_each_objects_silhouette() {
         }
     }
     let (width, height) = (48usize, 32usize);
-    let objects = ["ball", "floor", "wall"].map(|n| matte(&image, CryptoType::Object, id_of(n)));
+    let objects = ["ball", "floor", "wall"].map(|n| matte(&image, CryptoType::Object, n));
     let alpha = channel(&image, "A");
     for i in 0..width * height {
         // Every sample hits one of the three: coverages sum to the alpha, 1.
@@ -265,7 +249,7 @@ fn cryptomatte_decodes_to_each_objects_silhouette() {
     }
     assert!(inside > 20 && outside > 500 && edge > 10, "{inside} inside, {outside} outside, {edge} on the edge");
     // Materials: the ball is the only red object.
-    let red = matte(&image, CryptoType::Material, id_of("red"));
+    let red = matte(&image, CryptoType::Material, "red");
     assert_eq!(red, objects[0], "the red matte is the ball's");
 }
 

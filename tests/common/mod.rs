@@ -84,6 +84,18 @@ pub fn render(scene: &Path, out: &Path, flags: &[&str]) -> ExrImage {
 }
 
 /// The named channel of `image`; a panic naming it when there is none.
+/// The Cryptomatte matte of `name` (an object's or a material's, as
+/// `kind` says) by the specification's decoding: per pixel, the sum of the
+/// coverages of the ranks whose ID is `name`'s.
+pub fn matte(image: &ExrImage, kind: lightcuts::render::cryptomatte::CryptoType, name: &str) -> Vec<f32> {
+    let id = lightcuts::render::cryptomatte::id_of(name).to_bits();
+    let ranks: Vec<(&[f32], &[f32])> =
+        kind.channels().chunks(2).map(|pair| (channel(image, &pair[0]), channel(image, &pair[1]))).collect();
+    (0..image.width * image.height)
+        .map(|i| ranks.iter().filter(|(ids, _)| ids[i].to_bits() == id).map(|(_, coverage)| coverage[i]).sum())
+        .collect()
+}
+
 pub fn channel<'a>(image: &'a ExrImage, name: &str) -> &'a [f32] {
     image.channels.get(name).unwrap_or_else(|| panic!("no channel {name}: {:?}", image.channels.keys()))
 }
