@@ -34,13 +34,20 @@ fn error_zero_reproduces_the_exact_image() {
     // environment's lights: its part is sampled, the same in both.
     let environment = "\n[environment]\nradiance = [0.4, 0.5, 0.6]\nsamples = 256\n";
     error_zero_reproduces_the_exact_image_of(&(small_pbr_scene(16) + environment), "error-zero-environment");
+    // Reconstruction cuts assume no visibility at --error 0.
+    error_zero_reproduces_the_exact_image_with(&small_scene(16), "error-zero-reconstruct", &["--reconstruct", "2"]);
 }
 
 fn error_zero_reproduces_the_exact_image_of(text: &str, name: &str) {
+    error_zero_reproduces_the_exact_image_with(text, name, &[]);
+}
+
+fn error_zero_reproduces_the_exact_image_with(text: &str, name: &str, flags: &[&str]) {
     let dir = TempDir::new(name);
     let scene = dir.write("s.toml", text);
     let (lc, exact) = (dir.path("lc.exr"), dir.path("exact.exr"));
-    let stdout = lightcuts_ok(&["render", s(&scene), "-o", s(&lc), "--error", "0", "--max-cut", "100000", "--quiet"]);
+    let args = ["render", s(&scene), "-o", s(&lc), "--error", "0", "--max-cut", "100000", "--quiet"];
+    let stdout = lightcuts_ok(&[&args[..], flags].concat());
     assert!(stdout.contains("cut size"), "{stdout}");
     lightcuts_ok(&["render", s(&scene), "-o", s(&exact), "--exact", "--quiet"]);
     let (a, b) = (read_exr(&lc).unwrap(), read_exr(&exact).unwrap());
@@ -106,6 +113,64 @@ fn known_answer_holds_in_lightcuts_mode() {
     let image = read_exr(&out).unwrap();
     assert_inside_sphere_answer(&out, &image, 1e-3);
     assert!(image.channels["lightcuts.cut_size"].iter().all(|&c| c as usize == SHELL_LIGHTS));
+}
+
+/// Reconstruction cuts ([LC05] §6, `--reconstruct B`): full cuts at the
+/// corners of 2 x 2 pixel blocks, the camera hits between them reconstructed:
+/// as close to the exact image as the bounded cut, with far fewer shadow
+/// rays; the anchors depend on the image alone, so threads, windows and
+/// tiles change no bit.
+#[test]
+fn reconstruction_cuts_stay_close_to_exact_with_fewer_rays_for_any_threads_window_and_tiles() {
+    let dir = TempDir::new("reconstruct");
+    let scene = dir.write("s.toml", &small_scene(24));
+    let render = |name: &str, flags: &[&str]| {
+        let out = dir.path(name);
+        let quiet = if flags.contains(&"--stats") { "--threads=2" } else { "--quiet" };
+        let args = ["render", s(&scene), "-o", s(&out), "--spp", "4", quiet];
+        let stdout = lightcuts_ok(&[&args[..], flags].concat());
+        (out, stdout)
+    };
+    let (reconstructed, stdout) = render("rc.exr", &["--reconstruct", "2"]);
+    assert!(stdout.contains("reconstruction_block=2"), "{stdout}");
+    let (bounded, _) = render("lc.exr", &["--bounded"]);
+    let (exact, _) = render("exact.exr", &["--exact"]);
+    let (rc_error, lc_error) = (mean_error(&reconstructed, &exact), mean_error(&bounded, &exact));
+    assert!(rc_error > 0.0 && rc_error < 0.01, "mean relative error {rc_error} (bounded {lc_error})");
+    assert!(rc_error < 1.5 * lc_error, "{rc_error} against the bounded cut's {lc_error}");
+    // The pass's totals count the anchors' rays too (the AOV counts each
+    // pixel's samples' own).
+    let rays = |flags: &[&str]| {
+        let (_, stdout) = render("stats.exr", &[flags, &["--stats"][..]].concat());
+        let line = stdout.lines().find(|l| l.contains("shadow rays  ")).unwrap().to_string();
+        line.split_whitespace().nth(2).unwrap().parse::<f64>().unwrap()
+    };
+    let (rc_rays, lc_rays) = (rays(&["--reconstruct", "2"]), rays(&["--bounded"]));
+    assert!(2.0 * rc_rays < lc_rays, "{rc_rays} rays against the bounded cut's {lc_rays}");
+
+    assert_same_bits_for_any_threads_and_window(&dir, &scene, 96, &["--reconstruct", "2", "--spp", "2"]);
+    // Bands of 7 tiles (block rows cut across) assemble to the one-process render.
+    let one = read_exr(&reconstructed).unwrap();
+    let mut tiles = Vec::new();
+    for i in 0..7 {
+        let (tile, _) = render(&format!("t{i}.exr"), &["--reconstruct", "2", "--tile", &format!("{i}/7")]);
+        tiles.push(tile);
+    }
+    let frame = dir.path("frame.exr");
+    lightcuts_ok(&[&["assemble", s(&frame)][..], &tiles.iter().map(|t| s(t)).collect::<Vec<_>>()].concat());
+    let frame = read_exr(&frame).unwrap();
+    for (name, values) in &one.channels {
+        let same = values.iter().zip(&frame.channels[name]).all(|(a, b)| a.to_bits() == b.to_bits());
+        assert!(same, "{name}: tiles differ from the one-process render");
+    }
+
+    let stderr = lightcuts_fails(&["render", s(&scene), "-o", s(&dir.path("x.exr")), "--reconstruct", "0"]);
+    assert!(stderr.contains("--reconstruct") && stderr.contains("at least 1"), "{stderr}");
+    // clap's own usage error (exit code 2).
+    let out = lightcuts(&["render", s(&scene), "-o", s(&dir.path("x.exr")), "--reconstruct", "2", "--stochastic"]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success() && stderr.contains("--reconstruct") && stderr.contains("--stochastic"), "{stderr}");
+    assert!(!dir.path("x.exr").exists());
 }
 
 #[test]

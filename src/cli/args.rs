@@ -159,6 +159,13 @@ pub struct ModeArgs {
     /// sampling; unbiased). 0 (the default) traces every cut node's light.
     #[arg(long, value_name = "N")]
     pub resampled_rays: Option<usize>,
+    /// Bounded mode: reconstruction cuts [LC05 §6]. Full cuts only at the
+    /// corners of B x B pixel blocks; every camera hit between them cuts
+    /// the trees again with the same bounds, but traces a shadow ray only
+    /// where the corners' cuts disagree on what they saw. Implies
+    /// --bounded when no mode is given.
+    #[arg(long, value_name = "B", conflicts_with_all = ["exact", "stochastic", "multidimensional"])]
+    pub reconstruct: Option<u32>,
 }
 
 /// Parses `--group-error`.
@@ -174,6 +181,28 @@ impl ModeArgs {
     /// The mode these flags ask for, at `spp` samples per pixel.
     pub fn mode(&self, spp: u32) -> Result<Mode, CliError> {
         let mode = self.mode_without_resampling(spp)?;
+        let mode = match (mode, self.reconstruct) {
+            (_, Some(0)) => {
+                return Err(CliError::Usage {
+                    flag: "--reconstruct",
+                    message: "the block must be at least 1 pixel".into(),
+                })
+            }
+            (Mode::Bounded(mut cut), Some(block)) => {
+                cut.reconstruction_block = block;
+                Mode::Bounded(cut)
+            }
+            (Mode::Stochastic(_), Some(block)) if !self.stochastic => {
+                // The default mode at this spp is stochastic; --reconstruct
+                // asks for the bounded one.
+                let d = CutSettings::default();
+                let mut cut = cut_settings(self.error.unwrap_or(d.error), self.max_cut.unwrap_or(d.max_cut))?;
+                cut.group_error = self.group_error.unwrap_or(d.group_error);
+                cut.reconstruction_block = block;
+                Mode::Bounded(cut)
+            }
+            (mode, _) => mode,
+        };
         match (mode, self.resampled_rays) {
             (Mode::Stochastic(mut cut), Some(rays)) => {
                 cut.resampled_rays = rays;

@@ -57,6 +57,12 @@ impl Child {
         self.0 & EXACT != 0
     }
 
+    /// The slot's bits: distinct for every node of a tree.
+    #[must_use]
+    pub fn bits(self) -> u32 {
+        self.0
+    }
+
     /// Light index (leaf) or block index (internal node).
     #[must_use]
     pub fn index(self) -> usize {

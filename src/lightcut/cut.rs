@@ -30,6 +30,7 @@ use glam::{DVec3, Vec3};
 use std::collections::BinaryHeap;
 
 use super::bounds::PointBounds;
+use super::reconstruction::{AnchorCut, AnchorNode, Visibility};
 use super::{by_group, exhaustive_part, CutResult, CutSettings};
 use crate::embree::{PacketWidth, Scene as EmbreeScene};
 use crate::light_tree::layout::{Child, CutTree};
@@ -54,9 +55,27 @@ struct Entry {
     representative: u32,
     tree: TreeIndex,
     in_cut: bool,
+    /// What the representative's shadow ray found (reconstruction cuts'
+    /// anchors read it: docs/design.md §9.6).
+    seen: Seen,
+}
+
+/// What a cut node's shadow ray found at a shading point.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Seen {
+    /// No ray was traced: the representative's M * G was 0.
+    Untraced,
+    Visible,
+    Occluded,
 }
 
 impl Entry {
+    /// What a child sharing this node's representative reuses.
+    #[inline(always)]
+    fn shared(&self) -> (u32, DVec3, Seen) {
+        (self.representative, self.unit, self.seen)
+    }
+
     /// The node's estimate, M * G * V of the representative times the
     /// node's intensity ([LC05] eq. 2); f64, the same bits every time.
     #[inline]
@@ -156,7 +175,7 @@ impl Cut<'_, '_> {
     /// M * G * V, which the child that shares the representative reuses; the
     /// other child waits in `pending` for its representative's evaluation.
     #[inline(always)]
-    fn add_children(&mut self, tree: TreeIndex, b: usize, parent: Option<(u32, DVec3)>) {
+    fn add_children(&mut self, tree: TreeIndex, b: usize, parent: Option<(u32, DVec3, Seen)>) {
         let t = &self.trees[tree as usize];
         let bounds = self.bounds.pair(t.kind, &t.blocks[b], t.cones_of(b));
         self.add_slots(tree, b, bounds, parent);
@@ -170,17 +189,17 @@ impl Cut<'_, '_> {
         let [b0, b1] = parents.map(|p| p.child.index());
         let cones = t.cones_of(b0).zip(t.cones_of(b1)).map(|(x, y)| [x, y]);
         let [a0, a1, c0, c1] = self.bounds.quad(t.kind, [&t.blocks[b0], &t.blocks[b1]], cones);
-        self.add_slots(tree, b0, [a0, a1], Some((parents[0].representative, parents[0].unit)));
-        self.add_slots(tree, b1, [c0, c1], Some((parents[1].representative, parents[1].unit)));
+        self.add_slots(tree, b0, [a0, a1], Some(parents[0].shared()));
+        self.add_slots(tree, b1, [c0, c1], Some(parents[1].shared()));
     }
 
     /// Makes the entries of block `b`'s children: the one that shares the
     /// refined node's representative (`parent`) joins the cut with its M * G
     /// * V; the other waits for its representative's evaluation.
     #[inline(always)]
-    fn add_slots(&mut self, tree: TreeIndex, b: usize, bounds: [f32; 2], parent: Option<(u32, DVec3)>) {
+    fn add_slots(&mut self, tree: TreeIndex, b: usize, bounds: [f32; 2], parent: Option<(u32, DVec3, Seen)>) {
         let block = &self.trees[tree as usize].blocks[b];
-        let (shared, unit) = parent.unwrap_or((u32::MAX, DVec3::ZERO));
+        let (shared, unit, seen) = parent.unwrap_or((u32::MAX, DVec3::ZERO, Seen::Untraced));
         for (k, &bound) in bounds.iter().enumerate() {
             let child = block.child[k];
             if child == Child::EMPTY {
@@ -190,10 +209,21 @@ impl Cut<'_, '_> {
             let intensity = Vec3::new(block.intensity[0][k], block.intensity[1][k], block.intensity[2][k]);
             let index = self.scratch.entries.len();
             if representative == shared && parent.is_some() {
-                self.scratch.entries.push(Entry { unit, intensity, bound, child, representative, tree, in_cut: true });
+                self.scratch.entries.push(Entry {
+                    unit,
+                    intensity,
+                    bound,
+                    child,
+                    representative,
+                    tree,
+                    in_cut: true,
+                    seen,
+                });
                 self.admit(index);
             } else {
-                let entry = Entry { unit: DVec3::ZERO, intensity, bound, child, representative, tree, in_cut: true };
+                let seen = Seen::Untraced;
+                let entry =
+                    Entry { unit: DVec3::ZERO, intensity, bound, child, representative, tree, in_cut: true, seen };
                 self.scratch.entries.push(entry);
                 self.scratch.pending.push(Pending { entry: index as u32, block: b as u32, slot: k as u8 });
             }
@@ -282,6 +312,9 @@ impl Cut<'_, '_> {
         for (p, &unit) in pending.iter().zip(units) {
             entries[p.entry as usize].unit = unit;
         }
+        for (k, occluded) in evaluations.traced() {
+            entries[pending[k].entry as usize].seen = if occluded { Seen::Occluded } else { Seen::Visible };
+        }
         for i in 0..self.scratch.pending.len() {
             let entry = self.scratch.pending[i].entry as usize;
             self.admit(entry);
@@ -312,7 +345,34 @@ pub fn evaluate(
                 groups,
                 settings.group_error,
                 #[inline(always)]
-                |range, result| cut_through(trees, range, sp, embree, settings, scratch, result),
+                |range, result| cut_through(trees, range, sp, embree, settings, scratch, result, None),
+            )
+        },
+    )
+}
+
+/// [`evaluate`] at an anchor of reconstruction cuts (docs/design.md §9.6):
+/// the same cut, and what it found recorded in `anchor` (each cut's total,
+/// each node's visibility) for the samples around it.
+pub fn evaluate_anchor(
+    trees: &LightTrees,
+    sp: &SurfacePoint<'_>,
+    embree: &EmbreeScene,
+    settings: &CutSettings,
+    scratch: &mut CutScratch,
+    groups: usize,
+    anchor: &mut AnchorCut,
+) -> CutResult {
+    anchor.clear();
+    crate::util::simd::best(
+        #[inline(always)]
+        || {
+            by_group(
+                trees,
+                groups,
+                settings.group_error,
+                #[inline(always)]
+                |range, result| cut_through(trees, range, sp, embree, settings, scratch, result, Some(anchor)),
             )
         },
     )
@@ -320,7 +380,8 @@ pub fn evaluate(
 
 /// One cut through `trees.trees[range]`, its threshold relative to their
 /// total, added to `result`: every node's estimate is also credited to the
-/// slot of its tree's group.
+/// slot of its tree's group. With `anchor`, the cut is recorded there.
+#[allow(clippy::too_many_arguments)]
 #[inline(always)]
 fn cut_through(
     all: &LightTrees,
@@ -330,6 +391,7 @@ fn cut_through(
     settings: &CutSettings,
     scratch: &mut CutScratch,
     result: &mut CutResult,
+    anchor: Option<&mut AnchorCut>,
 ) {
     let trees = &all.trees[range.clone()];
     // Small trees first, light by light with the exact renderer's code; their
@@ -337,6 +399,9 @@ fn cut_through(
     let fixed = exhaustive_part(all, &range, sp, embree, &mut scratch.batch, result);
     if trees.iter().all(|t| t.blocks.is_empty()) {
         result.radiance += fixed;
+        if let Some(anchor) = anchor {
+            anchor.totals.push(luminance64(fixed));
+        }
         return;
     }
 
@@ -381,7 +446,7 @@ fn cut_through(
                     refined += 1;
                     cut.add_children_of_two(first.tree, [&first, &second]);
                 }
-                None => cut.add_children(first.tree, first.child.index(), Some((first.representative, first.unit))),
+                None => cut.add_children(first.tree, first.child.index(), Some(first.shared())),
             }
         }
         if refined == 0 {
@@ -396,11 +461,46 @@ fn cut_through(
         bound += f64::from(entry.bound);
         result.credit(all.group_of_tree[range.start + entry.tree as usize], entry.estimate());
     }
+    if let Some(anchor) = anchor {
+        record(trees, range.start, &cut.scratch.entries, luminance64(radiance), anchor);
+    }
     result.radiance += radiance;
     result.error_bound += bound / f64::from(scale);
     // The exhaustive part's lights are in the point's cut too (counted there).
     result.nodes += cut.cut_nodes as u64;
     result.shadow_rays += cut.shadow_rays;
+}
+
+/// Records a finished cut through `trees` (the scene's trees from
+/// `first_tree` on) in `anchor`: its total's luminance, and every node it
+/// made: a node of the cut with what its ray saw, a refined node with what
+/// its cut descendants saw, all alike or [`Visibility::Mixed`]. Children
+/// are made after their parents, so a reverse walk meets them first.
+fn record(trees: &[CutTree], first_tree: usize, entries: &[Entry], total: f64, anchor: &mut AnchorCut) {
+    anchor.totals.push(total);
+    for entry in entries.iter().rev() {
+        let tree = first_tree + entry.tree as usize;
+        let visibility = if entry.in_cut {
+            match entry.seen {
+                Seen::Visible => Visibility::Visible,
+                Seen::Occluded => Visibility::Occluded,
+                Seen::Untraced => Visibility::Mixed,
+            }
+        } else {
+            let block = &trees[entry.tree as usize].blocks[entry.child.index()];
+            let mut children = block.child.iter().filter(|&&c| c != Child::EMPTY);
+            let first = children.next().and_then(|&c| anchor.node(tree, c)).map_or(Visibility::Mixed, |n| n.visibility);
+            children.fold(first, |v, &c| {
+                let other = anchor.node(tree, c).map_or(Visibility::Mixed, |n| n.visibility);
+                if other == v {
+                    v
+                } else {
+                    Visibility::Mixed
+                }
+            })
+        };
+        anchor.insert(tree, entry.child, AnchorNode { visibility, refined: !entry.in_cut });
+    }
 }
 
 #[cfg(test)]

@@ -13,6 +13,7 @@
 pub mod bounds;
 pub mod cut;
 pub mod multidimensional;
+pub mod reconstruction;
 pub mod stochastic;
 
 use glam::DVec3;
@@ -63,6 +64,11 @@ pub struct CutSettings {
     /// their unoccluded contributions (docs/design.md §10.7) when the cut
     /// has more. The other modes ignore it.
     pub resampled_rays: usize,
+    /// The bounded mode's reconstruction cuts (`--reconstruct B`): 0 cuts
+    /// every camera hit in full; B > 0 cuts in full only at the corners of
+    /// B x B pixel blocks and reconstructs the cuts of the camera hits in
+    /// between from them (docs/design.md §9.6). The other modes ignore it.
+    pub reconstruction_block: u32,
 }
 
 impl Default for CutSettings {
@@ -73,6 +79,7 @@ impl Default for CutSettings {
             group_error: GroupError::Group,
             exhaustive_lights: EXHAUSTIVE_LIGHTS,
             resampled_rays: 0,
+            reconstruction_block: 0,
         }
     }
 }

@@ -42,6 +42,7 @@ pub const MULTIDIMENSIONAL_DEFAULTS: CutSettings = CutSettings {
     group_error: super::GroupError::Group,
     exhaustive_lights: 0,
     resampled_rays: 0,
+    reconstruction_block: 0,
 };
 
 /// One shading point of a pixel's camera paths, with its strength: the

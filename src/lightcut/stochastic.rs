@@ -45,6 +45,7 @@ pub const STOCHASTIC_DEFAULTS: CutSettings = CutSettings {
     group_error: GroupError::Group,
     exhaustive_lights: super::EXHAUSTIVE_LIGHTS,
     resampled_rays: 0,
+    reconstruction_block: 0,
 };
 
 /// From this many samples per pixel on, a render without a mode flag is

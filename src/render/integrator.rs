@@ -14,6 +14,7 @@ use super::emitter_sampling::{EmitterChoice, EmitterDraw, EmitterSampling};
 use crate::light::Lights;
 use crate::light_tree::LightTrees;
 use crate::lightcut::multidimensional::{GatherPoint, GatherScratch};
+use crate::lightcut::reconstruction::{AnchorBlock, AnchorCut, ReconstructionScratch, ANCHORS};
 use crate::lightcut::{self, CutResult, CutScratch, CutSettings, StochasticScratch};
 use crate::shading::{BatchBuffers, Bsdf, Geometry, LightBatch, Lobes, SurfacePoint};
 use crate::util::color::luminance;
@@ -94,6 +95,61 @@ pub struct Scratch {
     stochastic: StochasticScratch,
     gather: GatherScratch,
     choice: EmitterChoice,
+    reconstruction: ReconstructionScratch,
+    pub anchors: Anchors,
+}
+
+/// The least cosine between a camera hit's normal and an anchor's for the
+/// anchor to count as a neighbour on the same surface (docs/design.md §9.6).
+const ANCHOR_NORMAL_COS: f32 = 0.9;
+
+/// The largest ratio between a camera hit's distance and an anchor's for
+/// the anchor to count as a neighbour.
+const ANCHOR_DISTANCE_RATIO: f32 = 1.1;
+
+/// A full cut at a corner of a pixel block (reconstruction cuts,
+/// docs/design.md §9.6): where it hit, and what it found.
+pub struct Anchor {
+    material: usize,
+    normal: Vec3,
+    distance: f32,
+    cut: AnchorCut,
+}
+
+/// The anchors of a tile (keyed by their corners in image pixels), and the
+/// four of the pixel being shaded.
+#[derive(Default)]
+pub struct Anchors {
+    corners: std::collections::HashMap<(u32, u32), Option<usize>>,
+    anchors: Vec<Anchor>,
+    /// Each block's anchors merged (by their indices), made when a pixel
+    /// of the block is first shaded.
+    blocks: std::collections::HashMap<[usize; ANCHORS], AnchorBlock>,
+    /// The pixel's block corners' anchors; None where a corner saw no
+    /// surface (the pixel's points are then cut in full).
+    current: Option<[usize; ANCHORS]>,
+}
+
+impl Anchors {
+    /// Forgets every anchor (a new tile).
+    pub fn clear(&mut self) {
+        self.corners.clear();
+        self.anchors.clear();
+        self.blocks.clear();
+        self.current = None;
+    }
+
+    /// The pixel's anchors, if all four are on the surface of `sp`
+    /// (material `material`): same material, normals within
+    /// `ANCHOR_NORMAL_COS`, distances within `ANCHOR_DISTANCE_RATIO`.
+    fn fitting(&self, material: usize, sp: &SurfacePoint<'_>) -> Option<[usize; ANCHORS]> {
+        let current = self.current?;
+        let fits = |a: &Anchor| {
+            let ratio = a.distance.max(sp.distance) / a.distance.min(sp.distance);
+            a.material == material && a.normal.dot(sp.n) >= ANCHOR_NORMAL_COS && ratio <= ANCHOR_DISTANCE_RATIO
+        };
+        current.iter().all(|&i| fits(&self.anchors[i])).then_some(current)
+    }
 }
 
 /// Buckets of the cut-size histogram: bucket k counts cuts of 2^k to
@@ -290,7 +346,21 @@ impl<'a> Integrator<'a> {
             if sp.material.unlit {
                 break;
             }
-            self.next_event(&sp, sharp, sample, depth, sees_emitters, throughput, scratch, groups, gather, &mut result);
+            // Reconstruction cuts read the pixel's anchors at the camera's hit.
+            let anchors = if depth == 0 { scratch.anchors.fitting(material, &sp) } else { None };
+            self.next_event(
+                &sp,
+                sharp,
+                sample,
+                depth,
+                sees_emitters,
+                anchors,
+                throughput,
+                scratch,
+                groups,
+                gather,
+                &mut result,
+            );
             if depth + 1 == vertices {
                 break;
             }
@@ -327,6 +397,7 @@ impl<'a> Integrator<'a> {
         sample: SampleKey,
         depth: u32,
         primary: bool,
+        anchors: Option<[usize; ANCHORS]>,
         throughput: DVec3,
         scratch: &mut Scratch,
         groups: &mut [DVec3],
@@ -336,7 +407,8 @@ impl<'a> Integrator<'a> {
         if let DirectLighting::Multidimensional { .. } = self.direct {
             gather.push(GatherPoint { sp: sp.clone(), strength: throughput });
         } else {
-            let direct = self.direct_light(sp, sample, depth, primary, groups.len(), scratch, &mut result.stats);
+            let direct =
+                self.direct_light(sp, sample, depth, primary, anchors, groups.len(), scratch, &mut result.stats);
             result.stats.record_point(direct.nodes, direct.shadow_rays);
             direct.add_scaled_to(throughput, &mut result.radiance, groups);
         }
@@ -523,6 +595,90 @@ impl<'a> Integrator<'a> {
         None
     }
 
+    /// The block edge of reconstruction cuts, in pixels, when the pass
+    /// uses them (the bounded mode with `--reconstruct`).
+    #[must_use]
+    pub fn reconstruction_block(&self) -> Option<u32> {
+        match self.direct {
+            DirectLighting::Lightcuts { settings, .. } if settings.reconstruction_block > 0 => {
+                Some(settings.reconstruction_block)
+            }
+            _ => None,
+        }
+    }
+
+    /// Makes sure the anchors of the block corners `corners` are in
+    /// `scratch.anchors`, each cut in full where camera ray `ray_at(corner)`
+    /// first hits a lit surface, and makes them the current pixel's (None
+    /// when one of them saw no surface). What the new anchors cost is
+    /// counted in `stats` (each is a shading point). `key` is the pixel's
+    /// (seed, x, y).
+    pub fn set_anchors(
+        &self,
+        corners: [(u32, u32); ANCHORS],
+        ray_at: impl Fn(u32, u32) -> crate::embree::Ray,
+        seed: u64,
+        scratch: &mut Scratch,
+        stats: &mut ShadingStats,
+    ) -> u64 {
+        let DirectLighting::Lightcuts { trees, settings } = self.direct else { return 0 };
+        let mut camera_rays = 0;
+        let mut found = [0usize; ANCHORS];
+        let mut all = true;
+        for (slot, &(cx, cy)) in found.iter_mut().zip(&corners) {
+            let index = match scratch.anchors.corners.get(&(cx, cy)) {
+                Some(&index) => index,
+                None => {
+                    camera_rays += 1;
+                    let mut ray = ray_at(cx, cy);
+                    let anchor = self.first_hit(&mut ray).and_then(|hit| {
+                        let mut sp = self.geometry.surface(&ray, &hit);
+                        let material = self.geometry.scene.meshes[self.geometry.mesh_of(&hit)].material;
+                        if sp.material.unlit {
+                            return None;
+                        }
+                        // The same point as a camera sample there would be.
+                        sp.sample = Some(self.pixel_sample([seed, u64::from(cx), u64::from(cy), 0], 0));
+                        if self.emitters.and_then(|e| e.sharp_lobe(&sp)).is_some() {
+                            sp.emitter_lobes = Lobes::DIFFUSE;
+                        }
+                        let mut cut = AnchorCut::default();
+                        let groups = self.group_slots();
+                        let embree = &self.geometry.embree;
+                        let result = lightcut::cut::evaluate_anchor(
+                            trees,
+                            &sp,
+                            embree,
+                            &settings,
+                            &mut scratch.cut,
+                            groups,
+                            &mut cut,
+                        );
+                        stats.record_point(result.nodes, result.shadow_rays);
+                        Some(Anchor { material, normal: sp.n, distance: sp.distance, cut })
+                    });
+                    let index = anchor.map(|a| {
+                        scratch.anchors.anchors.push(a);
+                        scratch.anchors.anchors.len() - 1
+                    });
+                    scratch.anchors.corners.insert((cx, cy), index);
+                    index
+                }
+            };
+            match index {
+                Some(i) => *slot = i,
+                None => all = false,
+            }
+        }
+        let anchors = &mut scratch.anchors;
+        anchors.current = all.then_some(found);
+        if all && !anchors.blocks.contains_key(&found) {
+            let block = AnchorBlock::merge(found.map(|i| &anchors.anchors[i].cut));
+            anchors.blocks.insert(found, block);
+        }
+        camera_rays
+    }
+
     /// The direct light of a pixel's gather points (from [`Integrator::trace`]
     /// in the multidimensional mode), summed with their strengths, each
     /// group's share added to `groups`; None in the other modes. `pixel` is
@@ -569,7 +725,9 @@ impl<'a> Integrator<'a> {
     /// The direct light at `sp` by the pass's mode, with `groups` group
     /// slots (0: not split by group); the time spent choosing a cut is
     /// added to `stats`. Past a sampled bounce (not `primary`) a
-    /// stochastic cut has at most `SECONDARY_MAX_CUT` nodes.
+    /// stochastic cut has at most `SECONDARY_MAX_CUT` nodes. With
+    /// `anchors` (a camera hit whose pixel's anchors fit it), the bounded
+    /// cut is reconstructed from theirs.
     #[allow(clippy::too_many_arguments)]
     fn direct_light(
         &self,
@@ -577,6 +735,7 @@ impl<'a> Integrator<'a> {
         sample: SampleKey,
         depth: u32,
         primary: bool,
+        anchors: Option<[usize; ANCHORS]>,
         groups: usize,
         scratch: &mut Scratch,
         stats: &mut ShadingStats,
@@ -614,7 +773,14 @@ impl<'a> Integrator<'a> {
                 let timed = crate::embree::timing().then(|| (Instant::now(), crate::embree::thread_timed_nanos()));
                 let embree = &self.geometry.embree;
                 let mut found = if let DirectLighting::Lightcuts { .. } = self.direct {
-                    lightcut::evaluate(trees, sp, embree, &settings, &mut scratch.cut, groups)
+                    match anchors {
+                        Some(found) => {
+                            let block = &scratch.anchors.blocks[&found];
+                            let scratch = &mut scratch.reconstruction;
+                            lightcut::reconstruction::evaluate(trees, sp, embree, &settings, block, scratch, groups)
+                        }
+                        None => lightcut::evaluate(trees, sp, embree, &settings, &mut scratch.cut, groups),
+                    }
                 } else {
                     let [seed, x, y, s] = sample;
                     let mut rng = Rng::from_key(&[seed, x, y, s, u64::from(depth), STOCHASTIC_STREAM]);

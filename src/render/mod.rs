@@ -225,6 +225,16 @@ fn render_tile(
     let (mut objects, mut materials) = (Coverage::default(), Coverage::default());
     // The multidimensional mode's gather points of the pixel being shaded.
     let mut gathered = Vec::new();
+    // Reconstruction cuts' anchors: the tile's own, made as its pixels
+    // need them, so that they depend on the image alone (docs/design.md §9.6).
+    scratch.anchors.clear();
+    let block = integrator.reconstruction_block();
+    // An anchor's camera ray: through its corner's point of the film, the
+    // lens's centre, at the middle of the shutter.
+    let anchor_camera = match block {
+        Some(_) if camera.shutter_open() => std::borrow::Cow::Owned(camera.at(0.5)),
+        _ => std::borrow::Cow::Borrowed(camera),
+    };
     for (i, pixel) in values.chunks_exact_mut(count).enumerate() {
         let (x, y) = (tile.x0 + i as u32 % tile.width(), tile.y0 + i as u32 / tile.width());
         let mut radiance = DVec3::ZERO;
@@ -244,6 +254,15 @@ fn render_tile(
         let time_shift = camera
             .shutter_open()
             .then(|| Rng::from_key(&[settings.seed, u64::from(x), u64::from(y), SHUTTER_STREAM]).next_f32());
+        if let Some(b) = block {
+            let (x0, y0) = (x / b * b, y / b * b);
+            let corners = [(x0, y0), (x0 + b, y0), (x0, y0 + b), (x0 + b, y0 + b)];
+            let ray_at = |cx: u32, cy: u32| anchor_camera.ray(cx as f32, cy as f32);
+            // What an anchor costs counts in the pass's totals, not in the
+            // pixel's AOVs: which pixel of a tile first needs an anchor
+            // depends on the tile, and the AOVs must not.
+            stats.camera_rays += integrator.set_anchors(corners, ray_at, settings.seed, scratch, &mut stats.shading);
+        }
         for s in 0..settings.spp {
             let ray = match time_shift {
                 None => camera_ray(camera, settings, x, y, s, lens_shift),

@@ -47,6 +47,9 @@ impl Mode {
         if c.resampled_rays > 0 {
             text += &format!(" resampled_rays={}", c.resampled_rays);
         }
+        if c.reconstruction_block > 0 {
+            text += &format!(" reconstruction_block={}", c.reconstruction_block);
+        }
         text
     }
 

@@ -147,6 +147,19 @@ pub fn evaluate_into(evaluator: &LightEvaluator<'_, '_>, chosen: &Choices, buffe
 }
 
 impl Evaluations {
+    /// After [`trace_evaluations`]: each traced term's index among the
+    /// values, and whether its ray was blocked.
+    pub fn traced(&self) -> impl Iterator<Item = (usize, bool)> + '_ {
+        self.ray_entry.iter().zip(&self.occluded).map(|(&entry, &blocked)| (entry as usize, blocked))
+    }
+
+    /// After [`evaluate_into`]: the values appended, unoccluded (no ray
+    /// traced yet).
+    #[must_use]
+    pub fn values(&self) -> &[DVec3] {
+        &self.values
+    }
+
     pub fn clear(&mut self) {
         self.values.clear();
         self.rays.clear();
