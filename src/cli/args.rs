@@ -159,7 +159,7 @@ pub struct ModeArgs {
     /// sampling; unbiased). 0 (the default) traces every cut node's light.
     #[arg(long, value_name = "N")]
     pub resampled_rays: Option<usize>,
-    /// Bounded mode: reconstruction cuts [LC05 §6]. Full cuts only at the
+    /// Bounded mode: reconstruction cuts [LC05] section 6. Full cuts only at the
     /// corners of B x B pixel blocks; every camera hit between them cuts
     /// the trees again with the same bounds, but traces a shadow ray only
     /// where the corners' cuts disagree on what they saw. Implies

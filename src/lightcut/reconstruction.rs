@@ -1,4 +1,4 @@
-//! Reconstruction cuts ([LC05] §6; docs/design.md §9.6): full bounded cuts
+//! Reconstruction cuts ([LC05] section 6; docs/design.md §9.6): full bounded cuts
 //! at a sparse set of anchors (the corners of pixel blocks, fixed by the
 //! image), and at every other camera hit a cut reconstructed from its
 //! block's four anchors. The reconstruction walks the trees from the top:

@@ -255,13 +255,8 @@ fn render_tile(
             .shutter_open()
             .then(|| Rng::from_key(&[settings.seed, u64::from(x), u64::from(y), SHUTTER_STREAM]).next_f32());
         if let Some(b) = block {
-            let (x0, y0) = (x / b * b, y / b * b);
-            let corners = [(x0, y0), (x0 + b, y0), (x0, y0 + b), (x0 + b, y0 + b)];
-            let ray_at = |cx: u32, cy: u32| anchor_camera.ray(cx as f32, cy as f32);
-            // What an anchor costs counts in the pass's totals, not in the
-            // pixel's AOVs: which pixel of a tile first needs an anchor
-            // depends on the tile, and the AOVs must not.
-            stats.camera_rays += integrator.set_anchors(corners, ray_at, settings.seed, scratch, &mut stats.shading);
+            stats.camera_rays +=
+                pixel_anchors(integrator, &anchor_camera, b, (x, y), settings.seed, scratch, &mut stats.shading);
         }
         for s in 0..settings.spp {
             let ray = match time_shift {
@@ -331,6 +326,27 @@ fn render_tile(
         }
     }
     (values, non_finite, stats)
+}
+
+/// Makes pixel (x, y)'s anchors, the corners of its `block` x `block`
+/// pixel block, current in `scratch` (reconstruction cuts, docs/design.md
+/// §9.6), their camera rays from `camera`. What an anchor costs counts in
+/// the pass's totals (`stats`), not in the pixel's AOVs: which pixel of a
+/// tile first needs an anchor depends on the tile, and the AOVs must not.
+/// Returns the camera rays cast.
+fn pixel_anchors(
+    integrator: &Integrator<'_>,
+    camera: &Camera,
+    block: u32,
+    (x, y): (u32, u32),
+    seed: u64,
+    scratch: &mut Scratch,
+    stats: &mut ShadingStats,
+) -> u64 {
+    let (x0, y0) = (x / block * block, y / block * block);
+    let corners = [(x0, y0), (x0 + block, y0), (x0, y0 + block), (x0 + block, y0 + block)];
+    let ray_at = |cx: u32, cy: u32| camera.ray(cx as f32, cy as f32);
+    integrator.set_anchors(corners, ray_at, seed, scratch, stats)
 }
 
 /// Keeps a pixel's lens rotation apart from its samples' streams.
