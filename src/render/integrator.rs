@@ -96,7 +96,7 @@ pub struct Scratch {
     gather: GatherScratch,
     choice: EmitterChoice,
     reconstruction: ReconstructionScratch,
-    pub anchors: Anchors,
+    pub(super) anchors: Anchors,
 }
 
 /// The least cosine between a camera hit's normal and an anchor's for the
@@ -611,8 +611,9 @@ impl<'a> Integrator<'a> {
     /// `scratch.anchors`, each cut in full where camera ray `ray_at(corner)`
     /// first hits a lit surface, and makes them the current pixel's (None
     /// when one of them saw no surface). What the new anchors cost is
-    /// counted in `stats` (each is a shading point). `key` is the pixel's
-    /// (seed, x, y).
+    /// counted in `stats` (each is a shading point). `seed` keys each
+    /// anchor's point as it keys a camera sample's at the corner. Returns
+    /// the camera rays cast.
     pub fn set_anchors(
         &self,
         corners: [(u32, u32); ANCHORS],
