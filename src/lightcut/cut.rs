@@ -31,7 +31,7 @@ use std::collections::BinaryHeap;
 
 use super::bounds::PointBounds;
 use super::reconstruction::{AnchorCut, AnchorNode, Visibility};
-use super::{by_group, exhaustive_part, CutResult, CutSettings};
+use super::{by_group_at_best, exhaustive_part, CutResult, CutSettings};
 use crate::embree::{PacketWidth, Scene as EmbreeScene};
 use crate::light_tree::layout::{Child, CutTree};
 use crate::light_tree::{LightTrees, TreeIndex, MAX_TREES};
@@ -335,20 +335,7 @@ pub fn evaluate(
     scratch: &mut CutScratch,
     groups: usize,
 ) -> CutResult {
-    // The cut is inlined into the entry point compiled for the CPU's best
-    // instruction set (docs/design.md §4).
-    crate::util::simd::best(
-        #[inline(always)]
-        || {
-            by_group(
-                trees,
-                groups,
-                settings.group_error,
-                #[inline(always)]
-                |range, result| cut_through(trees, range, sp, embree, settings, scratch, result, None),
-            )
-        },
-    )
+    evaluate_recording(trees, sp, embree, settings, scratch, groups, None)
 }
 
 /// [`evaluate`] at an anchor of reconstruction cuts (docs/design.md §9.6):
@@ -364,17 +351,26 @@ pub fn evaluate_anchor(
     anchor: &mut AnchorCut,
 ) -> CutResult {
     anchor.clear();
-    crate::util::simd::best(
+    evaluate_recording(trees, sp, embree, settings, scratch, groups, Some(anchor))
+}
+
+/// [`evaluate`], each cut recorded in `anchor` when there is one.
+#[inline(always)]
+fn evaluate_recording(
+    trees: &LightTrees,
+    sp: &SurfacePoint<'_>,
+    embree: &EmbreeScene,
+    settings: &CutSettings,
+    scratch: &mut CutScratch,
+    groups: usize,
+    mut anchor: Option<&mut AnchorCut>,
+) -> CutResult {
+    by_group_at_best(
+        trees,
+        groups,
+        settings.group_error,
         #[inline(always)]
-        || {
-            by_group(
-                trees,
-                groups,
-                settings.group_error,
-                #[inline(always)]
-                |range, result| cut_through(trees, range, sp, embree, settings, scratch, result, Some(anchor)),
-            )
-        },
+        |range, result| cut_through(trees, range, sp, embree, settings, scratch, result, anchor.as_deref_mut()),
     )
 }
 
@@ -504,4 +500,4 @@ fn record(trees: &[CutTree], first_tree: usize, entries: &[Entry], total: f64, a
 }
 
 #[cfg(test)]
-mod tests;
+pub(crate) mod tests;

@@ -214,6 +214,21 @@ pub(crate) fn exhaustive_part(
     radiance
 }
 
+/// [`by_group`] inlined into the entry point compiled for the CPU's best
+/// instruction set (docs/design.md §4): how every cut mode runs its cuts.
+#[inline(always)]
+pub(crate) fn by_group_at_best(
+    trees: &LightTrees,
+    groups: usize,
+    group_error: GroupError,
+    cut: impl FnMut(std::ops::Range<usize>, &mut CutResult),
+) -> CutResult {
+    crate::util::simd::best(
+        #[inline(always)]
+        || by_group(trees, groups, group_error, cut),
+    )
+}
+
 /// Runs `cut` (one cut through the trees of a range, adding what it finds
 /// to the result it is given: its radiance, its group slots, its counters)
 /// as `group_error` says: through every tree at once when the result has

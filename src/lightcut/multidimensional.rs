@@ -18,7 +18,7 @@ use std::collections::BinaryHeap;
 use glam::{DVec3, Vec3};
 
 use super::bounds::{min_distance_squared_f32, GatherBounds, PointBounds};
-use super::{by_group, CutResult, CutSettings};
+use super::{by_group_at_best, CutResult, CutSettings};
 use crate::embree::Scene as EmbreeScene;
 use crate::light_tree::layout::{Child, CutTree};
 use crate::light_tree::{LightTrees, TreeIndex};
@@ -187,19 +187,14 @@ pub fn evaluate(
     }
     let salt = Rng::from_key(&[key[0], key[1], key[2], GATHER_STREAM]).next_u64();
     let root = build_gather_tree(points, trees.scale, scratch);
-    let cut = crate::util::simd::best(
+    let cut = by_group_at_best(
+        trees,
+        groups,
+        settings.group_error,
         #[inline(always)]
-        || {
-            by_group(
-                trees,
-                groups,
-                settings.group_error,
-                #[inline(always)]
-                |range, result| {
-                    let gathered = Gathered { points, root, salt };
-                    product_cut(trees, range, &gathered, embree, settings, scratch, result);
-                },
-            )
+        |range, result| {
+            let gathered = Gathered { points, root, salt };
+            product_cut(trees, range, &gathered, embree, settings, scratch, result);
         },
     );
     PixelCut { cut, gather_nodes: scratch.nodes.len() as u64 }

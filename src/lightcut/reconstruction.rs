@@ -29,7 +29,7 @@ use std::hash::{BuildHasherDefault, Hasher};
 use glam::DVec3;
 
 use super::bounds::PointBounds;
-use super::{by_group, exhaustive_part, CutResult, CutSettings};
+use super::{by_group_at_best, exhaustive_part, CutResult, CutSettings};
 use crate::embree::{PacketWidth, Scene as EmbreeScene};
 use crate::light_tree::layout::Child;
 use crate::light_tree::{LightTrees, TreeIndex};
@@ -81,7 +81,7 @@ impl Hasher for NodeHasher {
 }
 
 /// What one anchor's full cut found: per cut through a range of trees (in
-/// [`by_group`]'s order), the luminance of its total; per node it made,
+/// [`super::by_group`]'s order), the luminance of its total; per node it made,
 /// what it saw.
 #[derive(Debug, Clone, Default)]
 pub struct AnchorCut {
@@ -231,20 +231,15 @@ pub fn evaluate(
     scratch: &mut ReconstructionScratch,
     groups: usize,
 ) -> CutResult {
-    crate::util::simd::best(
+    let mut call = 0;
+    by_group_at_best(
+        trees,
+        groups,
+        settings.group_error,
         #[inline(always)]
-        || {
-            let mut call = 0;
-            by_group(
-                trees,
-                groups,
-                settings.group_error,
-                #[inline(always)]
-                |range, result| {
-                    reconstruct(trees, range, call, sp, embree, settings, anchors, scratch, result);
-                    call += 1;
-                },
-            )
+        |range, result| {
+            reconstruct(trees, range, call, sp, embree, settings, anchors, scratch, result);
+            call += 1;
         },
     )
 }

@@ -27,7 +27,7 @@ use std::collections::BinaryHeap;
 use glam::{DVec3, Vec3};
 
 use super::bounds::PointBounds;
-use super::{by_group, exhaustive_part, CutResult, CutSettings, GroupError};
+use super::{by_group_at_best, exhaustive_part, CutResult, CutSettings, GroupError};
 use crate::embree::{PacketWidth, Scene as EmbreeScene};
 use crate::light_tree::layout::{Child, CutTree};
 use crate::light_tree::{LightTrees, TreeIndex};
@@ -150,21 +150,12 @@ pub(crate) fn evaluate_with(
     importance: &impl Importance,
     groups: usize,
 ) -> CutResult {
-    // Inlined into the entry point compiled for the CPU's best instruction
-    // set (docs/design.md §4).
-    crate::util::simd::best(
+    by_group_at_best(
+        trees,
+        groups,
+        settings.group_error,
         #[inline(always)]
-        || {
-            by_group(
-                trees,
-                groups,
-                settings.group_error,
-                #[inline(always)]
-                |range, result| {
-                    cut_through(trees, range, sp, embree, settings, rng, scratch, bounds, importance, result);
-                },
-            )
-        },
+        |range, result| cut_through(trees, range, sp, embree, settings, rng, scratch, bounds, importance, result),
     )
 }
 

@@ -11,7 +11,7 @@ use crate::util::sampling::Rng;
 
 /// A floor, two occluding spheres (one glossy) and `n x n` lights of mixed
 /// brightness over them; returns the scene loaded from text.
-fn scene(n: u32) -> Scene {
+pub(crate) fn scene(n: u32) -> Scene {
     scene_with(n, "")
 }
 

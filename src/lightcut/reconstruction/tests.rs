@@ -5,27 +5,9 @@ use crate::embree::Device;
 use crate::light::Lights;
 use crate::lightcut::cut::{evaluate_anchor, CutScratch};
 use crate::lightcut::EXHAUSTIVE_LIGHTS;
-use crate::scene::builder::SceneText;
-use crate::scene::Scene;
 use crate::shading::{Geometry, LightBatch};
 use crate::util::color::luminance64;
 use crate::util::sampling::Rng;
-
-/// A floor, two occluding spheres (one glossy) and two grids of lights of
-/// mixed brightness over them, whose shadows cross the floor.
-fn scene() -> Scene {
-    SceneText::new(64, 48)
-        .camera([0.0, 4.0, 7.0], [0.0, 0.5, 0.0], 50.0)
-        .material("floor", [0.7, 0.7, 0.7], "")
-        .material("glossy", [0.5, 0.3, 0.2], "specular = [0.4, 0.4, 0.4]\nexponent = 60\n")
-        .floor(0.0, 6.0, "floor")
-        .sphere([-1.0, 1.0, 0.0], 1.0, "glossy")
-        .sphere([1.5, 0.6, 1.0], 0.6, "floor")
-        .grid([-3.0, 3.0, -3.0], [6.0, 0.0, 0.0], [0.0, 0.0, 6.0], [20, 20], [0.05, 0.05, 0.05])
-        .grid([-4.0, 1.5, -4.0], [8.0, 0.0, 0.0], [0.0, 0.0, 8.0], [20, 2], [0.2, 0.1, 0.05])
-        .load(std::path::Path::new("test.toml"))
-        .unwrap()
-}
 
 /// What the checks see at one camera hit.
 struct Found {
@@ -38,7 +20,9 @@ struct Found {
 /// reconstructed from anchors cut at the four film points `spread` pixels
 /// around it (those that hit something), the bounded cut and the exact sum.
 fn at_camera_hits(settings: CutSettings, spread: f32, mut check: impl FnMut(&Found)) {
-    let scene = scene();
+    // A floor, two occluding spheres (one glossy) and two grids of lights
+    // of mixed brightness over them, whose shadows cross the floor.
+    let scene = crate::lightcut::cut::tests::scene(20);
     let device = Device::try_new().unwrap();
     let lights = Lights::from_scene(&scene);
     let geometry = Geometry::try_new(&device, &scene, std::slice::from_ref(&lights)).unwrap();
