@@ -159,6 +159,11 @@ pub struct ModeArgs {
     /// sampling; unbiased). 0 (the default) traces every cut node's light.
     #[arg(long, value_name = "N")]
     pub resampled_rays: Option<usize>,
+    /// Stochastic mode: choose a cut at every sample's shading point,
+    /// instead of once per pixel at its first sample's camera hit, for the
+    /// later samples on the same surface (the default: docs/design.md §10.9).
+    #[arg(long, conflicts_with_all = ["exact", "bounded", "multidimensional", "reconstruct"])]
+    pub cut_per_sample: bool,
     /// Bounded mode: reconstruction cuts [LC05] section 6. Full cuts only at the
     /// corners of B x B pixel blocks; every camera hit between them cuts
     /// the trees again with the same bounds, but traces a shadow ray only
@@ -236,6 +241,15 @@ impl ModeArgs {
         let defaults = if stochastic { STOCHASTIC_DEFAULTS } else { CutSettings::default() };
         let mut cut = cut_settings(self.error.unwrap_or(defaults.error), self.max_cut.unwrap_or(defaults.max_cut))?;
         cut.group_error = self.group_error.unwrap_or(defaults.group_error);
+        cut.pixel_cut = stochastic && !self.cut_per_sample;
+        if self.cut_per_sample && !stochastic {
+            return Err(CliError::Usage {
+                flag: "--cut-per-sample",
+                message: format!(
+                    "applies to the stochastic mode only; at {spp} spp this render is bounded: add --stochastic"
+                ),
+            });
+        }
         Ok(if stochastic { Mode::Stochastic(cut) } else { Mode::Bounded(cut) })
     }
 }

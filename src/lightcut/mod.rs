@@ -69,6 +69,12 @@ pub struct CutSettings {
     /// B x B pixel blocks and reconstructs the cuts of the camera hits in
     /// between from them (docs/design.md §9.6). The other modes ignore it.
     pub reconstruction_block: u32,
+    /// The stochastic cut's cut chosen once per pixel (docs/design.md
+    /// §10.9): the cut chosen at a pixel's first sample's camera hit serves
+    /// every later sample of the pixel whose camera hit is on the same
+    /// surface; false (`--cut-per-sample`) chooses a cut at every shading
+    /// point. The other modes ignore it.
+    pub pixel_cut: bool,
 }
 
 impl Default for CutSettings {
@@ -80,6 +86,7 @@ impl Default for CutSettings {
             exhaustive_lights: EXHAUSTIVE_LIGHTS,
             resampled_rays: 0,
             reconstruction_block: 0,
+            pixel_cut: false,
         }
     }
 }

@@ -21,6 +21,10 @@
 //! driven by one uniform number, rescaled at each step (inversion of the
 //! subtree's distribution), and the numbers a cut node gets at a pixel's
 //! samples fall one in each of as many strata as the pixel has samples.
+//!
+//! One cut per pixel (docs/design.md §10.9): by default a pixel's later
+//! samples walk the cut chosen at its first, each with its own point's
+//! importance (any cut is unbiased; only the walks need the point).
 
 use std::collections::BinaryHeap;
 
@@ -46,6 +50,7 @@ pub const STOCHASTIC_DEFAULTS: CutSettings = CutSettings {
     exhaustive_lights: super::EXHAUSTIVE_LIGHTS,
     resampled_rays: 0,
     reconstruction_block: 0,
+    pixel_cut: true,
 };
 
 /// From this many samples per pixel on, a render without a mode flag is
@@ -94,6 +99,36 @@ pub struct StochasticScratch {
     drawn: Vec<Drawn>,
     chosen: Choices,
     evaluations: Evaluations,
+    pixel_cuts: PixelCuts,
+}
+
+impl StochasticScratch {
+    /// Forgets the pixel's cuts (design §10.9): called where a tile starts,
+    /// so that a cut never outlives the render and the pixels it was chosen
+    /// for.
+    pub fn forget_pixel_cuts(&mut self) {
+        self.pixel_cuts.pixel = None;
+    }
+}
+
+/// A later sample walks its pixel's cut only where its point is on the
+/// first sample's surface (design §10.9): the same material, normals
+/// within this cosine, distances from the viewer within this ratio.
+const PIXEL_CUT_NORMAL_COS: f32 = 0.9;
+const PIXEL_CUT_DISTANCE_RATIO: f32 = 1.1;
+
+/// The cuts chosen at a pixel's first sample (design §10.9): one per cut
+/// through a range of trees (one per light group, or one for all).
+#[derive(Default)]
+struct PixelCuts {
+    /// The pixel sample's key they were chosen for ([`PixelSample::pixel`]).
+    pixel: Option<u64>,
+    /// The first sample's point: its material's address, normal and
+    /// distance from the viewer.
+    surface: Option<(usize, Vec3, f32)>,
+    /// (first tree of the range, the cut's nodes in `nodes`).
+    cuts: Vec<(usize, std::ops::Range<usize>)>,
+    nodes: Vec<Node>,
 }
 
 /// How a walk down a subtree chooses between two children: the weights of
@@ -108,6 +143,9 @@ impl<F: Fn(&CutTree, [usize; 2]) -> [[f32; 2]; 2]> Importance for F {}
 /// the box's centre). A block's weights do not depend on the block it is
 /// paired with (each lane is computed on its own).
 pub fn walk_importance(bounds: &PointBounds) -> impl Importance + '_ {
+    // Inlined into the walks, so compiled in their instruction set
+    // (util::simd::best).
+    #[inline(always)]
     move |tree: &CutTree, [a, b]: [usize; 2]| {
         let cones = tree.cones_of(a).zip(tree.cones_of(b)).map(|(x, y)| [x, y]);
         let [a0, a1, b0, b1] = bounds.importance_quad(tree.kind, [&tree.blocks[a], &tree.blocks[b]], cones);
@@ -181,7 +219,10 @@ fn cut_through(
         result.radiance += fixed;
         return;
     }
-    let cut_nodes = choose_cut(trees, range, settings, bounds, scratch);
+    let cut_nodes = match sp.sample.filter(|_| settings.pixel_cut) {
+        Some(sample) => pixel_cut(trees, range, sp, settings, bounds, scratch, sample),
+        None => choose_cut(trees, range, settings, bounds, scratch),
+    };
     result.nodes += cut_nodes as u64;
 
     draw(trees, rng, sp.sample.unwrap_or(PixelSample::ALONE), scratch, importance);
@@ -218,6 +259,7 @@ fn cut_through(
 /// the tree overlap in memory. Each walk is driven by one number: the
 /// pixel sample's for its node, from the next of `rng`'s in the order of
 /// the cut's nodes.
+#[inline(always)]
 fn draw(
     trees: &LightTrees,
     rng: &mut Rng,
@@ -294,6 +336,7 @@ fn key(bound: f32, node: usize) -> u64 {
 /// `in_cut`): from the roots, split the node with the largest error bound
 /// while that bound exceeds `error` times the cut's summed importance and
 /// the cut is smaller than `max_cut`. Returns the cut's size.
+#[inline(always)]
 fn choose_cut(
     trees: &LightTrees,
     range: std::ops::Range<usize>,
@@ -328,8 +371,56 @@ fn choose_cut(
     size
 }
 
+/// The cut of a pixel's sample (design §10.9): at its first sample (index
+/// 0) the cut [`choose_cut`] chooses, kept for the pixel; at a later sample
+/// of the same pixel on the same surface the kept cut, when the first
+/// sample kept one for these trees; otherwise a cut of its own. Any cut
+/// gives an unbiased estimate (design §10.4): the cut decides only how the
+/// lights are shared out among walks, and each walk draws by the
+/// importance at its own point. Returns the cut's size.
+#[inline(always)]
+fn pixel_cut(
+    trees: &LightTrees,
+    range: std::ops::Range<usize>,
+    sp: &SurfacePoint<'_>,
+    settings: &CutSettings,
+    bounds: &PointBounds,
+    scratch: &mut StochasticScratch,
+    sample: PixelSample,
+) -> usize {
+    let first = range.start;
+    let kept = &mut scratch.pixel_cuts;
+    let material = std::ptr::from_ref(sp.material) as usize;
+    let fits = |(m, n, distance): (usize, Vec3, f32)| {
+        let ratio = distance.max(sp.distance) / distance.min(sp.distance);
+        m == material && n.dot(sp.n) >= PIXEL_CUT_NORMAL_COS && ratio <= PIXEL_CUT_DISTANCE_RATIO
+    };
+    if sample.index > 0 && kept.pixel == Some(sample.pixel) && kept.surface.is_some_and(fits) {
+        if let Some((_, nodes)) = kept.cuts.iter().find(|(start, _)| *start == first) {
+            scratch.nodes.clear();
+            scratch.nodes.extend_from_slice(&kept.nodes[nodes.clone()]);
+            return scratch.nodes.len();
+        }
+    }
+    let size = choose_cut(trees, range, settings, bounds, scratch);
+    if sample.index == 0 {
+        let kept = &mut scratch.pixel_cuts;
+        if kept.pixel != Some(sample.pixel) {
+            kept.pixel = Some(sample.pixel);
+            kept.surface = Some((material, sp.n, sp.distance));
+            kept.cuts.clear();
+            kept.nodes.clear();
+        }
+        let start = kept.nodes.len();
+        kept.nodes.extend(scratch.nodes.iter().filter(|n| n.in_cut));
+        kept.cuts.push((first, start..kept.nodes.len()));
+    }
+    size
+}
+
 /// Adds slots `slots` of block `b` of tree `tree` to the cut; returns the
 /// cut's summed importance and size after.
+#[inline(always)]
 fn add_slots(
     trees: &LightTrees,
     bounds: &PointBounds,
@@ -382,6 +473,7 @@ enum Step {
 /// that choice u is uniform on the child's interval ([0, p0) or [p0, 1)),
 /// so mapped back onto [0, 1) it drives the next step (design §10.8): the
 /// walk inverts the subtree's distribution with one number.
+#[inline(always)]
 fn step(tree: &CutTree, walk: &mut Walk, weights: [f32; 2]) -> Step {
     let b = walk.below as usize;
     let Some(p0) = first_child_probability(tree, b, weights) else { return Step::Nothing };
@@ -404,6 +496,7 @@ fn step(tree: &CutTree, walk: &mut Walk, weights: [f32; 2]) -> Step {
 /// w_1) of the block's weights; child 1's is taken as 1 - p0, whatever
 /// w_1 / (w_0 + w_1) rounds to. None when no child can be taken (both
 /// weights 0).
+#[inline(always)]
 fn first_child_probability(tree: &CutTree, b: usize, weights: [f32; 2]) -> Option<f64> {
     let [w0, w1] = finite_weights(tree, b, weights);
     let sum = f64::from(w0) + f64::from(w1);
@@ -438,6 +531,7 @@ pub fn pmf(tree: &CutTree, importance: &impl Importance, below: usize, target: (
 /// The weights, or the slots' intensities' luminance where a weight is not
 /// finite (a box with the point inside and a clamp too small for f32): both
 /// children of a reachable node then stay possible.
+#[inline(always)]
 fn finite_weights(tree: &CutTree, b: usize, weights: [f32; 2]) -> [f32; 2] {
     if weights.iter().all(|x| x.is_finite()) {
         return weights;
@@ -445,6 +539,7 @@ fn finite_weights(tree: &CutTree, b: usize, weights: [f32; 2]) -> [f32; 2] {
     [0, 1].map(|k| luminance(slot_intensity(tree, b, k)).max(0.0))
 }
 
+#[inline(always)]
 fn slot_intensity(tree: &CutTree, b: usize, k: usize) -> Vec3 {
     let block = &tree.blocks[b];
     Vec3::new(block.intensity[0][k], block.intensity[1][k], block.intensity[2][k])

@@ -99,6 +99,17 @@ pub struct Scratch {
     pub(super) anchors: Anchors,
 }
 
+impl Scratch {
+    /// Forgets what a tile keeps between its pixels: reconstruction cuts'
+    /// anchors (the tile's own, made as its pixels need them, so that they
+    /// depend on the image alone: docs/design.md §9.6) and the stochastic
+    /// cut's pixel cuts (docs/design.md §10.9).
+    pub fn start_tile(&mut self) {
+        self.anchors.clear();
+        self.stochastic.forget_pixel_cuts();
+    }
+}
+
 /// The least cosine between a camera hit's normal and an anchor's for the
 /// anchor to count as a neighbour on the same surface (docs/design.md §9.6).
 const ANCHOR_NORMAL_COS: f32 = 0.9;
@@ -790,6 +801,9 @@ impl<'a> Integrator<'a> {
                     if !primary {
                         settings.max_cut = settings.max_cut.min(SECONDARY_MAX_CUT);
                     }
+                    // A pixel's cut is its camera hits' (design §10.9): a
+                    // later vertex's points are spread over the scene.
+                    settings.pixel_cut &= depth == 0;
                     lightcut::stochastic::evaluate(trees, sp, embree, &settings, &mut rng, scratch, groups)
                 };
                 if let Some((start, embree_before)) = timed {

@@ -225,9 +225,7 @@ fn render_tile(
     let (mut objects, mut materials) = (Coverage::default(), Coverage::default());
     // The multidimensional mode's gather points of the pixel being shaded.
     let mut gathered = Vec::new();
-    // Reconstruction cuts' anchors: the tile's own, made as its pixels
-    // need them, so that they depend on the image alone (docs/design.md §9.6).
-    scratch.anchors.clear();
+    scratch.start_tile();
     let block = integrator.reconstruction_block();
     // An anchor's camera ray: through its corner's point of the film, the
     // lens's centre, at the middle of the shutter.

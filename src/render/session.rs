@@ -59,6 +59,7 @@ impl Mode {
         match self {
             Self::Exact => "exact".into(),
             Self::Bounded(c) => format!("lightcuts {}", Self::settings(c)),
+            Self::Stochastic(c) if !c.pixel_cut => format!("stochastic lightcuts {} cut_per_sample", Self::settings(c)),
             Self::Stochastic(c) => format!("stochastic lightcuts {}", Self::settings(c)),
             Self::Multidimensional(c) => format!("multidimensional lightcuts {}", Self::settings(c)),
         }

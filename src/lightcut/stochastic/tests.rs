@@ -455,3 +455,109 @@ fn stratified_samples_of_a_pixel_are_unbiased_and_less_noisy() {
     eprintln!("variance of stratified over independent pixels: mean {pooled:.3}, per point {ratios:.3?}");
     assert!(pooled < 0.5, "variance of stratified over independent pixels, per point: {ratios:?}");
 }
+
+/// A pixel's cut (design §10.9) chosen at one shading point A (the
+/// pixel's first sample) and walked at another, B (its second), 1.4
+/// pixels away on the same surface: at 16 such pairs B's mean over
+/// `SEEDS` pixels is its exact sum, walking A's cut (different from B's
+/// own at most points); a kept cut missing its largest node (no longer
+/// covering every light) is caught; and a B on another surface than its A
+/// chooses its own cut.
+#[test]
+fn a_pixel_cut_serves_its_later_samples_unbiasedly_and_a_partial_one_is_caught() {
+    let settings = CutSettings { error: 0.1, max_cut: 8, pixel_cut: true, ..CutSettings::default() };
+    let scene = scene(OMNI);
+    let lights = Lights::from_scene(&scene);
+    let device = Device::try_new().unwrap();
+    let geometry = Geometry::try_new(&device, &scene, std::slice::from_ref(&lights)).unwrap();
+    let trees = crate::lightcut::build_trees(std::slice::from_ref(&lights), 5);
+    let mut pixel = Rng::seeded(11);
+    let camera = scene.camera(32, 24);
+    let mut pairs = Vec::new();
+    while pairs.len() < 400 {
+        let (x, y) = (pixel.range_f32(0.0, 31.0), pixel.range_f32(0.0, 23.0));
+        let [a, b] = [camera.ray(x, y), camera.ray(x + 1.0, y + 1.0)];
+        if let (Some(hit_a), Some(hit_b)) = (geometry.embree.intersect(&a), geometry.embree.intersect(&b)) {
+            pairs.push(((a, hit_a), (b, hit_b)));
+        }
+    }
+    let points: Vec<[SurfacePoint<'_>; 2]> =
+        pairs.iter().map(|((a, ha), (b, hb))| [geometry.surface(a, ha), geometry.surface(b, hb)]).collect();
+    let fits = |[a, b]: &[SurfacePoint<'_>; 2]| {
+        std::ptr::eq(a.material, b.material)
+            && a.n.dot(b.n) >= PIXEL_CUT_NORMAL_COS
+            && a.distance.max(b.distance) / a.distance.min(b.distance) <= PIXEL_CUT_DISTANCE_RATIO
+    };
+    let (same, other): (Vec<_>, Vec<_>) = points.iter().partition(|pair| fits(pair));
+    assert!(same.len() >= 16 && other.len() >= 4, "pairs on one surface {}, on two {}", same.len(), other.len());
+    fn at<'a>(sp: &SurfacePoint<'a>, pixel: u64, index: u32) -> SurfacePoint<'a> {
+        SurfacePoint { sample: Some(PixelSample { pixel, index, count: 2 }), ..sp.clone() }
+    }
+    let cut_of = |scratch: &StochasticScratch| -> Vec<(u32, u8)> {
+        scratch.nodes.iter().filter(|n| n.in_cut).map(|n| (n.block, n.slot)).collect()
+    };
+    let (mut scratch, mut batch) = (StochasticScratch::default(), BatchBuffers::default());
+    let embree = &geometry.embree;
+    let own_settings = CutSettings { pixel_cut: false, ..settings };
+    // On two surfaces: B chooses its own cut.
+    for (i, [a, b]) in other.iter().take(8).enumerate() {
+        evaluate(&trees, b, embree, &own_settings, &mut Rng::seeded(1), &mut scratch, 0);
+        let own = cut_of(&scratch);
+        evaluate(&trees, &at(a, mix64(i as u64), 0), embree, &settings, &mut Rng::seeded(1), &mut scratch, 0);
+        evaluate(&trees, &at(b, mix64(i as u64), 1), embree, &settings, &mut Rng::seeded(1), &mut scratch, 0);
+        assert_eq!(cut_of(&scratch), own, "a point on another surface must choose its own cut");
+    }
+    let (mut shared_rows, mut partial_rows, mut other_cuts) = (Vec::new(), Vec::new(), 0);
+    for (i, [a, b]) in same.iter().take(16).enumerate() {
+        let mut exact = LightBatch::new(embree, b, &mut batch);
+        lights.for_each(|light| exact.add(&light));
+        let exact = luminance64(exact.finish().radiance);
+        evaluate(&trees, b, embree, &own_settings, &mut Rng::seeded(1), &mut scratch, 0);
+        let own = cut_of(&scratch);
+        for partial in [false, true] {
+            let values: Vec<f64> = (0..SEEDS)
+                .map(|seed| {
+                    let mut rng = Rng::from_key(&[seed, i as u64]);
+                    let first = evaluate(&trees, &at(a, mix64(seed), 0), embree, &settings, &mut rng, &mut scratch, 0);
+                    let kept = cut_of(&scratch);
+                    if partial {
+                        // Drop the kept cut's largest node.
+                        let kept = &mut scratch.pixel_cuts;
+                        let largest = (0..kept.nodes.len())
+                            .max_by(|&x, &y| kept.nodes[x].importance.total_cmp(&kept.nodes[y].importance))
+                            .unwrap();
+                        kept.nodes.remove(largest);
+                        kept.cuts[0].1.end -= 1;
+                    }
+                    let later = evaluate(&trees, &at(b, mix64(seed), 1), embree, &settings, &mut rng, &mut scratch, 0);
+                    assert_eq!(
+                        later.nodes,
+                        first.nodes - u64::from(partial),
+                        "the later sample must walk the kept cut"
+                    );
+                    if !partial {
+                        assert_eq!(cut_of(&scratch), kept, "the later sample must walk the kept cut");
+                        other_cuts += usize::from(seed == 0 && kept != own);
+                    }
+                    luminance64(later.radiance)
+                })
+                .collect();
+            let mean = values.iter().sum::<f64>() / SEEDS as f64;
+            let variance = values.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (SEEDS - 1) as f64;
+            let row = (exact, mean, (variance / SEEDS as f64).sqrt());
+            if partial {
+                partial_rows.push(row)
+            } else {
+                shared_rows.push(row)
+            }
+        }
+    }
+    eprintln!(
+        "kept cut differs from own at {other_cuts} of 16 points; partial caught at {}",
+        biased_points(&partial_rows)
+    );
+    assert!(other_cuts >= 4, "the test needs points whose own cut differs from the kept one: {other_cuts}");
+    assert!(shared_rows.iter().filter(|r| r.2 > 0.0).count() >= 8, "most points must be sampled: {shared_rows:?}");
+    assert_eq!(biased_points(&shared_rows), 0, "(exact, mean, standard error) per point: {shared_rows:?}");
+    assert!(biased_points(&partial_rows) >= 4, "a partial cut must be caught: {partial_rows:?}");
+}
