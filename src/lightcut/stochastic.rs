@@ -36,7 +36,8 @@ use crate::embree::{PacketWidth, Scene as EmbreeScene};
 use crate::light_tree::layout::{Child, CutTree};
 use crate::light_tree::{LightTrees, TreeIndex};
 use crate::shading::{
-    evaluate_and_trace, resample_and_trace, BatchBuffers, Choices, Evaluations, LightEvaluator, SurfacePoint,
+    evaluate_and_trace, resample_and_trace, BatchBuffers, Choices, Evaluations, LightEvaluator, SurfaceKey,
+    SurfacePoint,
 };
 use crate::util::color::luminance;
 use crate::util::sampling::{PixelSample, Rng, ONE_BELOW};
@@ -107,25 +108,18 @@ impl StochasticScratch {
     /// so that a cut never outlives the render and the pixels it was chosen
     /// for.
     pub fn forget_pixel_cuts(&mut self) {
-        self.pixel_cuts.pixel = None;
+        self.pixel_cuts.first = None;
     }
 }
-
-/// A later sample walks its pixel's cut only where its point is on the
-/// first sample's surface (design §10.9): the same material, normals
-/// within this cosine, distances from the viewer within this ratio.
-const PIXEL_CUT_NORMAL_COS: f32 = 0.9;
-const PIXEL_CUT_DISTANCE_RATIO: f32 = 1.1;
 
 /// The cuts chosen at a pixel's first sample (design §10.9): one per cut
 /// through a range of trees (one per light group, or one for all).
 #[derive(Default)]
 struct PixelCuts {
-    /// The pixel sample's key they were chosen for ([`PixelSample::pixel`]).
-    pixel: Option<u64>,
-    /// The first sample's point: its material's address, normal and
-    /// distance from the viewer.
-    surface: Option<(usize, Vec3, f32)>,
+    /// The pixel sample's key they were chosen for ([`PixelSample::pixel`])
+    /// and the surface of that sample's point (its material by address):
+    /// a later sample walks them only on that surface.
+    first: Option<(u64, SurfaceKey)>,
     /// (first tree of the range, the cut's nodes in `nodes`).
     cuts: Vec<(usize, std::ops::Range<usize>)>,
     nodes: Vec<Node>,
@@ -388,15 +382,12 @@ fn pixel_cut(
     scratch: &mut StochasticScratch,
     sample: PixelSample,
 ) -> usize {
-    let first = range.start;
+    let trees_from = range.start;
     let kept = &mut scratch.pixel_cuts;
     let material = std::ptr::from_ref(sp.material) as usize;
-    let fits = |(m, n, distance): (usize, Vec3, f32)| {
-        let ratio = distance.max(sp.distance) / distance.min(sp.distance);
-        m == material && n.dot(sp.n) >= PIXEL_CUT_NORMAL_COS && ratio <= PIXEL_CUT_DISTANCE_RATIO
-    };
-    if sample.index > 0 && kept.pixel == Some(sample.pixel) && kept.surface.is_some_and(fits) {
-        if let Some((_, nodes)) = kept.cuts.iter().find(|(start, _)| *start == first) {
+    let same_pixel = |(pixel, _): &(u64, SurfaceKey)| *pixel == sample.pixel;
+    if sample.index > 0 && kept.first.is_some_and(|first| same_pixel(&first) && first.1.holds(material, sp)) {
+        if let Some((_, nodes)) = kept.cuts.iter().find(|(start, _)| *start == trees_from) {
             scratch.nodes.clear();
             scratch.nodes.extend_from_slice(&kept.nodes[nodes.clone()]);
             return scratch.nodes.len();
@@ -405,15 +396,14 @@ fn pixel_cut(
     let size = choose_cut(trees, range, settings, bounds, scratch);
     if sample.index == 0 {
         let kept = &mut scratch.pixel_cuts;
-        if kept.pixel != Some(sample.pixel) {
-            kept.pixel = Some(sample.pixel);
-            kept.surface = Some((material, sp.n, sp.distance));
+        if !kept.first.as_ref().is_some_and(same_pixel) {
+            kept.first = Some((sample.pixel, SurfaceKey::of(material, sp)));
             kept.cuts.clear();
             kept.nodes.clear();
         }
         let start = kept.nodes.len();
         kept.nodes.extend(scratch.nodes.iter().filter(|n| n.in_cut));
-        kept.cuts.push((first, start..kept.nodes.len()));
+        kept.cuts.push((trees_from, start..kept.nodes.len()));
     }
     size
 }

@@ -16,7 +16,7 @@ use crate::light_tree::LightTrees;
 use crate::lightcut::multidimensional::{GatherPoint, GatherScratch};
 use crate::lightcut::reconstruction::{AnchorBlock, AnchorCut, ReconstructionScratch, ANCHORS};
 use crate::lightcut::{self, CutResult, CutScratch, CutSettings, StochasticScratch};
-use crate::shading::{BatchBuffers, Bsdf, Geometry, LightBatch, Lobes, SurfacePoint};
+use crate::shading::{BatchBuffers, Bsdf, Geometry, LightBatch, Lobes, SurfaceKey, SurfacePoint};
 use crate::util::color::luminance;
 use crate::util::sampling::{PixelSample, Rng};
 
@@ -110,20 +110,10 @@ impl Scratch {
     }
 }
 
-/// The least cosine between a camera hit's normal and an anchor's for the
-/// anchor to count as a neighbour on the same surface (docs/design.md §9.6).
-const ANCHOR_NORMAL_COS: f32 = 0.9;
-
-/// The largest ratio between a camera hit's distance and an anchor's for
-/// the anchor to count as a neighbour.
-const ANCHOR_DISTANCE_RATIO: f32 = 1.1;
-
 /// A full cut at a corner of a pixel block (reconstruction cuts,
 /// docs/design.md §9.6): where it hit, and what it found.
 pub struct Anchor {
-    material: usize,
-    normal: Vec3,
-    distance: f32,
+    surface: SurfaceKey,
     cut: AnchorCut,
 }
 
@@ -151,15 +141,10 @@ impl Anchors {
     }
 
     /// The pixel's anchors, if all four are on the surface of `sp`
-    /// (material `material`): same material, normals within
-    /// `ANCHOR_NORMAL_COS`, distances within `ANCHOR_DISTANCE_RATIO`.
+    /// (material `material`; `SurfaceKey::holds`).
     fn fitting(&self, material: usize, sp: &SurfacePoint<'_>) -> Option<[usize; ANCHORS]> {
         let current = self.current?;
-        let fits = |a: &Anchor| {
-            let ratio = a.distance.max(sp.distance) / a.distance.min(sp.distance);
-            a.material == material && a.normal.dot(sp.n) >= ANCHOR_NORMAL_COS && ratio <= ANCHOR_DISTANCE_RATIO
-        };
-        current.iter().all(|&i| fits(&self.anchors[i])).then_some(current)
+        current.iter().all(|&i| self.anchors[i].surface.holds(material, sp)).then_some(current)
     }
 }
 
@@ -667,7 +652,7 @@ impl<'a> Integrator<'a> {
                             &mut cut,
                         );
                         stats.record_point(result.nodes, result.shadow_rays);
-                        Some(Anchor { material, normal: sp.n, distance: sp.distance, cut })
+                        Some(Anchor { surface: SurfaceKey::of(material, &sp), cut })
                     });
                     let index = anchor.map(|a| {
                         scratch.anchors.anchors.push(a);

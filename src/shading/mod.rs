@@ -21,4 +21,4 @@ pub use evaluate::{
 };
 pub use geometry::{Geometry, GeometryError};
 pub use lobes::Lobes;
-pub use surface::SurfacePoint;
+pub use surface::{SurfaceKey, SurfacePoint};

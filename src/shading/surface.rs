@@ -160,6 +160,39 @@ impl SurfacePoint<'_> {
     }
 }
 
+/// Where a camera hit was, to tell whether another hit is on the same
+/// surface: the same material (an identity: the scene's index, or the
+/// material's address), normals within `NORMAL_COS`, distances from the
+/// viewer within `DISTANCE_RATIO`. Reconstruction cuts take an anchor's
+/// cut only there (docs/design.md §9.6), and the stochastic cut's later
+/// samples walk their pixel's cut only there (docs/design.md §10.9).
+#[derive(Debug, Clone, Copy)]
+pub struct SurfaceKey {
+    material: usize,
+    normal: Vec3,
+    distance: f32,
+}
+
+impl SurfaceKey {
+    /// The least cosine between the two hits' normals.
+    pub const NORMAL_COS: f32 = 0.9;
+    /// The largest ratio between the two hits' distances from the viewer.
+    pub const DISTANCE_RATIO: f32 = 1.1;
+
+    /// The key of `sp`, of material `material`.
+    #[must_use]
+    pub fn of(material: usize, sp: &SurfacePoint<'_>) -> Self {
+        Self { material, normal: sp.n, distance: sp.distance }
+    }
+
+    /// Whether `sp` (of material `material`) is on this key's surface.
+    #[must_use]
+    pub fn holds(&self, material: usize, sp: &SurfacePoint<'_>) -> bool {
+        let ratio = self.distance.max(sp.distance) / self.distance.min(sp.distance);
+        self.material == material && self.normal.dot(sp.n) >= Self::NORMAL_COS && ratio <= Self::DISTANCE_RATIO
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use glam::Vec3;

@@ -483,11 +483,8 @@ fn a_pixel_cut_serves_its_later_samples_unbiasedly_and_a_partial_one_is_caught()
     }
     let points: Vec<[SurfacePoint<'_>; 2]> =
         pairs.iter().map(|((a, ha), (b, hb))| [geometry.surface(a, ha), geometry.surface(b, hb)]).collect();
-    let fits = |[a, b]: &[SurfacePoint<'_>; 2]| {
-        std::ptr::eq(a.material, b.material)
-            && a.n.dot(b.n) >= PIXEL_CUT_NORMAL_COS
-            && a.distance.max(b.distance) / a.distance.min(b.distance) <= PIXEL_CUT_DISTANCE_RATIO
-    };
+    let address = |sp: &SurfacePoint<'_>| std::ptr::from_ref(sp.material) as usize;
+    let fits = |[a, b]: &[SurfacePoint<'_>; 2]| SurfaceKey::of(address(a), a).holds(address(b), b);
     let (same, other): (Vec<_>, Vec<_>) = points.iter().partition(|pair| fits(pair));
     assert!(same.len() >= 16 && other.len() >= 4, "pairs on one surface {}, on two {}", same.len(), other.len());
     fn at<'a>(sp: &SurfacePoint<'a>, pixel: u64, index: u32) -> SurfacePoint<'a> {
