@@ -338,6 +338,9 @@ LC_PACKET(4)
 LC_PACKET(8)
 LC_PACKET(16)
 
+/* A packet of at most this many rays is traced ray by ray. */
+#define LC_SINGLE_RAYS 2
+
 int32_t lc_occluded_packets(LcScene* scene, const LcRay* rays, uint8_t* occluded, size_t n, int32_t width) {
     void (*trace)(RTCScene, const LcRay*, uint8_t*, size_t);
     switch (width) {
@@ -348,7 +351,16 @@ int32_t lc_occluded_packets(LcScene* scene, const LcRay* rays, uint8_t* occluded
     }
     for (size_t start = 0; start < n; start += (size_t)width) {
         size_t count = n - start < (size_t)width ? n - start : (size_t)width;
-        trace(scene->scene, &rays[start], &occluded[start], count);
+        if (count <= LC_SINGLE_RAYS) {
+            /* A packet costs its traversal whatever its lanes: with one or
+             * two active rays, Embree's single-ray queries are cheaper
+             * (docs/measurements.md, "Single rays for a packet's last one
+             * or two"). */
+            for (size_t i = 0; i < count; ++i)
+                occluded[start + i] = (uint8_t)occluded_one(scene->scene, &rays[start + i]);
+        } else {
+            trace(scene->scene, &rays[start], &occluded[start], count);
+        }
     }
     return 0;
 }

@@ -113,7 +113,8 @@ void lc_occluded_batch(LcScene* scene, const LcRay* rays, uint8_t* occluded, siz
 
 /* occluded[i] = 1 when rays[i] is blocked, for n rays traced as packets of
  * `width` rays (4, 8 or 16: rtcOccluded4/8/16; the last packet is padded
- * with inactive lanes). Returns 0, or -1 for an unsupported width. */
+ * with inactive lanes; a packet of one or two rays is traced ray by ray).
+ * Returns 0, or -1 for an unsupported width. */
 int32_t lc_occluded_packets(LcScene* scene, const LcRay* rays, uint8_t* occluded, size_t n, int32_t width);
 
 /* The alignments, in bytes, of the structures lc_occluded_packets hands
