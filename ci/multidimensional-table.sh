@@ -1,5 +1,6 @@
 #!/bin/bash
-# The multidimensional mode against the bounded and stochastic modes at the
+# The multidimensional mode against the bounded and stochastic modes (and the
+# stochastic mode with one light drawn over a fine cut, `cut-draws`) at the
 # same samples per pixel (16, 64, 256 gather points per pixel from camera
 # samples), each against the exact render of the same gather points, on
 # windows of the depth-of-field scene, the Cornell box and the motion-blur
@@ -32,8 +33,11 @@ for entry in "${entries[@]}"; do
     for spp in 16 64 256; do
         read -r reference exact_seconds < <(row "$scene" "$window" "$spp" "--exact" exact)
         echo "| $(basename "$scene") ($window) | $spp | exact | $exact_seconds | 0 | 0 |"
-        for mode in multidimensional bounded stochastic; do
-            read -r exr seconds < <(row "$scene" "$window" "$spp" "--$mode" "$mode")
+        for mode in multidimensional bounded stochastic cut-draws; do
+            # One light drawn a point over a fine cut (docs/design.md §10.10).
+            args="--$mode"
+            [ "$mode" = cut-draws ] && args="--stochastic --error 0.02 --cut-draws 1"
+            read -r exr seconds < <(row "$scene" "$window" "$spp" "$args" "$mode")
             json=$("$bin" compare "$exr" "$reference" --json)
             mean=$(echo "$json" | python3 -c 'import json,sys; print("%.2f%%" % (100*json.load(sys.stdin)["mean_relative_error"]))')
             p99=$(echo "$json" | python3 -c 'import json,sys; print("%.2f%%" % (100*json.load(sys.stdin)["p99_relative_error"]))')

@@ -51,6 +51,52 @@ fn a_pixel_cut_serves_its_samples_and_cut_per_sample_chooses_at_each() {
     assert!(!dir.path("r.exr").exists());
 }
 
+/// `--cut-draws M` (docs/design.md §10.10): M lights drawn over the whole
+/// cut per shading point, with or without the pixel's cut; close to the
+/// exact image with a fine cut, fewer shadow rays than a walk from every
+/// node, the header names it, deterministic for any threads and window;
+/// the stochastic mode's only.
+#[test]
+fn draws_over_the_cut_are_near_exact_with_fewer_rays() {
+    let dir = TempDir::new("st-cut-draws");
+    let scene = dir.write("s.toml", &small_scene(24));
+    let common = ["--spp", "16", "--resolution", "48x36", "--quiet"];
+    let exact = dir.path("exact.exr");
+    lightcuts_ok(&[&["render", s(&scene), "-o", s(&exact), "--exact"][..], &common].concat());
+    let rays = |out: &std::path::Path, flags: &[&str]| -> (f64, u64) {
+        let stats = lightcuts_ok(
+            &[&["render", s(&scene), "-o", s(out), "--stochastic", "--stats"][..], flags, &common].concat(),
+        );
+        let line = stats.lines().find(|l| l.trim_start().starts_with("shadow rays ")).expect("shadow rays line");
+        (mean_error(out, &exact), line.split_whitespace().nth(2).unwrap().parse().unwrap())
+    };
+    let (walks_error, walks_rays) = rays(&dir.path("walks.exr"), &["--error", "0.01"]);
+    let mut results = Vec::new();
+    for flags in
+        [&["--cut-draws", "2", "--error", "0.01"][..], &["--cut-draws", "2", "--error", "0.01", "--cut-per-sample"][..]]
+    {
+        results.push(rays(&dir.path("draws.exr"), flags));
+    }
+    eprintln!("walks from every node: {walks_error:.4} at {walks_rays} rays; two draws over the cut: {results:?}");
+    for (error, rays) in &results {
+        assert!(*error < 0.05, "mean error with two draws over the cut: {error}");
+        assert!(5 * rays < walks_rays, "two draws must trace far fewer rays: {rays} against {walks_rays}");
+    }
+    let image = read_exr(&dir.path("draws.exr")).unwrap();
+    assert_eq!(
+        image.attributes["lightcuts:renderMode"],
+        "stochastic lightcuts error=0.01 max_cut=1000 cut_draws=2 cut_per_sample"
+    );
+    assert_same_bits_for_any_threads_and_window(&dir, &scene, 96, &["--stochastic", "--spp", "4", "--cut-draws", "1"]);
+    for flags in [&["--bounded"][..], &["--spp", "4"][..], &["--stochastic", "--resampled-rays", "2"][..]] {
+        let out = dir.path("r.exr");
+        let refused = lightcuts(&[&["render", s(&scene), "-o", s(&out), "--cut-draws", "1"][..], flags].concat());
+        assert!(!refused.status.success(), "{refused:?}");
+        assert!(String::from_utf8_lossy(&refused.stderr).contains("--cut-draws"), "{refused:?}");
+    }
+    assert!(!dir.path("r.exr").exists());
+}
+
 #[test]
 fn the_error_falls_with_samples_per_pixel() {
     let dir = TempDir::new("st-spp");

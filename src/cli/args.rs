@@ -164,6 +164,13 @@ pub struct ModeArgs {
     /// later samples on the same surface (the default: docs/design.md §10.9).
     #[arg(long, conflicts_with_all = ["exact", "bounded", "multidimensional", "reconstruct"])]
     pub cut_per_sample: bool,
+    /// Stochastic mode: draw M lights per shading point over the whole
+    /// cut, each cut node by its importance, one shadow ray each, instead
+    /// of one light from every cut node (docs/design.md §10.10; unbiased).
+    /// Pays at many samples per pixel: with a finer cut (a smaller
+    /// --error) for the same rays.
+    #[arg(long, value_name = "M", conflicts_with_all = ["exact", "bounded", "multidimensional", "reconstruct", "resampled_rays"])]
+    pub cut_draws: Option<usize>,
     /// Bounded mode: reconstruction cuts [LC05] section 6. Full cuts only at the
     /// corners of B x B pixel blocks; every camera hit between them cuts
     /// the trees again with the same bounds, but traces a shadow ray only
@@ -242,6 +249,17 @@ impl ModeArgs {
         let mut cut = cut_settings(self.error.unwrap_or(defaults.error), self.max_cut.unwrap_or(defaults.max_cut))?;
         cut.group_error = self.group_error.unwrap_or(defaults.group_error);
         cut.pixel_cut = stochastic && !self.cut_per_sample;
+        if let Some(draws) = self.cut_draws {
+            if !stochastic {
+                return Err(CliError::Usage {
+                    flag: "--cut-draws",
+                    message: format!(
+                        "applies to the stochastic mode only; at {spp} spp this render is bounded: add --stochastic"
+                    ),
+                });
+            }
+            cut.cut_draws = draws;
+        }
         if self.cut_per_sample && !stochastic {
             return Err(CliError::Usage {
                 flag: "--cut-per-sample",

@@ -75,6 +75,11 @@ pub struct CutSettings {
     /// surface; false (`--cut-per-sample`) chooses a cut at every shading
     /// point. The other modes ignore it.
     pub pixel_cut: bool,
+    /// The stochastic cut's draws per shading point (`--cut-draws M`,
+    /// docs/design.md §10.10): 0 walks from every cut node, one light
+    /// each ([SLC19]); M > 0 draws M lights over the whole cut, each node
+    /// by its importance, one shadow ray each. The other modes ignore it.
+    pub cut_draws: usize,
 }
 
 impl Default for CutSettings {
@@ -87,6 +92,7 @@ impl Default for CutSettings {
             resampled_rays: 0,
             reconstruction_block: 0,
             pixel_cut: false,
+            cut_draws: 0,
         }
     }
 }

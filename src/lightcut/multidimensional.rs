@@ -44,6 +44,7 @@ pub const MULTIDIMENSIONAL_DEFAULTS: CutSettings = CutSettings {
     resampled_rays: 0,
     reconstruction_block: 0,
     pixel_cut: false,
+    cut_draws: 0,
 };
 
 /// One shading point of a pixel's camera paths, with its strength: the

@@ -38,11 +38,15 @@ impl Mode {
     }
 
     /// A cut's settings as the header shows them (`group_error` and
-    /// `resampled_rays` only when they are not the default).
+    /// `cut_draws`, `resampled_rays` and `reconstruction_block` only when
+    /// they are not the default).
     fn settings(c: &CutSettings) -> String {
         let mut text = format!("error={} max_cut={}", c.error, c.max_cut);
         if c.group_error == crate::lightcut::GroupError::Pixel {
             text += " group_error=pixel";
+        }
+        if c.cut_draws > 0 {
+            text += &format!(" cut_draws={}", c.cut_draws);
         }
         if c.resampled_rays > 0 {
             text += &format!(" resampled_rays={}", c.resampled_rays);

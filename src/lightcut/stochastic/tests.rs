@@ -125,14 +125,15 @@ fn with_points(
 /// `biased` its walk made wrong (child 1 of every third block gets
 /// probability 0: the lights below it are never drawn).
 fn estimates(scene: &Scene, biased: bool) -> Vec<(f64, f64, f64)> {
-    estimates_with(scene, biased, 0)
+    estimates_with(scene, biased, 0, 0)
 }
 
 /// [`estimates`] with `resampled_rays` shadow rays resampled per cut (0:
-/// every cut node's).
-fn estimates_with(scene: &Scene, biased: bool, resampled_rays: usize) -> Vec<(f64, f64, f64)> {
+/// every cut node's), or `cut_draws` lights drawn over the cut (0: one
+/// per node).
+fn estimates_with(scene: &Scene, biased: bool, resampled_rays: usize, cut_draws: usize) -> Vec<(f64, f64, f64)> {
     // A small cut, so that most of the estimate is sampled.
-    let settings = CutSettings { error: 0.1, max_cut: 8, resampled_rays, ..CutSettings::default() };
+    let settings = CutSettings { error: 0.1, max_cut: 8, resampled_rays, cut_draws, ..CutSettings::default() };
     let (mut scratch, mut batch) = (StochasticScratch::default(), BatchBuffers::default());
     let mut rows = Vec::new();
     with_points(scene, 16, |lights, geometry, trees, sp| {
@@ -211,9 +212,26 @@ fn a_variant_that_never_takes_some_children_is_caught() {
 #[test]
 fn resampled_cuts_are_unbiased() {
     for lights in [OMNI, ORIENTED] {
-        let rows = estimates_with(&scene(lights), false, 2);
+        let rows = estimates_with(&scene(lights), false, 2, 0);
         assert!(rows.iter().filter(|r| r.2 > 0.0).count() >= 8, "most points must be sampled: {rows:?}");
         assert_eq!(biased_points(&rows), 0, "(exact, mean, standard error) per point: {rows:?}");
+    }
+}
+
+/// Lights drawn over the cut (`--cut-draws`: 1 and 3 per point, each cut
+/// node by its importance, design §10.10) are unbiased for every light
+/// kind; with the walks made wrong (as [`estimates`]' biased variant) the
+/// bias shows.
+#[test]
+fn draws_over_the_cut_are_unbiased_and_a_wrong_walk_is_caught() {
+    for lights in [OMNI, ORIENTED, &directional(), &spots()] {
+        for draws in [1, 3] {
+            let rows = estimates_with(&scene(lights), false, 0, draws);
+            assert!(rows.iter().filter(|r| r.2 > 0.0).count() >= 8, "most points must be sampled: {rows:?}");
+            assert_eq!(biased_points(&rows), 0, "{draws} draws: (exact, mean, standard error) per point: {rows:?}");
+        }
+        let rows = estimates_with(&scene(lights), true, 0, 1);
+        assert!(biased_points(&rows) >= 4, "the bias must show: {rows:?}");
     }
 }
 
@@ -465,7 +483,19 @@ fn stratified_samples_of_a_pixel_are_unbiased_and_less_noisy() {
 /// chooses its own cut.
 #[test]
 fn a_pixel_cut_serves_its_later_samples_unbiasedly_and_a_partial_one_is_caught() {
-    let settings = CutSettings { error: 0.1, max_cut: 8, pixel_cut: true, ..CutSettings::default() };
+    check_pixel_cut(0);
+}
+
+/// The same with one light drawn over the kept cut (`--cut-draws 1`, by
+/// the probabilities A's importance gave its nodes, design §10.10); the
+/// partial variant gives the largest node probability 0.
+#[test]
+fn a_pixel_cut_drawn_over_serves_its_later_samples_unbiasedly_and_a_partial_one_is_caught() {
+    check_pixel_cut(1);
+}
+
+fn check_pixel_cut(cut_draws: usize) {
+    let settings = CutSettings { error: 0.1, max_cut: 8, pixel_cut: true, cut_draws, ..CutSettings::default() };
     let scene = scene(OMNI);
     let lights = Lights::from_scene(&scene);
     let device = Device::try_new().unwrap();
@@ -517,21 +547,21 @@ fn a_pixel_cut_serves_its_later_samples_unbiasedly_and_a_partial_one_is_caught()
                     let mut rng = Rng::from_key(&[seed, i as u64]);
                     let first = evaluate(&trees, &at(a, mix64(seed), 0), embree, &settings, &mut rng, &mut scratch, 0);
                     let kept = cut_of(&scratch);
-                    if partial {
+                    let kept_cut = &mut scratch.pixel_cuts;
+                    let largest = (0..kept_cut.nodes.len())
+                        .max_by(|&x, &y| kept_cut.nodes[x].importance.total_cmp(&kept_cut.nodes[y].importance))
+                        .unwrap();
+                    let dropped = u64::from(partial && cut_draws == 0);
+                    if partial && cut_draws == 0 {
                         // Drop the kept cut's largest node.
-                        let kept = &mut scratch.pixel_cuts;
-                        let largest = (0..kept.nodes.len())
-                            .max_by(|&x, &y| kept.nodes[x].importance.total_cmp(&kept.nodes[y].importance))
-                            .unwrap();
-                        kept.nodes.remove(largest);
-                        kept.cuts[0].1.end -= 1;
+                        kept_cut.nodes.remove(largest);
+                        kept_cut.cuts[0].1.end -= 1;
+                    } else if partial {
+                        // Never draw it: its interval of the cdf emptied.
+                        kept_cut.cdf[largest] = if largest == 0 { 0.0 } else { kept_cut.cdf[largest - 1] };
                     }
                     let later = evaluate(&trees, &at(b, mix64(seed), 1), embree, &settings, &mut rng, &mut scratch, 0);
-                    assert_eq!(
-                        later.nodes,
-                        first.nodes - u64::from(partial),
-                        "the later sample must walk the kept cut"
-                    );
+                    assert_eq!(later.nodes, first.nodes - dropped, "the later sample must walk the kept cut");
                     if !partial {
                         assert_eq!(cut_of(&scratch), kept, "the later sample must walk the kept cut");
                         other_cuts += usize::from(seed == 0 && kept != own);
