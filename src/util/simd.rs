@@ -97,8 +97,7 @@ pub fn pow(x: f32x4, n: f32) -> f32x4 {
     if (0.0..=POW_SQUARING_LIMIT).contains(&n) && n.fract() == 0.0 {
         // `n` is a whole number below 2^20: exact as a u32.
         let mut e = n as u32;
-        let [a, b, c, d] = x.to_array().map(f64::from);
-        let mut base = f64x4::from([a, b, c, d]);
+        let mut base = f64x4::from(x.to_array().map(f64::from));
         let mut power = f64x4::ONE;
         while e > 0 {
             if e & 1 == 1 {
