@@ -165,7 +165,8 @@ impl SurfacePoint<'_> {
 /// material's address), normals within `NORMAL_COS`, distances from the
 /// viewer within `DISTANCE_RATIO`. Reconstruction cuts take an anchor's
 /// cut only there (docs/design.md §9.6), and the stochastic cut's later
-/// samples walk their pixel's cut only there (docs/design.md §10.9).
+/// samples walk their pixel's cut only there, with normals closer
+/// (docs/design.md §10.9).
 #[derive(Debug, Clone, Copy)]
 pub struct SurfaceKey {
     material: usize,
@@ -188,8 +189,16 @@ impl SurfaceKey {
     /// Whether `sp` (of material `material`) is on this key's surface.
     #[must_use]
     pub fn holds(&self, material: usize, sp: &SurfacePoint<'_>) -> bool {
+        self.holds_within(material, sp, Self::NORMAL_COS)
+    }
+
+    /// Whether `sp` (of material `material`) is on this key's surface with
+    /// normals within `normal_cos` (a stricter test than [`Self::holds`]
+    /// where the normal weighs more).
+    #[must_use]
+    pub fn holds_within(&self, material: usize, sp: &SurfacePoint<'_>, normal_cos: f32) -> bool {
         let ratio = self.distance.max(sp.distance) / self.distance.min(sp.distance);
-        self.material == material && self.normal.dot(sp.n) >= Self::NORMAL_COS && ratio <= Self::DISTANCE_RATIO
+        self.material == material && self.normal.dot(sp.n) >= normal_cos && ratio <= Self::DISTANCE_RATIO
     }
 }
 

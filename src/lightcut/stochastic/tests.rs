@@ -480,7 +480,8 @@ fn stratified_samples_of_a_pixel_are_unbiased_and_less_noisy() {
 /// `SEEDS` pixels is its exact sum, walking A's cut (different from B's
 /// own at most points); a kept cut missing its largest node (no longer
 /// covering every light) is caught; and a B on another surface than its A
-/// chooses its own cut.
+/// chooses its own cut, kept beside A's: a later sample on either surface
+/// walks that surface's cut.
 #[test]
 fn a_pixel_cut_serves_its_later_samples_unbiasedly_and_a_partial_one_is_caught() {
     check_pixel_cut(0);
@@ -514,7 +515,9 @@ fn check_pixel_cut(cut_draws: usize) {
     let points: Vec<[SurfacePoint<'_>; 2]> =
         pairs.iter().map(|((a, ha), (b, hb))| [geometry.surface(a, ha), geometry.surface(b, hb)]).collect();
     let address = |sp: &SurfacePoint<'_>| std::ptr::from_ref(sp.material) as usize;
-    let fits = |[a, b]: &[SurfacePoint<'_>; 2]| SurfaceKey::of(address(a), a).holds(address(b), b);
+    let fits = |[a, b]: &[SurfacePoint<'_>; 2]| {
+        SurfaceKey::of(address(a), a).holds_within(address(b), b, PIXEL_CUT_NORMAL_COS)
+    };
     let (same, other): (Vec<_>, Vec<_>) = points.iter().partition(|pair| fits(pair));
     assert!(same.len() >= 16 && other.len() >= 4, "pairs on one surface {}, on two {}", same.len(), other.len());
     fn at<'a>(sp: &SurfacePoint<'a>, pixel: u64, index: u32) -> SurfacePoint<'a> {
@@ -531,8 +534,22 @@ fn check_pixel_cut(cut_draws: usize) {
         evaluate(&trees, b, embree, &own_settings, &mut Rng::seeded(1), &mut scratch, 0);
         let own = cut_of(&scratch);
         evaluate(&trees, &at(a, mix64(i as u64), 0), embree, &settings, &mut Rng::seeded(1), &mut scratch, 0);
+        let first = cut_of(&scratch);
         evaluate(&trees, &at(b, mix64(i as u64), 1), embree, &settings, &mut Rng::seeded(1), &mut scratch, 0);
         assert_eq!(cut_of(&scratch), own, "a point on another surface must choose its own cut");
+        // Both cuts kept, each for its surface: a third and a fourth sample,
+        // on A's surface and on B's, walk them without choosing a cut.
+        let kept = |scratch: &StochasticScratch| (scratch.pixel_cuts.surfaces.len(), scratch.pixel_cuts.nodes.len());
+        let after_b = kept(&scratch);
+        assert_eq!(after_b.0, 2, "the pixel must keep a cut for each of its two surfaces");
+        for (index, point, cut) in [(2, a, first), (3, b, own)] {
+            let later = at(point, mix64(i as u64), index);
+            evaluate(&trees, &later, embree, &settings, &mut Rng::seeded(1), &mut scratch, 0);
+            assert_eq!(kept(&scratch), after_b, "a later sample on a kept surface must not keep another cut");
+            if cut_draws == 0 {
+                assert_eq!(cut_of(&scratch), cut, "a later sample must walk its surface's kept cut");
+            }
+        }
     }
     let (mut shared_rows, mut partial_rows, mut other_cuts) = (Vec::new(), Vec::new(), 0);
     for (i, [a, b]) in same.iter().take(16).enumerate() {
@@ -555,7 +572,7 @@ fn check_pixel_cut(cut_draws: usize) {
                     if partial && cut_draws == 0 {
                         // Drop the kept cut's largest node.
                         kept_cut.nodes.remove(largest);
-                        kept_cut.cuts[0].1.end -= 1;
+                        kept_cut.cuts[0].2.end -= 1;
                     } else if partial {
                         // Never draw it: its interval of the cdf emptied.
                         kept_cut.cdf[largest] = if largest == 0 { 0.0 } else { kept_cut.cdf[largest - 1] };
