@@ -1,6 +1,7 @@
 #!/bin/bash
 # The multidimensional mode against the bounded and stochastic modes (and the
-# stochastic mode with one light drawn over a fine cut, `cut-draws`) at the
+# stochastic mode with one or four lights drawn over a fine cut, `cut-draws`
+# and `cut-draws-4`) at the
 # same samples per pixel (16, 64, 256 gather points per pixel from camera
 # samples), each against the exact render of the same gather points, on
 # windows of the depth-of-field scene, the Cornell box and the motion-blur
@@ -33,10 +34,11 @@ for entry in "${entries[@]}"; do
     for spp in 16 64 256; do
         read -r reference exact_seconds < <(row "$scene" "$window" "$spp" "--exact" exact)
         echo "| $(basename "$scene") ($window) | $spp | exact | $exact_seconds | 0 | 0 |"
-        for mode in multidimensional bounded stochastic cut-draws; do
-            # One light drawn a point over a fine cut (docs/design.md §10.10).
+        for mode in multidimensional bounded stochastic cut-draws cut-draws-4; do
+            # One or four lights drawn a point over a fine cut (docs/design.md §10.10).
             args="--$mode"
             [ "$mode" = cut-draws ] && args="--stochastic --error 0.02 --cut-draws 1"
+            [ "$mode" = cut-draws-4 ] && args="--stochastic --error 0.02 --cut-draws 4"
             read -r exr seconds < <(row "$scene" "$window" "$spp" "$args" "$mode")
             json=$("$bin" compare "$exr" "$reference" --json)
             mean=$(echo "$json" | python3 -c 'import json,sys; print("%.2f%%" % (100*json.load(sys.stdin)["mean_relative_error"]))')
