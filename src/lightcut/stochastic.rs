@@ -121,7 +121,7 @@ impl StochasticScratch {
 /// samples see several surfaces (a silhouette, a moving object, a blurred
 /// foreground) chooses a cut at the first sample on each and reuses it at
 /// the later ones on that surface. On the motion scene's window at 256 spp
-/// 8 left twice the cuts to choose that 16 did, and 32 no fewer than 16.
+/// 8 left twice as many cuts to choose as 16 did, and 32 no fewer than 16.
 const PIXEL_SURFACES: usize = 16;
 
 /// The least cosine between the normals of a kept cut's point and a later
