@@ -1,7 +1,7 @@
 #!/bin/bash
-# The multidimensional mode against the bounded and stochastic modes (and the
-# stochastic mode with one or four lights drawn over a fine cut, `cut-draws`
-# and `cut-draws-4`) at the
+# The multidimensional mode against the bounded, reconstruction (B = 2) and
+# stochastic modes (and the stochastic mode with one, three or four lights
+# drawn over a fine cut, `cut-draws`, `cut-draws-3` and `cut-draws-4`) at the
 # same samples per pixel (16, 64, 256 gather points per pixel from camera
 # samples), each against the exact render of the same gather points, on
 # windows of the depth-of-field scene, the Cornell box and the motion-blur
@@ -22,28 +22,32 @@ row() { # scene window spp mode-args label
     end=$(date +%s.%N)
     echo "$exr $(echo "$end - $start" | bc)"
 }
-echo "| scene (window) | spp | mode | seconds | mean error | p99 error |"
-echo "|---|---|---|---|---|---|"
+echo "| scene (window) | spp | mode | seconds | x bounded 1 spp | mean error | p99 error |"
+echo "|---|---|---|---|---|---|---|"
 default_scenes=("scenes/dof.toml 64,96,44,68" "scenes/cornell.toml 60,92,60,84" "scenes/motion.toml 24,56,50,74")
 if [ -n "${SCENES:-}" ]; then entries=("$SCENES"); else entries=("${default_scenes[@]}"); fi
 for entry in "${entries[@]}"; do
     set -- $entry
     scene=$1 window=$2
     read -r _ one < <(row "$scene" "$window" 1 "--bounded" bounded1)
-    echo "| $(basename "$scene") ($window) | 1 | bounded | $one | | |"
+    echo "| $(basename "$scene") ($window) | 1 | bounded | $one | 1 | | |"
     for spp in 16 64 256; do
         read -r reference exact_seconds < <(row "$scene" "$window" "$spp" "--exact" exact)
-        echo "| $(basename "$scene") ($window) | $spp | exact | $exact_seconds | 0 | 0 |"
-        for mode in multidimensional bounded stochastic cut-draws cut-draws-4; do
-            # One or four lights drawn a point over a fine cut (docs/design.md §10.10).
+        times() { echo "scale=1; $1 / $one" | bc; }
+        echo "| $(basename "$scene") ($window) | $spp | exact | $exact_seconds | $(times "$exact_seconds") | 0 | 0 |"
+        for mode in multidimensional bounded reconstruct stochastic cut-draws cut-draws-3 cut-draws-4; do
+            # Reconstruction cuts over 2 x 2 blocks (docs/design.md §9.6);
+            # one, three or four lights drawn a point over a fine cut (§10.10).
             args="--$mode"
+            [ "$mode" = reconstruct ] && args="--reconstruct 2"
             [ "$mode" = cut-draws ] && args="--stochastic --error 0.02 --cut-draws 1"
+            [ "$mode" = cut-draws-3 ] && args="--stochastic --error 0.02 --cut-draws 3"
             [ "$mode" = cut-draws-4 ] && args="--stochastic --error 0.02 --cut-draws 4"
             read -r exr seconds < <(row "$scene" "$window" "$spp" "$args" "$mode")
             json=$("$bin" compare "$exr" "$reference" --json)
             mean=$(echo "$json" | python3 -c 'import json,sys; print("%.2f%%" % (100*json.load(sys.stdin)["mean_relative_error"]))')
             p99=$(echo "$json" | python3 -c 'import json,sys; print("%.2f%%" % (100*json.load(sys.stdin)["p99_relative_error"]))')
-            echo "| $(basename "$scene") ($window) | $spp | $mode | $seconds | $mean | $p99 |"
+            echo "| $(basename "$scene") ($window) | $spp | $mode | $seconds | $(times "$seconds") | $mean | $p99 |"
         done
     done
 done
