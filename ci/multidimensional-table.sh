@@ -22,6 +22,9 @@ row() { # scene window spp mode-args label
     end=$(date +%s.%N)
     echo "$exr $(echo "$end - $start" | bc)"
 }
+ratio() { # seconds reference-seconds
+    echo "scale=1; $1 / $2" | bc
+}
 echo "| scene (window) | spp | mode | seconds | x bounded 1 spp | mean error | p99 error |"
 echo "|---|---|---|---|---|---|---|"
 default_scenes=("scenes/dof.toml 64,96,44,68" "scenes/cornell.toml 60,92,60,84" "scenes/motion.toml 24,56,50,74")
@@ -33,21 +36,21 @@ for entry in "${entries[@]}"; do
     echo "| $(basename "$scene") ($window) | 1 | bounded | $one | 1 | | |"
     for spp in 16 64 256; do
         read -r reference exact_seconds < <(row "$scene" "$window" "$spp" "--exact" exact)
-        times() { echo "scale=1; $1 / $one" | bc; }
-        echo "| $(basename "$scene") ($window) | $spp | exact | $exact_seconds | $(times "$exact_seconds") | 0 | 0 |"
+        echo "| $(basename "$scene") ($window) | $spp | exact | $exact_seconds | $(ratio "$exact_seconds" "$one") | 0 | 0 |"
         for mode in multidimensional bounded reconstruct stochastic cut-draws cut-draws-3 cut-draws-4; do
             # Reconstruction cuts over 2 x 2 blocks (docs/design.md §9.6);
             # one, three or four lights drawn a point over a fine cut (§10.10).
-            args="--$mode"
-            [ "$mode" = reconstruct ] && args="--reconstruct 2"
-            [ "$mode" = cut-draws ] && args="--stochastic --error 0.02 --cut-draws 1"
-            [ "$mode" = cut-draws-3 ] && args="--stochastic --error 0.02 --cut-draws 3"
-            [ "$mode" = cut-draws-4 ] && args="--stochastic --error 0.02 --cut-draws 4"
+            case "$mode" in
+                reconstruct) args="--reconstruct 2" ;;
+                cut-draws) args="--stochastic --error 0.02 --cut-draws 1" ;;
+                cut-draws-*) args="--stochastic --error 0.02 --cut-draws ${mode#cut-draws-}" ;;
+                *) args="--$mode" ;;
+            esac
             read -r exr seconds < <(row "$scene" "$window" "$spp" "$args" "$mode")
             json=$("$bin" compare "$exr" "$reference" --json)
             mean=$(echo "$json" | python3 -c 'import json,sys; print("%.2f%%" % (100*json.load(sys.stdin)["mean_relative_error"]))')
             p99=$(echo "$json" | python3 -c 'import json,sys; print("%.2f%%" % (100*json.load(sys.stdin)["p99_relative_error"]))')
-            echo "| $(basename "$scene") ($window) | $spp | $mode | $seconds | $(times "$seconds") | $mean | $p99 |"
+            echo "| $(basename "$scene") ($window) | $spp | $mode | $seconds | $(ratio "$seconds" "$one") | $mean | $p99 |"
         done
     done
 done
