@@ -345,7 +345,7 @@ fn draw(
             });
         } else {
             let u = sample.number(node_key(node.tree, node.block, node.slot), rng.next_f64());
-            scratch.walks.push(Walk { below: child.index() as u32, probability: 1.0, u, tree: node.tree });
+            scratch.walks.push(Walk { below: child.index() as u32, inverse_probability: 1.0, u, tree: node.tree });
         }
     }
     run_walks(trees, scratch, importance);
@@ -395,7 +395,12 @@ fn draw_over_cut(
             });
         } else {
             let u = ((u_m - low) / q).clamp(0.0, ONE_BELOW);
-            walks.push(Walk { below: child.index() as u32, probability, u, tree: node.tree });
+            walks.push(Walk {
+                below: child.index() as u32,
+                inverse_probability: 1.0 / probability,
+                u,
+                tree: node.tree,
+            });
         }
     }
 }
@@ -603,8 +608,8 @@ fn add_slots(
 struct Walk {
     /// The block holding the children of the node the walk is at.
     below: u32,
-    /// The probability of the path so far.
-    probability: f64,
+    /// One over the probability of the path so far.
+    inverse_probability: f64,
     /// The number that drives the walk, uniform on [0, 1) given the path
     /// so far (rescaled at each step).
     u: f64,
@@ -621,53 +626,58 @@ enum Step {
 }
 
 /// One step of a walk: takes child k with probability w_k / (w_0 + w_1),
-/// the weights of the block the walk is at: child 0 when u < p0. Given
-/// that choice u is uniform on the child's interval ([0, p0) or [p0, 1)),
-/// so mapped back onto [0, 1) it drives the next step (design §10.8): the
-/// walk inverts the subtree's distribution with one number.
+/// the weights of the block the walk is at: child 0 when u < w_0 / (w_0 +
+/// w_1), compared as u (w_0 + w_1) < w_0 so that the choice waits on no
+/// division. Given that choice u is uniform on the child's interval, so
+/// mapped back onto [0, 1) it drives the next step (design §10.8): the walk
+/// inverts the subtree's distribution with one number. One division a step
+/// (1 / w_k), where p_0 = w_0 / (w_0 + w_1) and u / p_k took two (design
+/// §10.4).
 #[inline(always)]
 fn step(tree: &CutTree, walk: &mut Walk, weights: [f32; 2]) -> Step {
     let b = walk.below as usize;
-    let Some(p0) = first_child_probability(tree, b, weights) else { return Step::Nothing };
-    let k = usize::from(walk.u >= p0);
-    // The probability of the choice made (p0 > 0 when u < p0; 1 - p0 > 0
-    // when p0 <= u < 1).
-    let p = [p0, 1.0 - p0][k];
-    walk.probability *= p;
-    walk.u = ((walk.u - [0.0, p0][k]) / p).clamp(0.0, ONE_BELOW);
+    let Some((k, sum, weights)) = choose_child(tree, b, weights, walk.u) else { return Step::Nothing };
+    let w = weights[k];
+    let inverse = 1.0 / w;
+    walk.inverse_probability *= sum * inverse;
+    walk.u = ((walk.u * sum - [0.0, weights[0]][k]) * inverse).clamp(0.0, ONE_BELOW);
     let child = tree.blocks[b].child[k];
     if child.is_exact() {
-        let weight = slot_intensity(tree, b, k).as_dvec3() / walk.probability;
+        let weight = slot_intensity(tree, b, k).as_dvec3() * walk.inverse_probability;
         return Step::Drawn(Drawn { weight, block: b as u32, slot: k as u8, tree: walk.tree });
     }
     walk.below = child.index() as u32;
     Step::Down
 }
 
-/// The probability that a walk at block `b` takes child 0, w_0 / (w_0 +
-/// w_1) of the block's weights; child 1's is taken as 1 - p0, whatever
-/// w_1 / (w_0 + w_1) rounds to. None when no child can be taken (both
-/// weights 0).
+/// The child a walk at block `b` with number `u` takes, the weights' sum
+/// and the weights (f64): child 1 when u (w_0 + w_1) >= w_0 and w_1 > 0
+/// (u < 1, but u w_0 may round up to w_0). None when both weights are 0.
 #[inline(always)]
-fn first_child_probability(tree: &CutTree, b: usize, weights: [f32; 2]) -> Option<f64> {
-    let [w0, w1] = finite_weights(tree, b, weights);
-    let sum = f64::from(w0) + f64::from(w1);
-    (sum > 0.0).then(|| f64::from(w0) / sum)
+fn choose_child(tree: &CutTree, b: usize, weights: [f32; 2], u: f64) -> Option<(usize, f64, [f64; 2])> {
+    let [w0, w1] = finite_weights(tree, b, weights).map(f64::from);
+    let sum = w0 + w1;
+    (sum > 0.0).then(|| (usize::from(u * sum >= w0 && w1 > 0.0), sum, [w0, w1]))
 }
 
 /// The probability that a walk started below a cut node (at block `below`,
 /// which holds the node's children) ends at slot `target` = (block, slot),
 /// a leaf or an exact node, with the weights `importance` gives: the
-/// product of the probabilities [`step`] takes on the way down, by the same
-/// code. pbrt-v4's `PMF` of its light samplers; for tests and diagnostics
+/// product of w_k / (w_0 + w_1) on the way down, the probabilities [`step`]
+/// takes (it keeps their product's inverse, which rounds differently, well
+/// within the tests' 1e-12). pbrt-v4's `PMF` of its light samplers; for tests and diagnostics
 /// (it searches the subtree: time linear in its size). 0 when the walk
 /// cannot reach `target` or `target` is not below the node.
 pub fn pmf(tree: &CutTree, importance: &impl Importance, below: usize, target: (usize, usize)) -> f64 {
     let [weights, _] = importance(tree, [below, below]);
-    let Some(p0) = first_child_probability(tree, below, weights) else { return 0.0 };
+    let [w0, w1] = finite_weights(tree, below, weights).map(f64::from);
+    let sum = w0 + w1;
+    if sum <= 0.0 {
+        return 0.0;
+    }
     (0..2)
         .map(|k| {
-            let p = [p0, 1.0 - p0][k];
+            let p = [w0, w1][k] / sum;
             let child = tree.blocks[below].child[k];
             if (below, k) == target {
                 p
