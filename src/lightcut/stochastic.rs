@@ -665,9 +665,10 @@ fn choose_child(tree: &CutTree, b: usize, weights: [f32; 2], u: f64) -> Option<(
 /// a leaf or an exact node, with the weights `importance` gives: the
 /// product of w_k / (w_0 + w_1) on the way down, the probabilities [`step`]
 /// takes (it keeps their product's inverse, which rounds differently, well
-/// within the tests' 1e-12). pbrt-v4's `PMF` of its light samplers; for tests and diagnostics
-/// (it searches the subtree: time linear in its size). 0 when the walk
-/// cannot reach `target` or `target` is not below the node.
+/// within the tests' 1e-12). pbrt-v4's `PMF` of its light samplers; for
+/// tests and diagnostics (it searches the subtree: time linear in its
+/// size). 0 when the walk cannot reach `target` or `target` is not below
+/// the node.
 pub fn pmf(tree: &CutTree, importance: &impl Importance, below: usize, target: (usize, usize)) -> f64 {
     let [weights, _] = importance(tree, [below, below]);
     let [w0, w1] = finite_weights(tree, below, weights).map(f64::from);
