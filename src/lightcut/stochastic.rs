@@ -651,13 +651,21 @@ fn step(tree: &CutTree, walk: &mut Walk, weights: [f32; 2]) -> Step {
 }
 
 /// The child a walk at block `b` with number `u` takes, the weights' sum
-/// and the weights (f64): child 1 when u (w_0 + w_1) >= w_0 and w_1 > 0
-/// (u < 1, but u w_0 may round up to w_0). None when both weights are 0.
+/// and the weights ([`child_weights`]): child 1 when u (w_0 + w_1) >= w_0
+/// and w_1 > 0 (u < 1, but u w_0 may round up to w_0).
 #[inline(always)]
 fn choose_child(tree: &CutTree, b: usize, weights: [f32; 2], u: f64) -> Option<(usize, f64, [f64; 2])> {
+    let (sum, [w0, w1]) = child_weights(tree, b, weights)?;
+    Some((usize::from(u * sum >= w0 && w1 > 0.0), sum, [w0, w1]))
+}
+
+/// Block `b`'s two weights as the walk uses them ([`finite_weights`], in
+/// f64) and their sum; None when both are 0 (no child can be taken).
+#[inline(always)]
+fn child_weights(tree: &CutTree, b: usize, weights: [f32; 2]) -> Option<(f64, [f64; 2])> {
     let [w0, w1] = finite_weights(tree, b, weights).map(f64::from);
     let sum = w0 + w1;
-    (sum > 0.0).then(|| (usize::from(u * sum >= w0 && w1 > 0.0), sum, [w0, w1]))
+    (sum > 0.0).then_some((sum, [w0, w1]))
 }
 
 /// The probability that a walk started below a cut node (at block `below`,
@@ -671,14 +679,10 @@ fn choose_child(tree: &CutTree, b: usize, weights: [f32; 2], u: f64) -> Option<(
 /// the node.
 pub fn pmf(tree: &CutTree, importance: &impl Importance, below: usize, target: (usize, usize)) -> f64 {
     let [weights, _] = importance(tree, [below, below]);
-    let [w0, w1] = finite_weights(tree, below, weights).map(f64::from);
-    let sum = w0 + w1;
-    if sum <= 0.0 {
-        return 0.0;
-    }
+    let Some((sum, weights)) = child_weights(tree, below, weights) else { return 0.0 };
     (0..2)
         .map(|k| {
-            let p = [w0, w1][k] / sum;
+            let p = weights[k] / sum;
             let child = tree.blocks[below].child[k];
             if (below, k) == target {
                 p
