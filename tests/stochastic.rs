@@ -187,3 +187,65 @@ bounces = 1
     let error = mean_error(&st, &exact);
     assert!(error > 0.0 && error < 0.05, "mean relative error {error}");
 }
+
+/// `--reuse B` (docs/design.md §10.11): every camera hit lit by its pixel
+/// block's draws; closer to the exact image than the same cuts without
+/// reuse, more shadow rays, the header names it, the same bits for any
+/// threads, window and tile split (blocks cut across by the tiles); the
+/// stochastic mode's only, B from 2 to 8.
+#[test]
+fn reuse_between_pixels_is_nearer_exact_and_the_same_for_any_threads_window_and_tiles() {
+    let dir = TempDir::new("st-reuse");
+    let scene = dir.write("s.toml", &small_scene(24));
+    let render = |name: &str, flags: &[&str]| {
+        let out = dir.path(name);
+        let quiet = if flags.contains(&"--stats") { "--threads=2" } else { "--quiet" };
+        let args = ["render", s(&scene), "-o", s(&out), "--spp", "2", "--resolution", "48x36", quiet];
+        let stdout = lightcuts_ok(&[&args[..], flags].concat());
+        (out, stdout)
+    };
+    let (reused, stdout) = render("reuse.exr", &["--stochastic", "--reuse", "2"]);
+    assert!(stdout.contains("reuse_block=2"), "{stdout}");
+    let (own, _) = render("own.exr", &["--stochastic"]);
+    let (exact, _) = render("exact.exr", &["--exact"]);
+    let (reuse_error, own_error) = (mean_error(&reused, &exact), mean_error(&own, &exact));
+    eprintln!("mean error against exact: reuse {:.3}%, own draws {:.3}%", 100.0 * reuse_error, 100.0 * own_error);
+    assert!(reuse_error > 0.0 && reuse_error < 0.8 * own_error, "reuse {reuse_error}, own draws {own_error}");
+    let rays = |flags: &[&str]| {
+        let (_, stdout) = render("stats.exr", &[flags, &["--stats"][..]].concat());
+        let line = stdout.lines().find(|l| l.contains("shadow rays  ")).unwrap().to_string();
+        line.split_whitespace().nth(2).unwrap().parse::<f64>().unwrap()
+    };
+    let (reuse_rays, own_rays) = (rays(&["--stochastic", "--reuse", "2"]), rays(&["--stochastic"]));
+    assert!(reuse_rays > 2.0 * own_rays, "{reuse_rays} rays against {own_rays} without reuse");
+
+    // Blocks of 3 do not divide the 16-pixel tiles either.
+    for block in ["2", "3"] {
+        let flags = ["--stochastic", "--reuse", block, "--spp", "2"];
+        assert_same_bits_for_any_threads_and_window(&dir, &scene, 96, &flags);
+    }
+    // Bands of 7 tiles (block rows cut across) assemble to the one-process render.
+    let one = read_exr(&reused).unwrap();
+    let mut tiles = Vec::new();
+    for i in 0..7 {
+        let (tile, _) = render(&format!("t{i}.exr"), &["--stochastic", "--reuse", "2", "--tile", &format!("{i}/7")]);
+        tiles.push(tile);
+    }
+    let frame = dir.path("frame.exr");
+    lightcuts_ok(&[&["assemble", s(&frame)][..], &tiles.iter().map(|t| s(t)).collect::<Vec<_>>()].concat());
+    let frame = read_exr(&frame).unwrap();
+    for (name, values) in &one.channels {
+        let same = values.iter().zip(&frame.channels[name]).all(|(a, b)| a.to_bits() == b.to_bits());
+        assert!(same, "{name}: tiles differ from the one-process render");
+    }
+
+    for (flags, says) in [
+        (&["--reuse", "1", "--stochastic"][..], "2 to 8"),
+        (&["--reuse", "9", "--stochastic"][..], "2 to 8"),
+        (&["--reuse", "2", "--spp", "1"][..], "stochastic mode only"),
+    ] {
+        let stderr = lightcuts_fails(&[&["render", s(&scene), "-o", s(&dir.path("x.exr"))][..], flags].concat());
+        assert!(stderr.contains("--reuse") && stderr.contains(says), "{stderr}");
+    }
+    assert!(!dir.path("x.exr").exists());
+}

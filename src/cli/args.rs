@@ -171,6 +171,13 @@ pub struct ModeArgs {
     /// --error) for the same rays.
     #[arg(long, value_name = "M", conflicts_with_all = ["exact", "bounded", "multidimensional", "reconstruct", "resampled_rays"])]
     pub cut_draws: Option<usize>,
+    /// Stochastic mode: light each camera hit by the drawn lights of every
+    /// camera hit of its B x B pixel block (B from 2 to 8) at the same
+    /// sample, weighted by multiple importance sampling (docs/design.md
+    /// §10.11; unbiased): B^2 times the shadow rays of a cut, for less noise
+    /// from the same cuts.
+    #[arg(long, value_name = "B", conflicts_with_all = ["exact", "bounded", "multidimensional", "reconstruct", "resampled_rays"])]
+    pub reuse: Option<u32>,
     /// Bounded mode: reconstruction cuts [LC05] section 6. Full cuts only at the
     /// corners of B x B pixel blocks; every camera hit between them cuts
     /// the trees again with the same bounds, but traces a shadow ray only
@@ -260,6 +267,23 @@ impl ModeArgs {
             }
             cut.cut_draws = draws;
         }
+        if let Some(block) = self.reuse {
+            if !stochastic {
+                return Err(CliError::Usage {
+                    flag: "--reuse",
+                    message: format!(
+                        "applies to the stochastic mode only; at {spp} spp this render is bounded: add --stochastic"
+                    ),
+                });
+            }
+            if !(2..=MAX_REUSE_BLOCK).contains(&block) {
+                return Err(CliError::Usage {
+                    flag: "--reuse",
+                    message: format!("the block's edge must be 2 to {MAX_REUSE_BLOCK} pixels, not {block}"),
+                });
+            }
+            cut.reuse_block = block;
+        }
         if self.cut_per_sample && !stochastic {
             return Err(CliError::Usage {
                 flag: "--cut-per-sample",
@@ -271,6 +295,10 @@ impl ModeArgs {
         Ok(if stochastic { Mode::Stochastic(cut) } else { Mode::Bounded(cut) })
     }
 }
+
+/// The largest block of `--reuse`: a pixel's light costs about B^2 cuts'
+/// shadow rays and evaluations.
+const MAX_REUSE_BLOCK: u32 = 8;
 
 /// The mode a render uses when no mode flag is given, at `spp` samples per
 /// pixel, with its default settings.

@@ -14,6 +14,7 @@ pub mod bounds;
 pub mod cut;
 pub mod multidimensional;
 pub mod reconstruction;
+pub mod reuse;
 pub mod stochastic;
 
 use glam::DVec3;
@@ -80,6 +81,12 @@ pub struct CutSettings {
     /// each ([SLC19]); M > 0 draws M lights over the whole cut, each node
     /// by its importance, one shadow ray each. The other modes ignore it.
     pub cut_draws: usize,
+    /// The stochastic cut's reuse between pixels (`--reuse B`,
+    /// docs/design.md §10.11): 0 lights each camera hit by its own drawn
+    /// lights; B > 0 lights it by the drawn lights of every camera hit of
+    /// its B x B pixel block at the same sample index, weighted by
+    /// multiple importance sampling. The other modes ignore it.
+    pub reuse_block: u32,
 }
 
 impl Default for CutSettings {
@@ -93,6 +100,7 @@ impl Default for CutSettings {
             reconstruction_block: 0,
             pixel_cut: false,
             cut_draws: 0,
+            reuse_block: 0,
         }
     }
 }

@@ -43,6 +43,7 @@ pub const MULTIDIMENSIONAL_DEFAULTS: CutSettings = CutSettings {
     exhaustive_lights: 0,
     resampled_rays: 0,
     reconstruction_block: 0,
+    reuse_block: 0,
     pixel_cut: false,
     cut_draws: 0,
 };

@@ -51,6 +51,7 @@ pub const STOCHASTIC_DEFAULTS: CutSettings = CutSettings {
     exhaustive_lights: super::EXHAUSTIVE_LIGHTS,
     resampled_rays: 0,
     reconstruction_block: 0,
+    reuse_block: 0,
     pixel_cut: true,
     cut_draws: 0,
 };
@@ -213,6 +214,42 @@ pub fn evaluate(
     evaluate_with(trees, sp, embree, settings, rng, scratch, &bounds, &importance, groups)
 }
 
+/// The stochastic cut's lights at `sp`, drawn as [`evaluate`] draws them
+/// but not evaluated, appended to `into` after clearing it (each with its
+/// weight, the light's intensity over the probability of drawing it, and
+/// its group's slot), for an estimator that evaluates them at other points
+/// too (reuse between pixels, `lightcut::reuse`). The result holds what
+/// needs no draw (the trees summed light by light, their radiance and
+/// credits) and the cut's node count.
+#[allow(clippy::too_many_arguments)]
+pub fn draw_lights(
+    trees: &LightTrees,
+    sp: &SurfacePoint<'_>,
+    embree: &EmbreeScene,
+    settings: &CutSettings,
+    rng: &mut Rng,
+    scratch: &mut StochasticScratch,
+    groups: usize,
+    into: &mut Choices,
+) -> CutResult {
+    let bounds = PointBounds::new(sp, trees.scale);
+    let importance = walk_importance(&bounds);
+    into.clear();
+    by_group_at_best(
+        trees,
+        groups,
+        settings.group_error,
+        #[inline(always)]
+        |range, result| {
+            let drawn = draw_through(trees, range, sp, embree, settings, rng, scratch, &bounds, &importance, result);
+            if let Some(fixed) = drawn {
+                result.radiance += fixed;
+                into.append(&scratch.chosen);
+            }
+        },
+    )
+}
+
 /// [`evaluate`] with the walks' importance given (for tests of bias).
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn evaluate_with(
@@ -252,11 +289,50 @@ fn cut_through(
     importance: &impl Importance,
     result: &mut CutResult,
 ) {
+    let Some(fixed) = draw_through(trees, range, sp, embree, settings, rng, scratch, bounds, importance, result) else {
+        return;
+    };
+    let evaluator = LightEvaluator::new(sp);
+    let (values, rays) = if settings.resampled_rays > 0 {
+        // The stratified draws' number comes after the walks' numbers.
+        let xi = rng.next_f64();
+        let (chosen, evaluations) = (&scratch.chosen, &mut scratch.evaluations);
+        resample_and_trace(&evaluator, embree, PacketWidth::Sixteen, chosen, evaluations, settings.resampled_rays, xi)
+    } else {
+        evaluate_and_trace(&evaluator, embree, PacketWidth::Sixteen, &scratch.chosen, &mut scratch.evaluations)
+    };
+    result.shadow_rays += rays;
+    let mut radiance = fixed;
+    for (slot, value) in scratch.chosen.slots().zip(values) {
+        radiance += *value;
+        result.credit(slot as usize, *value);
+    }
+    result.radiance += radiance;
+}
+
+/// The first half of [`cut_through`]: the cut through `trees.trees[range]`
+/// and its drawn lights, into `scratch.chosen` (unevaluated); the trees
+/// summed light by light are added to `result` and their radiance returned,
+/// or None when no tree of the range has a cut (`result` then has it all).
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn draw_through(
+    trees: &LightTrees,
+    range: std::ops::Range<usize>,
+    sp: &SurfacePoint<'_>,
+    embree: &EmbreeScene,
+    settings: &CutSettings,
+    rng: &mut Rng,
+    scratch: &mut StochasticScratch,
+    bounds: &PointBounds,
+    importance: &impl Importance,
+    result: &mut CutResult,
+) -> Option<DVec3> {
     let range_start = range.start;
     let fixed = exhaustive_part(trees, &range, sp, embree, &mut scratch.batch, result);
     if trees.trees[range.clone()].iter().all(|t| t.blocks.is_empty()) {
         result.radiance += fixed;
-        return;
+        return None;
     }
     let (cut_nodes, kept) = match sp.sample.filter(|_| settings.pixel_cut) {
         Some(sample) => pixel_cut(trees, range, sp, settings, bounds, scratch, sample),
@@ -296,22 +372,7 @@ fn cut_through(
         let light = tree.representative(d.block as usize, d.slot as usize);
         scratch.chosen.push(tree.kind, &light, d.weight, trees.group_of_tree[d.tree as usize] as u32);
     }
-    let evaluator = LightEvaluator::new(sp);
-    let (values, rays) = if settings.resampled_rays > 0 {
-        // The stratified draws' number comes after the walks' numbers.
-        let xi = rng.next_f64();
-        let (chosen, evaluations) = (&scratch.chosen, &mut scratch.evaluations);
-        resample_and_trace(&evaluator, embree, PacketWidth::Sixteen, chosen, evaluations, settings.resampled_rays, xi)
-    } else {
-        evaluate_and_trace(&evaluator, embree, PacketWidth::Sixteen, &scratch.chosen, &mut scratch.evaluations)
-    };
-    result.shadow_rays += rays;
-    let mut radiance = fixed;
-    for (slot, value) in scratch.chosen.slots().zip(values) {
-        radiance += *value;
-        result.credit(slot as usize, *value);
-    }
-    result.radiance += radiance;
+    Some(fixed)
 }
 
 /// Draws one light per cut node of `scratch.nodes` into `scratch.drawn`,

@@ -6,6 +6,7 @@
 //! finite f32 only when a pixel is stored (`render::film::film_value`, which
 //! counts every non-finite value it meets).
 
+use std::collections::HashMap;
 use std::time::Instant;
 
 use glam::{DVec3, Vec3};
@@ -15,8 +16,11 @@ use crate::light::Lights;
 use crate::light_tree::LightTrees;
 use crate::lightcut::multidimensional::{GatherPoint, GatherScratch};
 use crate::lightcut::reconstruction::{AnchorBlock, AnchorCut, ReconstructionScratch, ANCHORS};
+use crate::lightcut::reuse::ReuseScratch;
 use crate::lightcut::{self, CutResult, CutScratch, CutSettings, StochasticScratch};
-use crate::shading::{BatchBuffers, Bsdf, Geometry, LightBatch, Lobes, SurfaceKey, SurfacePoint};
+use crate::shading::{
+    BatchBuffers, Bsdf, Choices, Geometry, LightBatch, LightEvaluator, Lobes, SurfaceKey, SurfacePoint,
+};
 use crate::util::color::luminance;
 use crate::util::sampling::{PixelSample, Rng};
 
@@ -97,6 +101,15 @@ pub struct Scratch {
     choice: EmitterChoice,
     reconstruction: ReconstructionScratch,
     pub(super) anchors: Anchors,
+    /// Reuse between pixels (docs/design.md §10.11): a stochastic cut's
+    /// buffers per pixel of a block (each keeps its pixel's cuts over the
+    /// pixel's samples), the block's draws, and the direct light of the
+    /// tile's camera hits found by their blocks, by sample key, with the
+    /// hit's distance.
+    reuse_cuts: Vec<StochasticScratch>,
+    reuse_drawn: Vec<Choices>,
+    reuse: ReuseScratch,
+    pub(super) reused: HashMap<SampleKey, (f32, CutResult)>,
 }
 
 impl Scratch {
@@ -107,6 +120,7 @@ impl Scratch {
     pub fn start_tile(&mut self) {
         self.anchors.clear();
         self.stochastic.forget_pixel_cuts();
+        self.reused.clear();
     }
 }
 
@@ -310,19 +324,8 @@ impl<'a> Integrator<'a> {
                 }
                 break;
             };
-            let mut sp = self.geometry.surface(&ray, &hit);
-            // What the point draws (the stochastic cut's lights, points on
-            // triangle lights) is stratified over the pixel's samples
-            // (docs/design.md §10.8); keyed by the bounce too.
-            sp.sample = Some(self.pixel_sample(sample, depth));
+            let (sp, sharp) = self.vertex(&ray, &hit, sample, depth);
             result.stats.path_vertices += 1;
-            // A glossy lobe too sharp for some emitter's stand-in lights:
-            // they light the diffuse lobe, and the glossy one's light from
-            // the continuous emitters is sampled (in every mode alike).
-            let sharp = self.emitters.and_then(|e| e.sharp_lobe(&sp).map(|bsdf| (e, bsdf)));
-            if sharp.is_some() {
-                sp.emitter_lobes = Lobes::DIFFUSE;
-            }
             let mesh = self.geometry.mesh_of(&hit);
             let material = scene.meshes[mesh].material;
             if depth == 0 {
@@ -368,6 +371,98 @@ impl<'a> Integrator<'a> {
             ray = bounce.ray;
         }
         result
+    }
+
+    /// The shading point where `ray`, the `depth`-th ray of the camera path
+    /// of `sample`, hit, and the emitters' sampling with the point's BSDF
+    /// when its glossy lobe is too sharp for their stand-in lights.
+    fn vertex(
+        &self,
+        ray: &crate::embree::Ray,
+        hit: &crate::embree::Hit,
+        sample: SampleKey,
+        depth: u32,
+    ) -> (SurfacePoint<'a>, Option<(&'a EmitterSampling<'a>, Bsdf)>) {
+        let mut sp = self.geometry.surface(ray, hit);
+        // What the point draws (the stochastic cut's lights, points on
+        // triangle lights) is stratified over the pixel's samples
+        // (docs/design.md §10.8); keyed by the bounce too.
+        sp.sample = Some(self.pixel_sample(sample, depth));
+        // A glossy lobe too sharp for some emitter's stand-in lights:
+        // they light the diffuse lobe, and the glossy one's light from
+        // the continuous emitters is sampled (in every mode alike).
+        let sharp = self.emitters.and_then(|e| e.sharp_lobe(&sp).map(|bsdf| (e, bsdf)));
+        if sharp.is_some() {
+            sp.emitter_lobes = Lobes::DIFFUSE;
+        }
+        (sp, sharp)
+    }
+
+    /// The block edge of reuse between pixels, when the pass uses it (the
+    /// stochastic mode with `--reuse`).
+    #[must_use]
+    pub fn reuse_block(&self) -> Option<u32> {
+        match self.direct {
+            DirectLighting::StochasticLightcuts { settings, .. } if settings.reuse_block > 0 => {
+                Some(settings.reuse_block)
+            }
+            _ => None,
+        }
+    }
+
+    /// Reuse between pixels (docs/design.md §10.11): the direct light of
+    /// the camera hits of one pixel block at one sample index, `rays[k]`
+    /// the camera ray of the sample of key `keys[k]`. Each hit draws its
+    /// stochastic cut's lights, and each is lit by every hit's draws
+    /// (`lightcut::reuse`). Returns, per pixel, the hit's distance and its
+    /// direct light from the trees (None: nothing to shade), as
+    /// [`Integrator::trace`] would find it at that hit with its own cut
+    /// alone, but from all the block's draws.
+    pub fn reuse_block_light(
+        &self,
+        rays: &mut [crate::embree::Ray],
+        keys: &[SampleKey],
+        scratch: &mut Scratch,
+        stats: &mut ShadingStats,
+    ) -> Vec<Option<(f32, CutResult)>> {
+        let DirectLighting::StochasticLightcuts { trees, settings } = self.direct else {
+            return rays.iter().map(|_| None).collect();
+        };
+        let timed = crate::embree::timing().then(|| (Instant::now(), crate::embree::thread_timed_nanos()));
+        let groups = self.group_slots();
+        let n = rays.len();
+        scratch.reuse_cuts.resize_with(n, StochasticScratch::default);
+        scratch.reuse_drawn.resize_with(n, Choices::default);
+        let mut points = Vec::with_capacity(n);
+        for (ray, &key) in rays.iter_mut().zip(keys) {
+            let point = self.first_hit(ray).map(|hit| self.vertex(ray, &hit, key, 0).0).filter(|sp| !sp.material.unlit);
+            points.push(point);
+        }
+        let embree = &self.geometry.embree;
+        let mut results: Vec<CutResult> = Vec::with_capacity(n);
+        for (k, (point, &[seed, x, y, s])) in points.iter().zip(keys).enumerate() {
+            scratch.reuse_drawn[k].clear();
+            let found = match point {
+                Some(sp) => {
+                    // The stream direct_light draws a camera hit's cut from.
+                    let mut rng = Rng::from_key(&[seed, x, y, s, 0, STOCHASTIC_STREAM]);
+                    let (cut, drawn) = (&mut scratch.reuse_cuts[k], &mut scratch.reuse_drawn[k]);
+                    lightcut::stochastic::draw_lights(trees, sp, embree, &settings, &mut rng, cut, groups, drawn)
+                }
+                None => CutResult::with_groups(groups),
+            };
+            results.push(found);
+        }
+        let evaluators: Vec<_> = points.iter().map(|p| p.as_ref().map(LightEvaluator::new)).collect();
+        crate::util::simd::best(
+            #[inline(always)]
+            || lightcut::reuse::estimate(&evaluators, &scratch.reuse_drawn, embree, &mut results, &mut scratch.reuse),
+        );
+        if let Some((start, embree_before)) = timed {
+            let embree = crate::embree::thread_timed_nanos() - embree_before;
+            stats.cut_nanos += (start.elapsed().as_nanos() as u64).saturating_sub(embree);
+        }
+        points.iter().zip(results).map(|(p, r)| p.as_ref().map(|sp| (sp.distance, r))).collect()
     }
 
     /// The pixel sample of a camera path's `depth`-th vertex: its pixel's
@@ -778,6 +873,11 @@ impl<'a> Integrator<'a> {
                         }
                         None => lightcut::evaluate(trees, sp, embree, &settings, &mut scratch.cut, groups),
                     }
+                } else if let Some((_, found)) =
+                    scratch.reused.remove(&sample).filter(|(distance, _)| depth == 0 && *distance == sp.distance)
+                {
+                    // Found by the hit's pixel block (design §10.11).
+                    found
                 } else {
                     let [seed, x, y, s] = sample;
                     let mut rng = Rng::from_key(&[seed, x, y, s, u64::from(depth), STOCHASTIC_STREAM]);

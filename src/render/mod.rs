@@ -233,6 +233,9 @@ fn render_tile(
         Some(_) if camera.shutter_open() => std::borrow::Cow::Owned(camera.at(0.5)),
         _ => std::borrow::Cow::Borrowed(camera),
     };
+    if let Some(b) = integrator.reuse_block() {
+        stats.camera_rays += reuse_blocks(integrator, camera, settings, tile, b, scratch, &mut stats.shading);
+    }
     for (i, pixel) in values.chunks_exact_mut(count).enumerate() {
         let (x, y) = (tile.x0 + i as u32 % tile.width(), tile.y0 + i as u32 / tile.width());
         let mut radiance = DVec3::ZERO;
@@ -245,24 +248,13 @@ fn render_tile(
         groups.fill(DVec3::ZERO);
         objects.clear();
         materials.clear();
-        let lens_shift = camera.has_lens().then(|| {
-            let mut rng = Rng::from_key(&[settings.seed, u64::from(x), u64::from(y), LENS_STREAM]);
-            [rng.next_f32(), rng.next_f32()]
-        });
-        let time_shift = camera
-            .shutter_open()
-            .then(|| Rng::from_key(&[settings.seed, u64::from(x), u64::from(y), SHUTTER_STREAM]).next_f32());
         if let Some(b) = block {
             stats.camera_rays +=
                 pixel_anchors(integrator, &anchor_camera, b, (x, y), settings.seed, scratch, &mut stats.shading);
         }
+        let pixel_ray = PixelRays::new(camera, settings, x, y);
         for s in 0..settings.spp {
-            let ray = match time_shift {
-                None => camera_ray(camera, settings, x, y, s, lens_shift),
-                // The sample's time, stratified per pixel like the lens
-                // (docs/design.md §13.6).
-                Some(shift) => camera_ray(&camera.at(sampling::shutter_time(s, shift)), settings, x, y, s, lens_shift),
-            };
+            let ray = pixel_ray.sample(s);
             let key = [settings.seed, u64::from(x), u64::from(y), u64::from(s)];
             let sample = integrator.trace(ray, key, settings.transparent, scratch, &mut groups, &mut gathered);
             stats.camera_rays += 1;
@@ -324,6 +316,86 @@ fn render_tile(
         }
     }
     (values, non_finite, stats)
+}
+
+/// The camera rays of one pixel's samples: through the pixel's jittered
+/// points, the lens and the shutter stratified per pixel.
+struct PixelRays<'c> {
+    camera: &'c Camera,
+    settings: &'c PassSettings,
+    x: u32,
+    y: u32,
+    lens_shift: Option<[f32; 2]>,
+    time_shift: Option<f32>,
+}
+
+impl<'c> PixelRays<'c> {
+    fn new(camera: &'c Camera, settings: &'c PassSettings, x: u32, y: u32) -> Self {
+        let lens_shift = camera.has_lens().then(|| {
+            let mut rng = Rng::from_key(&[settings.seed, u64::from(x), u64::from(y), LENS_STREAM]);
+            [rng.next_f32(), rng.next_f32()]
+        });
+        let time_shift = camera
+            .shutter_open()
+            .then(|| Rng::from_key(&[settings.seed, u64::from(x), u64::from(y), SHUTTER_STREAM]).next_f32());
+        Self { camera, settings, x, y, lens_shift, time_shift }
+    }
+
+    /// Sample `s`'s camera ray.
+    fn sample(&self, s: u32) -> Ray {
+        let Self { camera, settings, x, y, lens_shift, .. } = *self;
+        match self.time_shift {
+            None => camera_ray(camera, settings, x, y, s, lens_shift),
+            // The sample's time, stratified per pixel like the lens
+            // (docs/design.md §13.6).
+            Some(shift) => camera_ray(&camera.at(sampling::shutter_time(s, shift)), settings, x, y, s, lens_shift),
+        }
+    }
+}
+
+/// Reuse between pixels (docs/design.md §10.11): the direct light of every
+/// camera hit of `tile`, found by its `block` x `block` pixel block at its
+/// sample index, into `scratch` for [`Integrator::trace`] to take. Blocks
+/// are fixed by the film (their corners at multiples of `block`, cut by its
+/// edges), not by the tile: a tile that holds part of a block casts the
+/// whole block's rays, so each pixel's light is the same in any tile
+/// split. What the other pixels' rays cost counts in the pass's totals
+/// (`stats`), not in a pixel's AOVs. Returns the camera rays cast.
+fn reuse_blocks(
+    integrator: &Integrator<'_>,
+    camera: &Camera,
+    settings: &PassSettings,
+    tile: PixelBounds,
+    block: u32,
+    scratch: &mut Scratch,
+    stats: &mut ShadingStats,
+) -> u64 {
+    let mut camera_rays = 0;
+    let mut pixels = Vec::new();
+    for by in (tile.y0 / block * block..tile.y1).step_by(block as usize) {
+        for bx in (tile.x0 / block * block..tile.x1).step_by(block as usize) {
+            pixels.clear();
+            for y in by..(by + block).min(settings.height) {
+                for x in bx..(bx + block).min(settings.width) {
+                    pixels.push(PixelRays::new(camera, settings, x, y));
+                }
+            }
+            for s in 0..settings.spp {
+                let mut rays: Vec<Ray> = pixels.iter().map(|p| p.sample(s)).collect();
+                let keys: Vec<_> =
+                    pixels.iter().map(|p| [settings.seed, u64::from(p.x), u64::from(p.y), u64::from(s)]).collect();
+                camera_rays += rays.len() as u64;
+                let found = integrator.reuse_block_light(&mut rays, &keys, scratch, stats);
+                for ((p, key), found) in pixels.iter().zip(keys).zip(found) {
+                    let inside = (tile.x0..tile.x1).contains(&p.x) && (tile.y0..tile.y1).contains(&p.y);
+                    if let (true, Some(found)) = (inside, found) {
+                        scratch.reused.insert(key, found);
+                    }
+                }
+            }
+        }
+    }
+    camera_rays
 }
 
 /// Makes pixel (x, y)'s anchors, the corners of its `block` x `block`

@@ -38,7 +38,7 @@ impl Mode {
     }
 
     /// A cut's settings as the header shows them (`group_error` and
-    /// `cut_draws`, `resampled_rays` and `reconstruction_block` only when
+    /// `cut_draws`, `resampled_rays`, `reconstruction_block` and `reuse_block` only when
     /// they are not the default).
     fn settings(c: &CutSettings) -> String {
         let mut text = format!("error={} max_cut={}", c.error, c.max_cut);
@@ -53,6 +53,9 @@ impl Mode {
         }
         if c.reconstruction_block > 0 {
             text += &format!(" reconstruction_block={}", c.reconstruction_block);
+        }
+        if c.reuse_block > 0 {
+            text += &format!(" reuse_block={}", c.reuse_block);
         }
         text
     }

@@ -90,6 +90,19 @@ impl Choices {
         self.len += 1;
     }
 
+    /// Appends `other`'s lights after these, in order.
+    pub fn append(&mut self, other: &Choices) {
+        for quad in &other.quads[..other.used] {
+            if self.used == self.quads.len() {
+                self.quads.push(*quad);
+            } else {
+                self.quads[self.used] = *quad;
+            }
+            self.used += 1;
+        }
+        self.len += other.len;
+    }
+
     /// The slot of each chosen light, in order.
     pub fn slots(&self) -> impl Iterator<Item = u32> + '_ {
         self.quads[..self.used].iter().flat_map(|q| q.slots[..q.lanes.count].iter().copied())

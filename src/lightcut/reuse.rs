@@ -1,0 +1,121 @@
+//! Reuse between neighbouring pixels (docs/design.md §10.11): the camera
+//! hits of a B x B pixel block at one sample index each draw their
+//! stochastic cut's lights (`stochastic::draw_lights`), and every hit is
+//! lit by all of the block's draws, each weighted by multiple importance
+//! sampling, so that each hit's estimate has B^2 cuts' draws for the price
+//! of one cut's choosing and B^2 cuts' shadow rays.
+//!
+//! Hit q's draws are a stratified estimator of the sum over every light:
+//! each drawn light c carries its intensity over the probability q drew it
+//! with (its weight in [`Choices`]), so sum_c X_p(c) V_p(c) (its value at
+//! any point p) is unbiased for p's sum wherever q could draw every light
+//! that reaches p. With MIS weights m_q(c) that sum to 1 over the hits
+//! that can draw c, sum_q sum_c m_q(c) X_p(c) V_p(c) is unbiased for p's
+//! sum over all lights (Veach and Guibas's multi-sample model, SIGGRAPH
+//! 1995; pairwise and generalised forms in Lin et al., "Generalized
+//! Resampled Importance Sampling", SIGGRAPH 2022). The renderer's m_q(c) is the balance
+//! heuristic with each hit's unoccluded luminance of c standing for its
+//! probability of drawing it: lum X_q(c) / sum_j lum X_j(c). A hit whose
+//! X_q(c) is 0 gets weight 0 (its walk may not reach c), and the weights
+//! sum to 1 wherever some hit's X_j(c) > 0, in particular wherever
+//! X_p(c) > 0.
+use glam::DVec3;
+
+use super::CutResult;
+use crate::embree::{PacketWidth, Scene as EmbreeScene};
+use crate::shading::evaluate::{evaluate_into, trace_evaluations};
+use crate::shading::{Choices, Evaluations, LightEvaluator};
+use crate::util::color::luminance64;
+
+/// Reusable buffers of [`estimate`].
+#[derive(Default)]
+pub struct ReuseScratch {
+    evaluations: Evaluations,
+    /// Per hit of the block: the luminance of each of one hit's drawn
+    /// lights there, unoccluded, and its value there with visibility.
+    luminances: Vec<Vec<f64>>,
+    values: Vec<Vec<DVec3>>,
+    /// One drawn light's luminance at every hit.
+    at_hits: Vec<f64>,
+}
+
+/// The renderer's MIS weight of hit q's drawn light given its unoccluded
+/// luminance at every hit of the block (0 where a pixel hit nothing): the
+/// balance heuristic, lum_q / sum_j lum_j.
+#[must_use]
+pub fn balance(q: usize, luminances: &[f64]) -> f64 {
+    let total: f64 = luminances.iter().sum();
+    if total > 0.0 {
+        luminances[q] / total
+    } else {
+        0.0
+    }
+}
+
+/// Lights every hit of a block by every hit's draws: `drawn[q]` are hit
+/// q's drawn lights (weights included), `evaluators[p]` hit p's evaluator
+/// (None: the pixel's camera ray hit nothing to shade), and each drawn
+/// light's value at p, times its MIS weight, is added to `results[p]`'s
+/// radiance and credited to its group's slot; p's shadow rays too.
+/// Deterministic: the sums run in the order of q, then of q's draws.
+pub fn estimate(
+    evaluators: &[Option<LightEvaluator<'_, '_>>],
+    drawn: &[Choices],
+    embree: &EmbreeScene,
+    results: &mut [CutResult],
+    scratch: &mut ReuseScratch,
+) {
+    estimate_with(evaluators, drawn, embree, results, scratch, balance);
+}
+
+/// [`estimate`] with the MIS weight given as `weight(q, luminances)` (the
+/// renderer's is [`balance`]; tests pass wrong ones).
+pub(crate) fn estimate_with(
+    evaluators: &[Option<LightEvaluator<'_, '_>>],
+    drawn: &[Choices],
+    embree: &EmbreeScene,
+    results: &mut [CutResult],
+    scratch: &mut ReuseScratch,
+    weight: impl Fn(usize, &[f64]) -> f64,
+) {
+    let n = evaluators.len();
+    let ReuseScratch { evaluations, luminances, values, at_hits } = scratch;
+    luminances.resize_with(n, Vec::new);
+    values.resize_with(n, Vec::new);
+    at_hits.resize(n, 0.0);
+    for (q, lights) in drawn.iter().enumerate() {
+        if lights.is_empty() {
+            continue;
+        }
+        for (p, evaluator) in evaluators.iter().enumerate() {
+            luminances[p].clear();
+            values[p].clear();
+            let Some(evaluator) = evaluator else { continue };
+            evaluations.clear();
+            evaluate_into(evaluator, lights, evaluations);
+            luminances[p].extend(evaluations.values().iter().map(|&v| luminance64(v)));
+            let (traced, rays) = trace_evaluations(embree, PacketWidth::Sixteen, evaluations);
+            values[p].extend_from_slice(traced);
+            results[p].shadow_rays += rays;
+        }
+        for (c, slot) in lights.slots().enumerate() {
+            for (l, at) in at_hits.iter_mut().zip(luminances.iter()) {
+                *l = at.get(c).copied().unwrap_or(0.0);
+            }
+            let m = weight(q, at_hits);
+            if m == 0.0 {
+                continue;
+            }
+            for (result, at) in results.iter_mut().zip(values.iter()) {
+                if let Some(&value) = at.get(c) {
+                    let value = value * m;
+                    result.radiance += value;
+                    result.credit(slot as usize, value);
+                }
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests;
