@@ -115,11 +115,13 @@ pub struct Scratch {
 impl Scratch {
     /// Forgets what a tile keeps between its pixels: reconstruction cuts'
     /// anchors (the tile's own, made as its pixels need them, so that they
-    /// depend on the image alone: docs/design.md §9.6) and the stochastic
-    /// cut's pixel cuts (docs/design.md §10.9).
+    /// depend on the image alone: docs/design.md §9.6), the stochastic
+    /// cut's pixel cuts (docs/design.md §10.9, the blocks' too) and the
+    /// light the blocks found (§10.11).
     pub fn start_tile(&mut self) {
         self.anchors.clear();
         self.stochastic.forget_pixel_cuts();
+        self.reuse_cuts.iter_mut().for_each(StochasticScratch::forget_pixel_cuts);
         self.reused.clear();
     }
 }
