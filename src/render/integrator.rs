@@ -117,7 +117,7 @@ impl Scratch {
     /// anchors (the tile's own, made as its pixels need them, so that they
     /// depend on the image alone: docs/design.md §9.6), the stochastic
     /// cut's pixel cuts (docs/design.md §10.9, the blocks' too) and the
-    /// light the blocks found (§10.11).
+    /// light the blocks found (design §10.11).
     pub fn start_tile(&mut self) {
         self.anchors.clear();
         self.stochastic.forget_pixel_cuts();
