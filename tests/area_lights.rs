@@ -410,25 +410,7 @@ fn triangle_lights_compose_with_instances_motion_groups_cryptomatte_and_tiles() 
         let image = common::read_exr(&one).unwrap();
 
         // Tiles: three bands assemble to the one-process render, every channel.
-        let tiles: Vec<_> = (0..3)
-            .map(|i| {
-                let tile = dir.path(&format!("tile{i}.exr"));
-                let spec = format!("{i}/3");
-                let more = ["-o", common::s(&tile), "--tile", &spec, "--quiet"];
-                common::lightcuts_ok(&[&["render", common::s(&scene)][..], &args, &more].concat());
-                tile
-            })
-            .collect();
-        let frame = dir.path("frame.exr");
-        let assemble: Vec<&str> =
-            ["assemble", common::s(&frame)].into_iter().chain(tiles.iter().map(|t| common::s(t))).collect();
-        common::lightcuts_ok(&assemble);
-        let frame = common::read_exr(&frame).unwrap();
-        assert_eq!(image.channels.keys().collect::<Vec<_>>(), frame.channels.keys().collect::<Vec<_>>());
-        for (name, values) in &image.channels {
-            let same = values.iter().zip(&frame.channels[name]).all(|(a, b)| a.to_bits() == b.to_bits());
-            assert!(same, "{mode}: {name} differs between the tiles and the one-process render");
-        }
+        common::assert_tiles_assemble_to(&dir, &scene, &args, 3, &one);
         common::assert_same_bits_for_any_threads_and_window(&dir, &scene, width, &args);
 
         // Groups: the layers sum to the beauty; the still panels light

@@ -150,19 +150,7 @@ fn reconstruction_cuts_stay_close_to_exact_with_fewer_rays_for_any_threads_windo
 
     assert_same_bits_for_any_threads_and_window(&dir, &scene, 96, &["--reconstruct", "2", "--spp", "2"]);
     // Bands of 7 tiles (block rows cut across) assemble to the one-process render.
-    let one = read_exr(&reconstructed).unwrap();
-    let mut tiles = Vec::new();
-    for i in 0..7 {
-        let (tile, _) = render(&format!("t{i}.exr"), &["--reconstruct", "2", "--tile", &format!("{i}/7")]);
-        tiles.push(tile);
-    }
-    let frame = dir.path("frame.exr");
-    lightcuts_ok(&[&["assemble", s(&frame)][..], &tiles.iter().map(|t| s(t)).collect::<Vec<_>>()].concat());
-    let frame = read_exr(&frame).unwrap();
-    for (name, values) in &one.channels {
-        let same = values.iter().zip(&frame.channels[name]).all(|(a, b)| a.to_bits() == b.to_bits());
-        assert!(same, "{name}: tiles differ from the one-process render");
-    }
+    assert_tiles_assemble_to(&dir, &scene, &["--spp", "4", "--reconstruct", "2"], 7, &reconstructed);
 
     let stderr = lightcuts_fails(&["render", s(&scene), "-o", s(&dir.path("x.exr")), "--reconstruct", "0"]);
     assert!(stderr.contains("--reconstruct") && stderr.contains("at least 1"), "{stderr}");

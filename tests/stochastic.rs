@@ -225,19 +225,8 @@ fn reuse_between_pixels_is_nearer_exact_and_the_same_for_any_threads_window_and_
         assert_same_bits_for_any_threads_and_window(&dir, &scene, 96, &flags);
     }
     // Bands of 7 tiles (block rows cut across) assemble to the one-process render.
-    let one = read_exr(&reused).unwrap();
-    let mut tiles = Vec::new();
-    for i in 0..7 {
-        let (tile, _) = render(&format!("t{i}.exr"), &["--stochastic", "--reuse", "2", "--tile", &format!("{i}/7")]);
-        tiles.push(tile);
-    }
-    let frame = dir.path("frame.exr");
-    lightcuts_ok(&[&["assemble", s(&frame)][..], &tiles.iter().map(|t| s(t)).collect::<Vec<_>>()].concat());
-    let frame = read_exr(&frame).unwrap();
-    for (name, values) in &one.channels {
-        let same = values.iter().zip(&frame.channels[name]).all(|(a, b)| a.to_bits() == b.to_bits());
-        assert!(same, "{name}: tiles differ from the one-process render");
-    }
+    let args = ["--spp", "2", "--resolution", "48x36", "--stochastic", "--reuse", "2"];
+    assert_tiles_assemble_to(&dir, &scene, &args, 7, &reused);
 
     for (flags, says) in [
         (&["--reuse", "1", "--stochastic"][..], "2 to 8"),

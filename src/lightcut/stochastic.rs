@@ -211,7 +211,19 @@ pub fn evaluate(
 ) -> CutResult {
     let bounds = PointBounds::new(sp, trees.scale);
     let importance = walk_importance(&bounds);
-    evaluate_with(trees, sp, embree, settings, rng, scratch, &bounds, &importance, groups)
+    let at = AtPoint { trees, sp, embree, settings, bounds: &bounds, importance: &importance };
+    evaluate_with(&at, rng, scratch, groups)
+}
+
+/// What a shading point's stochastic cut reads: the trees, the point and
+/// its bounds, the settings, and the walks' importance there.
+pub(crate) struct AtPoint<'a, 'p, I> {
+    pub trees: &'a LightTrees,
+    pub sp: &'a SurfacePoint<'p>,
+    pub embree: &'a EmbreeScene,
+    pub settings: &'a CutSettings,
+    pub bounds: &'a PointBounds,
+    pub importance: &'a I,
 }
 
 /// The stochastic cut's lights at `sp`, drawn as [`evaluate`] draws them
@@ -234,6 +246,7 @@ pub fn draw_lights(
 ) -> CutResult {
     let bounds = PointBounds::new(sp, trees.scale);
     let importance = walk_importance(&bounds);
+    let at = AtPoint { trees, sp, embree, settings, bounds: &bounds, importance: &importance };
     into.clear();
     by_group_at_best(
         trees,
@@ -241,7 +254,7 @@ pub fn draw_lights(
         settings.group_error,
         #[inline(always)]
         |range, result| {
-            let drawn = draw_through(trees, range, sp, embree, settings, rng, scratch, &bounds, &importance, result);
+            let drawn = draw_through(&at, range, rng, scratch, result);
             if let Some(fixed) = drawn {
                 result.radiance += fixed;
                 into.append(&scratch.chosen);
@@ -251,47 +264,36 @@ pub fn draw_lights(
 }
 
 /// [`evaluate`] with the walks' importance given (for tests of bias).
-#[allow(clippy::too_many_arguments)]
 pub(crate) fn evaluate_with(
-    trees: &LightTrees,
-    sp: &SurfacePoint<'_>,
-    embree: &EmbreeScene,
-    settings: &CutSettings,
+    at: &AtPoint<'_, '_, impl Importance>,
     rng: &mut Rng,
     scratch: &mut StochasticScratch,
-    bounds: &PointBounds,
-    importance: &impl Importance,
     groups: usize,
 ) -> CutResult {
     by_group_at_best(
-        trees,
+        at.trees,
         groups,
-        settings.group_error,
+        at.settings.group_error,
         #[inline(always)]
-        |range, result| cut_through(trees, range, sp, embree, settings, rng, scratch, bounds, importance, result),
+        |range, result| cut_through(at, range, rng, scratch, result),
     )
 }
 
 /// One stochastic cut through `trees.trees[range]`, its threshold relative
 /// to their summed bounds, added to `result`: each drawn light's
 /// contribution is also credited to its tree's group's slot.
-#[allow(clippy::too_many_arguments)]
 #[inline(always)]
 fn cut_through(
-    trees: &LightTrees,
+    at: &AtPoint<'_, '_, impl Importance>,
     range: std::ops::Range<usize>,
-    sp: &SurfacePoint<'_>,
-    embree: &EmbreeScene,
-    settings: &CutSettings,
     rng: &mut Rng,
     scratch: &mut StochasticScratch,
-    bounds: &PointBounds,
-    importance: &impl Importance,
     result: &mut CutResult,
 ) {
-    let Some(fixed) = draw_through(trees, range, sp, embree, settings, rng, scratch, bounds, importance, result) else {
+    let Some(fixed) = draw_through(at, range, rng, scratch, result) else {
         return;
     };
+    let AtPoint { sp, embree, settings, .. } = *at;
     let evaluator = LightEvaluator::new(sp);
     let (values, rays) = if settings.resampled_rays > 0 {
         // The stratified draws' number comes after the walks' numbers.
@@ -314,20 +316,15 @@ fn cut_through(
 /// and its drawn lights, into `scratch.chosen` (unevaluated); the trees
 /// summed light by light are added to `result` and their radiance returned,
 /// or None when no tree of the range has a cut (`result` then has it all).
-#[allow(clippy::too_many_arguments)]
 #[inline(always)]
 fn draw_through(
-    trees: &LightTrees,
+    at: &AtPoint<'_, '_, impl Importance>,
     range: std::ops::Range<usize>,
-    sp: &SurfacePoint<'_>,
-    embree: &EmbreeScene,
-    settings: &CutSettings,
     rng: &mut Rng,
     scratch: &mut StochasticScratch,
-    bounds: &PointBounds,
-    importance: &impl Importance,
     result: &mut CutResult,
 ) -> Option<DVec3> {
+    let AtPoint { trees, sp, embree, settings, bounds, importance } = *at;
     let range_start = range.start;
     let fixed = exhaustive_part(trees, &range, sp, embree, &mut scratch.batch, result);
     if trees.trees[range.clone()].iter().all(|t| t.blocks.is_empty()) {
@@ -774,4 +771,4 @@ fn slot_intensity(tree: &CutTree, b: usize, k: usize) -> Vec3 {
 }
 
 #[cfg(test)]
-mod tests;
+pub(super) mod tests;

@@ -247,6 +247,29 @@ pub fn assert_same_bits_for_any_threads_and_window(dir: &TempDir, scene: &Path, 
     }
 }
 
+/// Renders `scene` with `args` as `bands` horizontal tiles (`--tile
+/// i/bands`), assembles them, and asserts that every channel has the bits
+/// of `one`, the one-process render with the same `args`.
+pub fn assert_tiles_assemble_to(dir: &TempDir, scene: &Path, args: &[&str], bands: u32, one: &Path) {
+    let tiles: Vec<PathBuf> = (0..bands)
+        .map(|i| {
+            let tile = dir.path(&format!("band{i}of{bands}.exr"));
+            let spec = format!("{i}/{bands}");
+            let more = ["-o", s(&tile), "--tile", &spec, "--quiet"];
+            lightcuts_ok(&[&["render", s(scene)][..], args, &more].concat());
+            tile
+        })
+        .collect();
+    let frame = dir.path(&format!("assembled{bands}.exr"));
+    lightcuts_ok(&[&["assemble", s(&frame)][..], &tiles.iter().map(|t| s(t)).collect::<Vec<_>>()].concat());
+    let (one, frame) = (read_exr(one).unwrap(), read_exr(&frame).unwrap());
+    assert_eq!(one.channels.keys().collect::<Vec<_>>(), frame.channels.keys().collect::<Vec<_>>());
+    for (name, values) in &one.channels {
+        let same = values.iter().zip(&frame.channels[name]).all(|(a, b)| a.to_bits() == b.to_bits());
+        assert!(same, "{args:?}: {name} differs between {bands} tiles and the one-process render");
+    }
+}
+
 /// Which pixels a comparison with a peer covers: its mean over them and
 /// its 8x8 blocks that they fill.
 #[derive(Clone, Copy, Debug)]

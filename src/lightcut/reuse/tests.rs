@@ -8,7 +8,6 @@ use crate::embree::Device;
 use crate::light::Lights;
 use crate::lightcut::stochastic::{draw_lights, StochasticScratch, STOCHASTIC_DEFAULTS};
 use crate::lightcut::CutSettings;
-use crate::scene::builder::SceneText;
 use crate::shading::{BatchBuffers, Geometry, LightBatch, SurfacePoint};
 use crate::util::sampling::Rng;
 
@@ -17,19 +16,12 @@ const SEEDS: u64 = 1024;
 /// Hits a block has: a 2 x 2 block's.
 const BLOCK: usize = 4;
 
-/// A floor, a sphere and a box (faces of every orientation: a light behind
-/// one hit's surface is one that hit never draws) under a grid of point
-/// lights and a row of brighter ones low beside the box.
+/// A grid of point lights and a row of brighter ones low beside the box of
+/// the stochastic cut's test scene (faces of every orientation: a light
+/// behind one hit's surface is one that hit never draws).
 fn scene() -> crate::scene::Scene {
-    SceneText::new(32, 24)
-        .camera([0.0, 4.0, 7.0], [0.0, 0.5, 0.0], 55.0)
-        .material("floor", [0.7, 0.7, 0.7], "")
-        .material("glossy", [0.4, 0.3, 0.2], "specular = [0.3, 0.3, 0.3]\nexponent = 30\n")
-        .floor(0.0, 6.0, "floor")
-        .sphere([-0.8, 1.0, 0.0], 1.0, "glossy")
-        .cuboid([1.0, 0.0, -1.0], [2.0, 1.5, 0.0], "floor")
-        .raw(
-            r#"
+    crate::lightcut::stochastic::tests::scene(
+        r#"
 [[lights]]
 type = "grid"
 corner = [-3, 3, -3]
@@ -45,9 +37,7 @@ v = [0, 0, 1]
 count = [10, 3]
 intensity = [0.2, 0.1, 0.05]
 "#,
-        )
-        .load(std::path::Path::new("reuse.toml"))
-        .unwrap()
+    )
 }
 
 /// For each of 16 hits: the exact sum's luminance, and the mean and

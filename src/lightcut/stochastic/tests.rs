@@ -16,8 +16,9 @@ use crate::util::sampling::mix64;
 // (a point 7.6 standard errors off at 256 passed at 8,192).
 const SEEDS: u64 = 1024;
 
-/// A floor, an occluding sphere and a box, and `lights`.
-fn scene(lights: &str) -> Scene {
+/// A floor, an occluding sphere and a box (faces of every orientation),
+/// and `lights` (also the scene of `lightcut::reuse`'s tests).
+pub(in crate::lightcut) fn scene(lights: &str) -> Scene {
     SceneText::new(32, 24)
         .camera([0.0, 4.0, 7.0], [0.0, 0.5, 0.0], 55.0)
         .material("floor", [0.7, 0.7, 0.7], "")
@@ -154,7 +155,8 @@ fn estimates_with(scene: &Scene, biased: bool, resampled_rays: usize, cut_draws:
                 let mut rng = Rng::from_key(&[seed, rows.len() as u64]);
                 let embree = &geometry.embree;
                 let found = if biased {
-                    evaluate_with(trees, sp, embree, &settings, &mut rng, &mut scratch, &bounds, &wrong, 0)
+                    let at = AtPoint { trees, sp, embree, settings: &settings, bounds: &bounds, importance: &wrong };
+                    evaluate_with(&at, &mut rng, &mut scratch, 0)
                 } else {
                     evaluate(trees, sp, embree, &settings, &mut rng, &mut scratch, 0)
                 };
