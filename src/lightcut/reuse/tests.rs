@@ -6,6 +6,7 @@
 use super::*;
 use crate::embree::Device;
 use crate::light::Lights;
+use crate::lightcut::stochastic::tests as stochastic_tests;
 use crate::lightcut::stochastic::{draw_lights, StochasticScratch, STOCHASTIC_DEFAULTS};
 use crate::lightcut::CutSettings;
 use crate::shading::{BatchBuffers, Geometry, LightBatch, SurfacePoint};
@@ -16,28 +17,13 @@ const SEEDS: u64 = 1024;
 /// Hits a block has: a 2 x 2 block's.
 const BLOCK: usize = 4;
 
-/// A grid of point lights and a row of brighter ones low beside the box of
-/// the stochastic cut's test scene (faces of every orientation: a light
-/// behind one hit's surface is one that hit never draws).
+/// The stochastic cut's test scene and point lights, the brighter row
+/// lower (faces of every orientation: a light behind one hit's surface is
+/// one that hit never draws).
 fn scene() -> crate::scene::Scene {
-    crate::lightcut::stochastic::tests::scene(
-        r#"
-[[lights]]
-type = "grid"
-corner = [-3, 3, -3]
-u = [6, 0, 0]
-v = [0, 0, 6]
-count = [20, 15]
-intensity = [0.05, 0.04, 0.03]
-[[lights]]
-type = "grid"
-corner = [-4, 0.6, 1.5]
-u = [8, 0, 0]
-v = [0, 0, 1]
-count = [10, 3]
-intensity = [0.2, 0.1, 0.05]
-"#,
-    )
+    let (row, lower) = ("corner = [-4, 1.2, 2]", "corner = [-4, 0.6, 1.5]");
+    assert!(stochastic_tests::OMNI.contains(row));
+    stochastic_tests::scene(&stochastic_tests::OMNI.replace(row, lower))
 }
 
 /// For each of 16 hits: the exact sum's luminance, and the mean and

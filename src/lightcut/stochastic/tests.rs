@@ -31,7 +31,8 @@ pub(in crate::lightcut) fn scene(lights: &str) -> Scene {
         .unwrap()
 }
 
-const OMNI: &str = r#"
+/// Point lights: a grid overhead and a brighter row low beside the box.
+pub(in crate::lightcut) const OMNI: &str = r#"
 [[lights]]
 type = "grid"
 corner = [-3, 3, -3]
