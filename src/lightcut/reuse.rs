@@ -26,6 +26,20 @@ use crate::embree::{PacketWidth, Scene as EmbreeScene};
 use crate::shading::evaluate::{evaluate_into, trace_evaluations};
 use crate::shading::{Choices, Evaluations, LightEvaluator};
 use crate::util::color::luminance64;
+use crate::util::sampling::PixelSample;
+
+/// The pixel sample of hit `k` of a block of `hits` camera hits at sample
+/// `index` of `spp` (design §10.11): the block's samples are one
+/// stratified set keyed by `block_key`, in which hit k takes index
+/// index x hits + k of spp x hits, so that the hits' draws of a cut node
+/// they share fall in different strata. Each hit's numbers stay uniform
+/// ([`PixelSample::number`]), so each hit's draws keep their distribution
+/// and the block's estimate its mean.
+#[must_use]
+pub fn block_sample(block_key: u64, hits: usize, k: usize, index: u32, spp: u32) -> PixelSample {
+    let n = hits as u32;
+    PixelSample { pixel: block_key, index: index * n + k as u32, count: spp.max(1) * n }
+}
 
 /// Reusable buffers of [`estimate`].
 #[derive(Default)]

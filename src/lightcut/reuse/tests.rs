@@ -10,7 +10,7 @@ use crate::lightcut::stochastic::tests as stochastic_tests;
 use crate::lightcut::stochastic::{draw_lights, StochasticScratch, STOCHASTIC_DEFAULTS};
 use crate::lightcut::CutSettings;
 use crate::shading::{BatchBuffers, Geometry, LightBatch, SurfacePoint};
-use crate::util::sampling::Rng;
+use crate::util::sampling::{mix64, Rng};
 
 const SEEDS: u64 = 1024;
 
@@ -28,8 +28,13 @@ fn scene() -> crate::scene::Scene {
 
 /// For each of 16 hits: the exact sum's luminance, and the mean and
 /// standard error over `SEEDS` seeds of the luminance of its estimate from
-/// its block's draws, MIS-weighted by `weight`.
-fn estimates(weight: impl Fn(usize, &[f64]) -> f64 + Copy) -> Vec<(f64, f64, f64)> {
+/// its block's draws, MIS-weighted by `weight`; the block's hits drawing
+/// with the renderer's stratified [`block_sample`]s when `stratified`,
+/// else each with numbers of its own. The hits are those of random pixels
+/// of a 32 x 24 film (blocks spread over surfaces of every orientation), or
+/// with `neighbours` of 2 x 2 pixel blocks at random corners of a 160 x 120
+/// film (blocks as rendered).
+fn estimates(weight: impl Fn(usize, &[f64]) -> f64 + Copy, stratified: bool, neighbours: bool) -> Vec<(f64, f64, f64)> {
     let scene = scene();
     let lights = Lights::from_scene(&scene);
     let device = Device::try_new().unwrap();
@@ -37,13 +42,22 @@ fn estimates(weight: impl Fn(usize, &[f64]) -> f64 + Copy) -> Vec<(f64, f64, f64
     let trees = crate::lightcut::build_trees(std::slice::from_ref(&lights), 5);
     // A small cut, so that most of the estimate is sampled.
     let settings = CutSettings { error: 0.1, max_cut: 8, pixel_cut: false, ..STOCHASTIC_DEFAULTS };
-    let camera = scene.camera(32, 24);
+    let (width, height) = if neighbours { (160, 120) } else { (32, 24) };
+    let camera = scene.camera(width, height);
     let mut pixel = Rng::seeded(11);
     let mut points: Vec<SurfacePoint<'_>> = Vec::new();
     while points.len() < 4 * BLOCK {
-        let ray = camera.ray(pixel.range_f32(0.0, 32.0), pixel.range_f32(0.0, 24.0));
-        if let Some(hit) = geometry.embree.intersect(&ray) {
-            points.push(geometry.surface(&ray, &hit));
+        let (x, y) = (pixel.range_f32(0.0, width as f32 - 1.0), pixel.range_f32(0.0, height as f32 - 1.0));
+        let pixels = if neighbours {
+            let (x, y) = (x.floor() + 0.5, y.floor() + 0.5);
+            vec![(x, y), (x + 1.0, y), (x, y + 1.0), (x + 1.0, y + 1.0)]
+        } else {
+            vec![(x, y)]
+        };
+        let rays: Vec<_> = pixels.iter().map(|&(x, y)| camera.ray(x, y)).collect();
+        let hits: Vec<_> = rays.iter().filter_map(|ray| geometry.embree.intersect(ray).map(|hit| (ray, hit))).collect();
+        if hits.len() == pixels.len() {
+            points.extend(hits.iter().map(|(ray, hit)| geometry.surface(ray, hit)));
         }
     }
     let (mut cut, mut reuse, mut batch) =
@@ -55,9 +69,13 @@ fn estimates(weight: impl Fn(usize, &[f64]) -> f64 + Copy) -> Vec<(f64, f64, f64
         let mut sums = vec![Vec::new(); BLOCK];
         for seed in 0..SEEDS {
             let mut results = vec![CutResult::default(); BLOCK];
+            let block_key = mix64(seed ^ mix64(rows.len() as u64));
             for (k, sp) in block.iter().enumerate() {
                 let mut rng = Rng::from_key(&[seed, rows.len() as u64, k as u64]);
-                results[k] = draw_lights(&trees, sp, &geometry.embree, &settings, &mut rng, &mut cut, 0, &mut drawn[k]);
+                let mut sp = sp.clone();
+                sp.sample = stratified.then(|| block_sample(block_key, BLOCK, k, 0, 1));
+                results[k] =
+                    draw_lights(&trees, &sp, &geometry.embree, &settings, &mut rng, &mut cut, 0, &mut drawn[k]);
             }
             estimate_with(&evaluators, &drawn, &geometry.embree, &mut results, &mut reuse, weight);
             for (sum, result) in sums.iter_mut().zip(&results) {
@@ -81,15 +99,34 @@ fn biased_points(rows: &[(f64, f64, f64)]) -> usize {
     rows.iter().filter(|(exact, mean, se)| (mean - exact).abs() > 4.0 * se + 1e-9 * exact.abs()).count()
 }
 
+/// Reuse is unbiased with the block's stratified numbers (as rendered)
+/// and with every hit's own, for blocks spread over the scene and for
+/// blocks of neighbouring pixels; and the stratified numbers have the
+/// smaller variance (summed over the hits, relative to each hit's exact
+/// sum; every hit put in one stratum, tried by hand, has the larger).
 #[test]
-fn reuse_between_hits_is_unbiased() {
-    let rows = estimates(balance);
-    assert!(rows.iter().filter(|r| r.2 > 0.0).count() >= 8, "most points must be sampled: {rows:?}");
-    assert_eq!(biased_points(&rows), 0, "(exact, mean, standard error) per point: {rows:?}");
+fn reuse_between_hits_is_unbiased_and_stratified_draws_lower_its_variance() {
+    let relative_variance =
+        |rows: &[(f64, f64, f64)]| rows.iter().filter(|r| r.0 > 0.0).map(|(e, _, se)| (se / e).powi(2)).sum::<f64>();
+    let mut variances = Vec::new();
+    for neighbours in [false, true] {
+        for stratified in [true, false] {
+            let rows = estimates(balance, stratified, neighbours);
+            assert!(rows.iter().filter(|r| r.2 > 0.0).count() >= 8, "most points must be sampled: {rows:?}");
+            let said =
+                format!("neighbours {neighbours}, stratified {stratified}: (exact, mean, standard error) {rows:?}");
+            assert_eq!(biased_points(&rows), 0, "{said}");
+            variances.push(relative_variance(&rows));
+        }
+    }
+    eprintln!("summed relative variance, stratified against own numbers: {variances:?}");
+    for (layout, pair) in ["spread", "neighbours"].iter().zip(variances.chunks(2)) {
+        assert!(pair[0] < pair[1], "{layout}: stratified {}, own numbers {}", pair[0], pair[1]);
+    }
 }
 
 #[test]
 fn equal_shares_for_every_hit_are_caught() {
-    let rows = estimates(|_, luminances| 1.0 / luminances.len() as f64);
+    let rows = estimates(|_, luminances| 1.0 / luminances.len() as f64, true, false);
     assert!(biased_points(&rows) > 0, "(exact, mean, standard error) per point: {rows:?}");
 }
