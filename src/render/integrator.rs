@@ -51,9 +51,17 @@ const STOCHASTIC_STREAM: u64 = 0x5107_c4a5;
 /// its samples.
 const PIXEL_SAMPLE_STREAM: u64 = 0x91c5_e15a;
 
-/// The key of a reuse block's shifts (`Integrator::block_sample`), apart
+/// The key of a reuse block's shifts (`reuse_block_key`), apart
 /// from its pixels' (`PIXEL_SAMPLE_STREAM`).
 const REUSE_STREAM: u64 = 0x4e05_e0b1;
+
+/// The key of the stratified set of the reuse block (of edge `block`)
+/// holding the pixel of sample key `key` (`lightcut::reuse::block_sample`):
+/// the seed and the block's corner, so the same for any tile split.
+fn reuse_block_key(block: u32, [seed, x, y, _]: SampleKey) -> u64 {
+    let block = u64::from(block);
+    Rng::from_key(&[seed, x / block * block, y / block * block, block, REUSE_STREAM]).next_u64()
+}
 
 /// Keeps the suns' directions apart from the other streams of a sample's
 /// shading point.
@@ -439,12 +447,14 @@ impl<'a> Integrator<'a> {
         let n = rays.len();
         scratch.reuse_cuts.resize_with(n, StochasticScratch::default);
         scratch.reuse_drawn.resize_with(n, Choices::default);
+        let block_key = reuse_block_key(settings.reuse_block, keys[0]);
         let mut points = Vec::with_capacity(n);
         for (k, (ray, &key)) in rays.iter_mut().zip(keys).enumerate() {
             let mut point =
                 self.first_hit(ray).map(|hit| self.vertex(ray, &hit, key, 0).0).filter(|sp| !sp.material.unlit);
             if let Some(sp) = &mut point {
-                sp.sample = Some(self.block_sample(settings.reuse_block, keys, k));
+                // The block's stratified set (design §10.11).
+                sp.sample = Some(lightcut::reuse::block_sample(block_key, n, k, key[3] as u32, self.spp));
             }
             points.push(point);
         }
@@ -473,17 +483,6 @@ impl<'a> Integrator<'a> {
             stats.cut_nanos += (start.elapsed().as_nanos() as u64).saturating_sub(embree);
         }
         points.iter().zip(results).map(|(p, r)| p.as_ref().map(|sp| (sp.distance, r))).collect()
-    }
-
-    /// The pixel sample of hit `k` of a reuse block of edge `block`, its
-    /// hits' keys `keys` (corner first): the block's stratified set
-    /// (`lightcut::reuse::block_sample`), keyed by the seed and the
-    /// block's corner.
-    fn block_sample(&self, block: u32, keys: &[SampleKey], k: usize) -> PixelSample {
-        let [seed, x, y, _] = keys[0];
-        let block = u64::from(block);
-        let key = Rng::from_key(&[seed, x / block * block, y / block * block, block, REUSE_STREAM]).next_u64();
-        lightcut::reuse::block_sample(key, keys.len(), k, keys[k][3] as u32, self.spp)
     }
 
     /// The pixel sample of a camera path's `depth`-th vertex: its pixel's
