@@ -19,12 +19,20 @@
 //! X_q(c) is 0 gets weight 0 (its walk may not reach c), and the weights
 //! sum to 1 wherever some hit's X_j(c) > 0, in particular wherever
 //! X_p(c) > 0.
+//!
+//! The weights are p's own: the sums run over the hits on p's surface
+//! ([`same_surfaces`]), p among them, and the other hits' draws do not
+//! light p. Any set of techniques that holds p's own gives p an unbiased
+//! estimate, and luminance stands for probability only between points
+//! whose cuts are alike: a sphere point beside a floor point (a moving
+//! object's blur mixes them over whole blocks) drew from a cut of
+//! another shape, and its draws came into the floor with large weights.
 use glam::DVec3;
 
 use super::CutResult;
 use crate::embree::{PacketWidth, Scene as EmbreeScene};
 use crate::shading::evaluate::{evaluate_into, trace_evaluations};
-use crate::shading::{Choices, Evaluations, LightEvaluator};
+use crate::shading::{Choices, Evaluations, LightEvaluator, SurfaceKey, SurfacePoint};
 use crate::util::color::luminance64;
 use crate::util::sampling::PixelSample;
 
@@ -41,6 +49,26 @@ pub fn block_sample(block_key: u64, hits: usize, k: usize, index: u32, spp: u32)
     PixelSample { pixel: block_key, index: index * n + k as u32, count: spp.max(1) * n }
 }
 
+/// Which hits of a block light which (design §10.11): entry p n + q is
+/// whether hit q's draws light hit p, true where both are on one surface
+/// ([`SurfaceKey::holds`]: the same material, normals within 0.9 in
+/// cosine, distances from the viewer within 1.1), so a hit on the sliding
+/// sphere lights no floor hit beside it. Symmetric, and true from a hit to
+/// itself; false where a pixel hit nothing.
+#[must_use]
+pub fn same_surfaces(points: &[Option<&SurfacePoint<'_>>]) -> Vec<bool> {
+    let material = |sp: &SurfacePoint<'_>| std::ptr::from_ref(sp.material) as usize;
+    let keys: Vec<_> = points.iter().map(|p| p.map(|sp| SurfaceKey::of(material(sp), sp))).collect();
+    let mut same = Vec::with_capacity(points.len() * points.len());
+    for point in points {
+        same.extend(keys.iter().map(|key| match (point, key) {
+            (Some(sp), Some(key)) => key.holds(material(sp), sp),
+            _ => false,
+        }));
+    }
+    same
+}
+
 /// Reusable buffers of [`estimate`].
 #[derive(Default)]
 pub struct ReuseScratch {
@@ -51,6 +79,8 @@ pub struct ReuseScratch {
     values: Vec<Vec<DVec3>>,
     /// One drawn light's luminance at every hit.
     at_hits: Vec<f64>,
+    /// `at_hits` at the hits on a receiver's surface (0 elsewhere).
+    masked: Vec<f64>,
 }
 
 /// The renderer's MIS weight of hit q's drawn light given its unoccluded
@@ -66,26 +96,30 @@ pub fn balance(q: usize, luminances: &[f64]) -> f64 {
     }
 }
 
-/// Lights every hit of a block by every hit's draws: `drawn[q]` are hit
-/// q's drawn lights (weights included), `evaluators[p]` hit p's evaluator
-/// (None: the pixel's camera ray hit nothing to shade), and each drawn
-/// light's value at p, times its MIS weight, is added to `results[p]`'s
-/// radiance and credited to its group's slot; p's shadow rays too.
-/// Deterministic: the sums run in the order of q, then of q's draws.
+/// Lights every hit of a block by the draws of the hits on its surface:
+/// `drawn[q]` are hit q's drawn lights (weights included), `evaluators[p]`
+/// hit p's evaluator (None: the pixel's camera ray hit nothing to shade),
+/// `same_surface` is [`same_surfaces`]' matrix, and each drawn light's
+/// value at p, times its MIS weight over the hits on p's surface, is added
+/// to `results[p]`'s radiance and credited to its group's slot; p's shadow
+/// rays too. Deterministic: the sums run in the order of q, then of q's
+/// draws.
 pub fn estimate(
     evaluators: &[Option<LightEvaluator<'_, '_>>],
+    same_surface: &[bool],
     drawn: &[Choices],
     embree: &EmbreeScene,
     results: &mut [CutResult],
     scratch: &mut ReuseScratch,
 ) {
-    estimate_with(evaluators, drawn, embree, results, scratch, balance);
+    estimate_with(evaluators, same_surface, drawn, embree, results, scratch, balance);
 }
 
 /// [`estimate`] with the MIS weight given as `weight(q, luminances)` (the
 /// renderer's is [`balance`]; tests pass wrong ones).
 pub(crate) fn estimate_with(
     evaluators: &[Option<LightEvaluator<'_, '_>>],
+    same_surface: &[bool],
     drawn: &[Choices],
     embree: &EmbreeScene,
     results: &mut [CutResult],
@@ -93,7 +127,9 @@ pub(crate) fn estimate_with(
     weight: impl Fn(usize, &[f64]) -> f64,
 ) {
     let n = evaluators.len();
-    let ReuseScratch { evaluations, luminances, values, at_hits } = scratch;
+    let ReuseScratch { evaluations, luminances, values, at_hits, masked } = scratch;
+    masked.resize(n, 0.0);
+    let one_surface = same_surface.iter().all(|&same| same);
     luminances.resize_with(n, Vec::new);
     values.resize_with(n, Vec::new);
     at_hits.resize(n, 0.0);
@@ -108,24 +144,36 @@ pub(crate) fn estimate_with(
             evaluations.clear();
             evaluate_into(evaluator, lights, evaluations);
             luminances[p].extend(evaluations.values().iter().map(|&v| luminance64(v)));
-            let (traced, rays) = trace_evaluations(embree, PacketWidth::Sixteen, evaluations);
-            values[p].extend_from_slice(traced);
-            results[p].shadow_rays += rays;
+            // Every hit's unoccluded luminance enters the weights of the
+            // hits on its surface; only a hit on q's surface traces q's draws.
+            if same_surface[p * n + q] {
+                let (traced, rays) = trace_evaluations(embree, PacketWidth::Sixteen, evaluations);
+                values[p].extend_from_slice(traced);
+                results[p].shadow_rays += rays;
+            }
         }
         for (c, slot) in lights.slots().enumerate() {
             for (l, at) in at_hits.iter_mut().zip(luminances.iter()) {
                 *l = at.get(c).copied().unwrap_or(0.0);
             }
-            let m = weight(q, at_hits);
-            if m == 0.0 {
-                continue;
-            }
-            for (result, at) in results.iter_mut().zip(values.iter()) {
-                if let Some(&value) = at.get(c) {
-                    let value = value * m;
-                    result.radiance += value;
-                    result.credit(slot as usize, value);
+            // One weight for every hit when the block is one surface.
+            let shared = one_surface.then(|| weight(q, at_hits));
+            // p has values of q's draws only when q is on its surface.
+            for (p, (result, at)) in results.iter_mut().zip(values.iter()).enumerate() {
+                let Some(&value) = at.get(c) else { continue };
+                let m = shared.unwrap_or_else(|| {
+                    let row = &same_surface[p * n..(p + 1) * n];
+                    for ((m, &l), &same) in masked.iter_mut().zip(at_hits.iter()).zip(row) {
+                        *m = if same { l } else { 0.0 };
+                    }
+                    weight(q, masked)
+                });
+                if m == 0.0 {
+                    continue;
                 }
+                let value = value * m;
+                result.radiance += value;
+                result.credit(slot as usize, value);
             }
         }
     }

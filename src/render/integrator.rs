@@ -474,9 +474,19 @@ impl<'a> Integrator<'a> {
             results.push(found);
         }
         let evaluators: Vec<_> = points.iter().map(|p| p.as_ref().map(LightEvaluator::new)).collect();
+        let same = lightcut::reuse::same_surfaces(&points.iter().map(Option::as_ref).collect::<Vec<_>>());
         crate::util::simd::best(
             #[inline(always)]
-            || lightcut::reuse::estimate(&evaluators, &scratch.reuse_drawn, embree, &mut results, &mut scratch.reuse),
+            || {
+                lightcut::reuse::estimate(
+                    &evaluators,
+                    &same,
+                    &scratch.reuse_drawn,
+                    embree,
+                    &mut results,
+                    &mut scratch.reuse,
+                )
+            },
         );
         if let Some((start, embree_before)) = timed {
             let embree = crate::embree::thread_timed_nanos() - embree_before;

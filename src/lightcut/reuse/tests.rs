@@ -2,7 +2,9 @@
 //! blocks of four, the mean over 1,024 seeds of each hit's estimate from
 //! its block's draws equals its exact sum within 4 standard errors; MIS
 //! weights that give every hit of the block the same share (1/4, which sums
-//! to 1 only for lights every hit can draw) fail the same test.
+//! to 1 only for lights every hit can draw) fail the same test, and so do
+//! weights summed over all four hits where only the hits on a hit's
+//! surface light it (tried by hand).
 use super::*;
 use crate::embree::Device;
 use crate::light::Lights;
@@ -33,8 +35,14 @@ fn scene() -> crate::scene::Scene {
 /// else each with numbers of its own. The hits are those of random pixels
 /// of a 32 x 24 film (blocks spread over surfaces of every orientation), or
 /// with `neighbours` of 2 x 2 pixel blocks at random corners of a 160 x 120
-/// film (blocks as rendered).
-fn estimates(weight: impl Fn(usize, &[f64]) -> f64 + Copy, stratified: bool, neighbours: bool) -> Vec<(f64, f64, f64)> {
+/// film (blocks as rendered). Each hit is lit by the hits on its surface
+/// ([`same_surfaces`], as rendered), or with `every_hit` by all four.
+fn estimates(
+    weight: impl Fn(usize, &[f64]) -> f64 + Copy,
+    stratified: bool,
+    neighbours: bool,
+    every_hit: bool,
+) -> Vec<(f64, f64, f64)> {
     let scene = scene();
     let lights = Lights::from_scene(&scene);
     let device = Device::try_new().unwrap();
@@ -66,6 +74,11 @@ fn estimates(weight: impl Fn(usize, &[f64]) -> f64 + Copy, stratified: bool, nei
     let mut rows = Vec::new();
     for block in points.chunks(BLOCK) {
         let evaluators: Vec<_> = block.iter().map(|sp| Some(LightEvaluator::new(sp))).collect();
+        let same = if every_hit {
+            vec![true; BLOCK * BLOCK]
+        } else {
+            same_surfaces(&block.iter().map(Some).collect::<Vec<_>>())
+        };
         let mut sums = vec![Vec::new(); BLOCK];
         for seed in 0..SEEDS {
             let mut results = vec![CutResult::default(); BLOCK];
@@ -77,7 +90,7 @@ fn estimates(weight: impl Fn(usize, &[f64]) -> f64 + Copy, stratified: bool, nei
                 results[k] =
                     draw_lights(&trees, &sp, &geometry.embree, &settings, &mut rng, &mut cut, 0, &mut drawn[k]);
             }
-            estimate_with(&evaluators, &drawn, &geometry.embree, &mut results, &mut reuse, weight);
+            estimate_with(&evaluators, &same, &drawn, &geometry.embree, &mut results, &mut reuse, weight);
             for (sum, result) in sums.iter_mut().zip(&results) {
                 sum.push(luminance64(result.radiance));
             }
@@ -111,7 +124,7 @@ fn reuse_between_hits_is_unbiased_and_stratified_draws_lower_its_variance() {
     let mut variances = Vec::new();
     for neighbours in [false, true] {
         for stratified in [true, false] {
-            let rows = estimates(balance, stratified, neighbours);
+            let rows = estimates(balance, stratified, neighbours, false);
             assert!(rows.iter().filter(|r| r.2 > 0.0).count() >= 8, "most points must be sampled: {rows:?}");
             let said =
                 format!("neighbours {neighbours}, stratified {stratified}: (exact, mean, standard error) {rows:?}");
@@ -127,6 +140,21 @@ fn reuse_between_hits_is_unbiased_and_stratified_draws_lower_its_variance() {
 
 #[test]
 fn equal_shares_for_every_hit_are_caught() {
-    let rows = estimates(|_, luminances| 1.0 / luminances.len() as f64, true, false);
+    let rows = estimates(|_, luminances| 1.0 / luminances.len() as f64, true, false, false);
     assert!(biased_points(&rows) > 0, "(exact, mean, standard error) per point: {rows:?}");
+}
+
+/// Every hit lit by all four hits' draws (the weights over all four) is
+/// unbiased too; hits on other surfaces left out (as rendered) has the
+/// smaller variance on blocks spread over surfaces of every orientation.
+#[test]
+fn hits_on_other_surfaces_left_out() {
+    let relative_variance =
+        |rows: &[(f64, f64, f64)]| rows.iter().filter(|r| r.0 > 0.0).map(|(e, _, se)| (se / e).powi(2)).sum::<f64>();
+    let every = estimates(balance, true, false, true);
+    assert_eq!(biased_points(&every), 0, "(exact, mean, standard error) per point: {every:?}");
+    let own = estimates(balance, true, false, false);
+    assert_eq!(biased_points(&own), 0, "(exact, mean, standard error) per point: {own:?}");
+    let (every, own) = (relative_variance(&every), relative_variance(&own));
+    assert!(own < every, "summed relative variance: every hit {every}, same surface {own}");
 }
