@@ -57,12 +57,11 @@ pub fn block_sample(block_key: u64, hits: usize, k: usize, index: u32, spp: u32)
 /// itself; false where a pixel hit nothing.
 #[must_use]
 pub fn same_surfaces(points: &[Option<&SurfacePoint<'_>>]) -> Vec<bool> {
-    let material = |sp: &SurfacePoint<'_>| std::ptr::from_ref(sp.material) as usize;
-    let keys: Vec<_> = points.iter().map(|p| p.map(|sp| SurfaceKey::of(material(sp), sp))).collect();
+    let keys: Vec<_> = points.iter().map(|p| p.map(|sp| SurfaceKey::of(sp.material_address(), sp))).collect();
     let mut same = Vec::with_capacity(points.len() * points.len());
     for point in points {
         same.extend(keys.iter().map(|key| match (point, key) {
-            (Some(sp), Some(key)) => key.holds(material(sp), sp),
+            (Some(sp), Some(key)) => key.holds(sp.material_address(), sp),
             _ => false,
         }));
     }

@@ -600,7 +600,7 @@ fn pixel_cut(
     let trees_from = range.start;
     let kept = &mut scratch.pixel_cuts;
     kept.follow(sample);
-    let material = std::ptr::from_ref(sp.material) as usize;
+    let material = sp.material_address();
     let surface = kept.surfaces.iter().position(|key| key.holds_within(material, sp, PIXEL_CUT_NORMAL_COS));
     if let Some(s) = surface {
         if let Some((_, _, nodes)) = kept.cuts.iter().find(|(on, from, _)| *on == s && *from == trees_from) {

@@ -87,6 +87,13 @@ impl<'m> SurfacePoint<'m> {
 }
 
 impl SurfacePoint<'_> {
+    /// Its material's identity for [`SurfaceKey`]: the material's address
+    /// (points of one material share it).
+    #[must_use]
+    pub fn material_address(&self) -> usize {
+        std::ptr::from_ref(self.material) as usize
+    }
+
     /// Origin for rays leaving the surface on the viewer's side.
     #[must_use]
     pub fn offset_origin(&self) -> Vec3 {

@@ -517,9 +517,8 @@ fn check_pixel_cut(cut_draws: usize) {
     }
     let points: Vec<[SurfacePoint<'_>; 2]> =
         pairs.iter().map(|((a, ha), (b, hb))| [geometry.surface(a, ha), geometry.surface(b, hb)]).collect();
-    let address = |sp: &SurfacePoint<'_>| std::ptr::from_ref(sp.material) as usize;
     let fits = |[a, b]: &[SurfacePoint<'_>; 2]| {
-        SurfaceKey::of(address(a), a).holds_within(address(b), b, PIXEL_CUT_NORMAL_COS)
+        SurfaceKey::of(a.material_address(), a).holds_within(b.material_address(), b, PIXEL_CUT_NORMAL_COS)
     };
     let (same, other): (Vec<_>, Vec<_>) = points.iter().partition(|pair| fits(pair));
     assert!(same.len() >= 16 && other.len() >= 4, "pairs on one surface {}, on two {}", same.len(), other.len());
