@@ -332,7 +332,7 @@ fn draw_through(
         return None;
     }
     let (cut_nodes, kept) = match sp.sample.filter(|_| settings.pixel_cut) {
-        Some(sample) => pixel_cut(trees, range, sp, settings, bounds, scratch, sample),
+        Some(sample) => pixel_cut(at, range, scratch, sample),
         None => (choose_cut(trees, range, settings, bounds, scratch), None),
     };
     result.nodes += cut_nodes as u64;
@@ -349,7 +349,7 @@ fn draw_through(
                 cut.clear();
                 cut.extend(nodes.iter().filter(|n| n.in_cut));
                 cdf.clear();
-                cut_distribution(cut, cdf);
+                cut_distribution(trees, importance, cut, cdf);
                 (&cut[..], &cdf[..])
             }
         };
@@ -411,7 +411,7 @@ fn draw(
 
 /// Draws `draws` lights per shading point over the whole cut (design
 /// §10.10) instead of one per node: node k of `cut` is taken with the
-/// probability q_k that `cdf` accumulates (its importance at the point the
+/// probability q_k that `cdf` accumulates (its walks' weight at the point the
 /// cut was chosen for, mixed with a uniform share), at `draws` numbers
 /// u_m = (m + u) / draws that stratify [0, 1) (systematic sampling: each
 /// u_m is uniform on its stratum, so the mean of the draws' estimates is
@@ -466,24 +466,43 @@ fn draw_over_cut(
 /// The share of the probability of drawing a cut node that is spread
 /// evenly over the cut's nodes when lights are drawn over the whole cut
 /// (design §10.10): every node stays possible at a later sample of the
-/// pixel whose point sees a node the first sample's bounds gave 0.
-/// 0.02, 0.1 and 0.3 measured alike on `scenes/dof.toml` at 256 spp.
+/// pixel whose point sees a node the first sample's weights gave 0.
+/// 0.02, 0.1 and 0.3 measured alike on `scenes/dof.toml` at 256 spp; with
+/// the walks' weights, 0.03 and 0.1 alike on the motion window and 0.3
+/// worse (docs/measurements.md, "A cut's draws by the walks' weights").
 const UNIFORM_SHARE: f64 = 0.1;
 
 /// The cumulative probabilities of drawing each of `cut`'s nodes, appended
-/// to `cdf`: q_k = (1 - s) I_k / sum I + s / n, s = [`UNIFORM_SHARE`]
-/// (uniform where every importance is 0); the last is exactly 1.
-fn cut_distribution(cut: &[Node], cdf: &mut Vec<f64>) {
+/// to `cdf`: q_k = (1 - s) W_k / sum W + s / n, s = [`UNIFORM_SHARE`]
+/// (uniform where every W is 0); the last is exactly 1. W_k is the walks'
+/// weight of node k at the point (`importance`, design §10.5: G at the
+/// box's centre), not the bound that chose the cut: a bound's 1 / d_min^2
+/// is far above the contribution of a node near the point, which then
+/// took draws from the nodes that light it (design §10.10).
+#[inline(always)]
+fn cut_distribution(trees: &LightTrees, importance: &impl Importance, cut: &[Node], cdf: &mut Vec<f64>) {
+    let start = cdf.len();
+    // Two nodes of one tree weighed in one evaluation (a block's weights
+    // do not depend on the block it is paired with).
+    let mut k = 0;
+    while k < cut.len() {
+        let (a, b) = (cut[k], cut.get(k + 1).copied().filter(|b| b.tree == cut[k].tree));
+        let tree = &trees.trees[a.tree as usize];
+        let blocks = [a.block, b.unwrap_or(a).block].map(|block| block as usize);
+        let [wa, wb] = importance(tree, blocks);
+        let finite = |w: f32| f64::from(if w.is_finite() { w } else { f32::MAX });
+        cdf.push(finite(wa[a.slot as usize]));
+        if let Some(b) = b {
+            cdf.push(finite(wb[b.slot as usize]));
+        }
+        k += 1 + usize::from(b.is_some());
+    }
     let n = cut.len() as f64;
-    let total: f64 = cut.iter().map(|node| f64::from(node.importance)).sum();
+    let total: f64 = cdf[start..].iter().sum();
     let mut sum = 0.0;
-    for node in cut {
-        sum += if total > 0.0 {
-            (1.0 - UNIFORM_SHARE) * f64::from(node.importance) / total + UNIFORM_SHARE / n
-        } else {
-            1.0 / n
-        };
-        cdf.push(sum);
+    for w in &mut cdf[start..] {
+        sum += if total > 0.0 { (1.0 - UNIFORM_SHARE) * *w / total + UNIFORM_SHARE / n } else { 1.0 / n };
+        *w = sum;
     }
     if let Some(last) = cdf.last_mut() {
         *last = 1.0;
@@ -589,14 +608,12 @@ fn choose_cut(
 /// kept (otherwise the cut is `scratch.nodes`' `in_cut` nodes).
 #[inline(always)]
 fn pixel_cut(
-    trees: &LightTrees,
+    at: &AtPoint<'_, '_, impl Importance>,
     range: std::ops::Range<usize>,
-    sp: &SurfacePoint<'_>,
-    settings: &CutSettings,
-    bounds: &PointBounds,
     scratch: &mut StochasticScratch,
     sample: PixelSample,
 ) -> (usize, Option<std::ops::Range<usize>>) {
+    let AtPoint { trees, sp, settings, bounds, importance, .. } = *at;
     let trees_from = range.start;
     let kept = &mut scratch.pixel_cuts;
     kept.follow(sample);
@@ -629,7 +646,7 @@ fn pixel_cut(
     if settings.cut_draws == 0 {
         return (size, None);
     }
-    cut_distribution(&kept.nodes[nodes.clone()], &mut kept.cdf);
+    cut_distribution(trees, importance, &kept.nodes[nodes.clone()], &mut kept.cdf);
     (size, Some(nodes))
 }
 

@@ -498,6 +498,52 @@ fn a_pixel_cut_drawn_over_serves_its_later_samples_unbiasedly_and_a_partial_one_
     check_pixel_cut(1);
 }
 
+/// The distribution of draws over the cut (design §10.10) is the walks'
+/// weights W_k, each node weighed alone, mixed with the uniform share; not
+/// the bounds that chose the cut (which at many of these points give it
+/// other probabilities: the test fails if the bounds are used, or if a
+/// paired evaluation hands a node its neighbour's weight).
+#[test]
+fn draws_over_the_cut_follow_the_walks_weights() {
+    let settings = CutSettings { error: 0.02, max_cut: 64, ..CutSettings::default() };
+    let (mut differ, mut checked) = (0, 0);
+    for lights in [OMNI, ORIENTED] {
+        with_points(&scene(lights), 16, |_, _, trees, sp| {
+            let bounds = PointBounds::new(sp, trees.scale);
+            let importance = walk_importance(&bounds);
+            let mut scratch = StochasticScratch::default();
+            choose_cut(trees, 0..trees.trees.len(), &settings, &bounds, &mut scratch);
+            let cut: Vec<Node> = scratch.nodes.iter().filter(|n| n.in_cut).copied().collect();
+            if cut.len() < 3 {
+                return; // a point no light reaches keeps the roots
+            }
+            checked += 1;
+            let mut cdf = Vec::new();
+            cut_distribution(trees, &importance, &cut, &mut cdf);
+            let alone: Vec<f64> = cut
+                .iter()
+                .map(|n| {
+                    let [w, _] = importance(&trees.trees[n.tree as usize], [n.block as usize; 2]);
+                    f64::from(w[n.slot as usize])
+                })
+                .collect();
+            let (total, n) = (alone.iter().sum::<f64>(), cut.len() as f64);
+            let bound_total: f64 = cut.iter().map(|n| f64::from(n.importance)).sum();
+            let mut low = 0.0;
+            for (k, node) in cut.iter().enumerate() {
+                let q = cdf[k] - low;
+                low = cdf[k];
+                let expected = (1.0 - UNIFORM_SHARE) * alone[k] / total + UNIFORM_SHARE / n;
+                assert!((q - expected).abs() <= 1e-9, "node {k}: q {q}, the walks' weight gives {expected}");
+                let by_bound = (1.0 - UNIFORM_SHARE) * f64::from(node.importance) / bound_total + UNIFORM_SHARE / n;
+                differ += usize::from((by_bound - expected).abs() > 1e-3);
+            }
+        });
+    }
+    assert!(checked >= 24, "most points must have cuts to draw over: {checked} of 32");
+    assert!(differ > 0, "the bounds must give some node another probability, or the test shows nothing");
+}
+
 fn check_pixel_cut(cut_draws: usize) {
     let settings = CutSettings { error: 0.1, max_cut: 8, pixel_cut: true, cut_draws, ..CutSettings::default() };
     let scene = scene(OMNI);
