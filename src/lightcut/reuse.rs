@@ -27,7 +27,6 @@
 //! whose cuts are alike: a sphere point beside a floor point (a moving
 //! object's blur mixes them over whole blocks) drew from a cut of
 //! another shape, and its draws came into the floor with large weights.
-use glam::DVec3;
 
 use super::CutResult;
 use crate::embree::{PacketWidth, Scene as EmbreeScene};
@@ -71,11 +70,18 @@ pub fn same_surfaces(points: &[Option<&SurfacePoint<'_>>]) -> Vec<bool> {
 /// Reusable buffers of [`estimate`].
 #[derive(Default)]
 pub struct ReuseScratch {
-    evaluations: Evaluations,
-    /// Per hit of the block: the luminance of each of one hit's drawn
-    /// lights there, unoccluded, and its value there with visibility.
+    /// Every hit's draws in one list, and the hit that drew each.
+    block: Choices,
+    drawn_by: Vec<usize>,
+    /// Per hit of the block: every drawn light's value there (unoccluded
+    /// until traced) and its shadow ray.
+    evaluations: Vec<Evaluations>,
+    /// Per hit: the luminance of every drawn light there, unoccluded.
     luminances: Vec<Vec<f64>>,
-    values: Vec<Vec<DVec3>>,
+    /// Per drawn light: its MIS weight, the same at every hit when the
+    /// block is one surface (`shared`), and at the hit being lit.
+    shared: Vec<f64>,
+    weights: Vec<f64>,
     /// One drawn light's luminance at every hit.
     at_hits: Vec<f64>,
     /// `at_hits` at the hits on a receiver's surface (0 elsewhere).
@@ -101,8 +107,8 @@ pub fn balance(q: usize, luminances: &[f64]) -> f64 {
 /// `same_surface` is [`same_surfaces`]' matrix, and each drawn light's
 /// value at p, times its MIS weight over the hits on p's surface, is added
 /// to `results[p]`'s radiance and credited to its group's slot; p's shadow
-/// rays too. Deterministic: the sums run in the order of q, then of q's
-/// draws.
+/// rays too. Deterministic: each hit's sum runs in the order of q, then
+/// of q's draws.
 pub fn estimate(
     evaluators: &[Option<LightEvaluator<'_, '_>>],
     same_surface: &[bool],
@@ -126,54 +132,77 @@ pub(crate) fn estimate_with(
     weight: impl Fn(usize, &[f64]) -> f64,
 ) {
     let n = evaluators.len();
-    let ReuseScratch { evaluations, luminances, values, at_hits, masked } = scratch;
-    masked.resize(n, 0.0);
-    let one_surface = same_surface.iter().all(|&same| same);
-    luminances.resize_with(n, Vec::new);
-    values.resize_with(n, Vec::new);
-    at_hits.resize(n, 0.0);
+    let ReuseScratch { block, drawn_by, evaluations, luminances, shared, weights, at_hits, masked } = scratch;
+    // The block's draws in one list, in the order of q then of q's draws,
+    // packed into full quads: each hit evaluates them all in one pass and
+    // traces its rays as full packets.
+    block.clear();
+    drawn_by.clear();
     for (q, lights) in drawn.iter().enumerate() {
-        if lights.is_empty() {
+        block.append_packed(lights);
+        drawn_by.extend(std::iter::repeat_n(q, lights.len()));
+    }
+    evaluations.resize_with(n, Evaluations::default);
+    luminances.resize_with(n, Vec::new);
+    for (p, evaluator) in evaluators.iter().enumerate() {
+        evaluations[p].clear();
+        luminances[p].clear();
+        if let Some(evaluator) = evaluator {
+            evaluate_into(evaluator, block, &mut evaluations[p]);
+            luminances[p].extend(evaluations[p].values().iter().map(|&v| luminance64(v)));
+        }
+    }
+    // Every hit's unoccluded luminance enters the weights of the hits on
+    // its surface: one weight per draw for every hit when the block is one
+    // surface.
+    let one_surface = same_surface.iter().all(|&same| same);
+    at_hits.resize(n, 0.0);
+    masked.resize(n, 0.0);
+    let luminances_of = |entry: usize, at_hits: &mut [f64]| {
+        for (l, at) in at_hits.iter_mut().zip(luminances.iter()) {
+            *l = at.get(entry).copied().unwrap_or(0.0);
+        }
+    };
+    shared.clear();
+    if one_surface {
+        for (entry, &q) in drawn_by.iter().enumerate() {
+            luminances_of(entry, at_hits);
+            shared.push(weight(q, at_hits));
+        }
+    }
+    for (p, result) in results.iter_mut().enumerate() {
+        if evaluators[p].is_none() {
             continue;
         }
-        for (p, evaluator) in evaluators.iter().enumerate() {
-            luminances[p].clear();
-            values[p].clear();
-            let Some(evaluator) = evaluator else { continue };
-            evaluations.clear();
-            evaluate_into(evaluator, lights, evaluations);
-            luminances[p].extend(evaluations.values().iter().map(|&v| luminance64(v)));
-            // Every hit's unoccluded luminance enters the weights of the
-            // hits on its surface; only a hit on q's surface traces q's draws.
-            if same_surface[p * n + q] {
-                let (traced, rays) = trace_evaluations(embree, PacketWidth::Sixteen, evaluations);
-                values[p].extend_from_slice(traced);
-                results[p].shadow_rays += rays;
-            }
-        }
-        for (c, slot) in lights.slots().enumerate() {
-            for (l, at) in at_hits.iter_mut().zip(luminances.iter()) {
-                *l = at.get(c).copied().unwrap_or(0.0);
-            }
-            // One weight for every hit when the block is one surface.
-            let shared = one_surface.then(|| weight(q, at_hits));
-            // p has values of q's draws only when q is on its surface.
-            for (p, (result, at)) in results.iter_mut().zip(values.iter()).enumerate() {
-                let Some(&value) = at.get(c) else { continue };
-                let m = shared.unwrap_or_else(|| {
-                    let row = &same_surface[p * n..(p + 1) * n];
-                    for ((m, &l), &same) in masked.iter_mut().zip(at_hits.iter()).zip(row) {
-                        *m = if same { l } else { 0.0 };
-                    }
-                    weight(q, masked)
-                });
-                if m == 0.0 {
+        // p's weight of each draw: 0 for those of hits off p's surface.
+        weights.clear();
+        if one_surface {
+            weights.extend_from_slice(shared);
+        } else {
+            let row = &same_surface[p * n..(p + 1) * n];
+            for (entry, &q) in drawn_by.iter().enumerate() {
+                if !row[q] {
+                    weights.push(0.0);
                     continue;
                 }
-                let value = value * m;
-                result.radiance += value;
-                result.credit(slot as usize, value);
+                luminances_of(entry, at_hits);
+                for ((m, &l), &same) in masked.iter_mut().zip(at_hits.iter()).zip(row) {
+                    *m = if same { l } else { 0.0 };
+                }
+                weights.push(weight(q, masked));
             }
+        }
+        let evaluations = &mut evaluations[p];
+        evaluations.scale_values(|entry| weights[entry]);
+        evaluations.keep_rays(|entry| weights[entry] != 0.0);
+        let (values, rays) = trace_evaluations(embree, PacketWidth::Sixteen, evaluations);
+        result.shadow_rays += rays;
+        for ((value, &m), slot) in values.iter().zip(weights.iter()).zip(block.slots()) {
+            if m == 0.0 {
+                continue;
+            }
+            result.radiance += *value;
+            result.credit(slot as usize, *value);
         }
     }
 }

@@ -58,6 +58,27 @@ impl Lanes {
         true
     }
 
+    /// Puts lane `lane` of `from` in the next lane; false when all four are
+    /// taken. Each lane is evaluated on its own, so a light gives the same
+    /// value in any lane of any quad.
+    #[inline(always)]
+    pub fn push_lane(&mut self, from: &Lanes, lane: usize) -> bool {
+        let k = self.count;
+        if k >= 4 {
+            return false;
+        }
+        for axis in 0..3 {
+            self.point[axis][k] = from.point[axis][lane];
+            self.normal[axis][k] = from.normal[axis][lane];
+            self.edges[0][axis][k] = from.edges[0][axis][lane];
+            self.edges[1][axis][k] = from.edges[1][axis][lane];
+        }
+        self.spread[0][k] = from.spread[0][lane];
+        self.spread[1][k] = from.spread[1][lane];
+        self.count = k + 1;
+        true
+    }
+
     /// The lanes' points, each area light's drawn on its triangle
     /// (uniform by area): for a camera path's point, point `index` of its
     /// pixel's stratified set, rotated by a shift of the pixel and the

@@ -69,6 +69,36 @@ impl Choices {
     /// credited to (a light group).
     #[inline(always)]
     pub fn push(&mut self, kind: LightKind, light: &TreeLight, weight: DVec3, slot: u32) {
+        self.start_quad(kind);
+        let quad = &mut self.quads[self.used - 1];
+        let k = quad.lanes.count & 3;
+        quad.weights[k] = weight;
+        quad.slots[k] = slot;
+        quad.lanes.push(light);
+        self.len += 1;
+    }
+
+    /// Appends `other`'s lights after these, in order, filling every quad
+    /// of one kind before starting the next (as [`Choices::push`] does), so
+    /// several points' few draws are evaluated in full quads.
+    pub fn append_packed(&mut self, other: &Choices) {
+        for quad in &other.quads[..other.used] {
+            for k in 0..quad.lanes.count {
+                self.start_quad(quad.kind);
+                let last = &mut self.quads[self.used - 1];
+                let lane = last.lanes.count;
+                last.weights[lane] = quad.weights[k];
+                last.slots[lane] = quad.slots[k];
+                last.lanes.push_lane(&quad.lanes, k);
+                self.len += 1;
+            }
+        }
+    }
+
+    /// Makes the last quad in use one of `kind` with a free lane: a new one
+    /// when the last is full or of another kind.
+    #[inline(always)]
+    fn start_quad(&mut self, kind: LightKind) {
         let full = self.used == 0 || {
             let last = &self.quads[self.used - 1];
             last.lanes.count == 4 || last.kind != kind
@@ -82,12 +112,6 @@ impl Choices {
             quad.lanes.count = 0;
             self.used += 1;
         }
-        let quad = &mut self.quads[self.used - 1];
-        let k = quad.lanes.count & 3;
-        quad.weights[k] = weight;
-        quad.slots[k] = slot;
-        quad.lanes.push(light);
-        self.len += 1;
     }
 
     /// Appends `other`'s lights after these, in order.
@@ -101,6 +125,12 @@ impl Choices {
             self.used += 1;
         }
         self.len += other.len;
+    }
+
+    /// The kind of each chosen light, in order.
+    #[cfg(test)]
+    pub(crate) fn kinds(&self) -> impl Iterator<Item = LightKind> + '_ {
+        self.quads[..self.used].iter().flat_map(|q| std::iter::repeat_n(q.kind, q.lanes.count))
     }
 
     /// The slot of each chosen light, in order.
@@ -171,6 +201,28 @@ impl Evaluations {
     #[must_use]
     pub fn values(&self) -> &[DVec3] {
         &self.values
+    }
+
+    /// Multiplies each value by `scale(index)`.
+    pub fn scale_values(&mut self, scale: impl Fn(usize) -> f64) {
+        for (index, value) in self.values.iter_mut().enumerate() {
+            *value *= scale(index);
+        }
+    }
+
+    /// Before [`trace_evaluations`]: drops the shadow rays of the values
+    /// for which `keep(index)` is false (their values stay unoccluded).
+    pub fn keep_rays(&mut self, mut keep: impl FnMut(usize) -> bool) {
+        let mut kept = 0;
+        for i in 0..self.rays.len() {
+            if keep(self.ray_entry[i] as usize) {
+                self.rays[kept] = self.rays[i];
+                self.ray_entry[kept] = self.ray_entry[i];
+                kept += 1;
+            }
+        }
+        self.rays.truncate(kept);
+        self.ray_entry.truncate(kept);
     }
 
     pub fn clear(&mut self) {

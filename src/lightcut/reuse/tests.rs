@@ -158,3 +158,41 @@ fn hits_on_other_surfaces_left_out() {
     let (every, own) = (relative_variance(&every), relative_variance(&own));
     assert!(own < every, "summed relative variance: every hit {every}, same surface {own}");
 }
+
+/// `estimate` evaluates the block's draws packed into full quads, lanes
+/// moved from one hit's quads to another's: every light keeps the value
+/// and slot it has in its own hit's quads, bit for bit, under point and
+/// oriented lights mixed (a new quad wherever the kind changes).
+#[test]
+fn packed_draws_keep_every_value() {
+    let scene = stochastic_tests::scene(&format!("{}{}", stochastic_tests::OMNI, stochastic_tests::ORIENTED));
+    let settings = CutSettings { error: 0.3, max_cut: 6, pixel_cut: false, ..STOCHASTIC_DEFAULTS };
+    let (mut moved, mut kinds_mixed) = (0, 0);
+    let mut seed = 0;
+    stochastic_tests::with_points(&scene, 16, |_, geometry, trees, sp| {
+        let mut cut = StochasticScratch::default();
+        let mut drawn: Vec<Choices> = (0..BLOCK).map(|_| Choices::default()).collect();
+        for lights in &mut drawn {
+            seed += 1;
+            draw_lights(trees, sp, &geometry.embree, &settings, &mut Rng::seeded(seed), &mut cut, 0, lights);
+        }
+        let evaluator = LightEvaluator::new(sp);
+        let (mut own, mut packed, mut block) = (Evaluations::default(), Evaluations::default(), Choices::default());
+        for lights in &drawn {
+            evaluate_into(&evaluator, lights, &mut own);
+            block.append_packed(lights);
+        }
+        evaluate_into(&evaluator, &block, &mut packed);
+        let own_slots: Vec<u32> = drawn.iter().flat_map(Choices::slots).collect();
+        assert_eq!(block.slots().collect::<Vec<_>>(), own_slots);
+        let bits = |e: &Evaluations| e.values().iter().map(|v| v.to_array().map(f64::to_bits)).collect::<Vec<_>>();
+        assert_eq!(bits(&packed), bits(&own));
+        assert_eq!(packed.traced().count(), own.traced().count(), "the same shadow rays");
+        moved += usize::from(drawn.iter().any(|lights| lights.len() % 4 != 0) && block.len() > 4);
+        let kinds: Vec<_> = drawn.iter().flat_map(Choices::kinds).collect();
+        assert_eq!(block.kinds().collect::<Vec<_>>(), kinds);
+        kinds_mixed += usize::from(kinds.iter().any(|&kind| kind != kinds[0]));
+    });
+    assert!(moved >= 8, "most points must move lanes between quads: {moved} of 16");
+    assert!(kinds_mixed >= 4, "some points must draw lights of both kinds: {kinds_mixed} of 16");
+}

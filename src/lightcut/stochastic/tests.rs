@@ -49,7 +49,7 @@ count = [10, 3]
 intensity = [0.2, 0.1, 0.05]
 "#;
 
-const ORIENTED: &str = r#"
+pub(in crate::lightcut) const ORIENTED: &str = r#"
 [[lights]]
 type = "area"
 corner = [-1.5, 3, -1.5]
@@ -100,7 +100,7 @@ fn spots() -> String {
 
 /// The shading points of the tests: `count` points seen through seeded
 /// pixels, with the scene's lights, Embree geometry and light trees.
-fn with_points(
+pub(in crate::lightcut) fn with_points(
     scene: &Scene,
     count: usize,
     mut check: impl FnMut(&Lights, &Geometry<'_>, &LightTrees, &SurfacePoint<'_>),
