@@ -35,7 +35,8 @@ What it does:
    ray each, at 16 samples per pixel, seed 1 where the renders under test
    use seed 0, so that no render shares its camera samples), then each setting of each renderer,
    timing whole processes (pbrt-v4's time includes parsing its 10,000 light
-   statements; ours includes loading and the tree build).
+   statements; ours includes loading and the tree build), each the median
+   of --repeat runs (default 1).
 4. Measures each image's mean relative error in luminance on smooth pixels
    (those whose 3x3 neighbourhood in the reference varies by at most 5%:
    no silhouette, no hard shadow edge, where neither renderer's pixel
@@ -271,13 +272,17 @@ def smooth_pixels(reference):
     return (lo > 0) & (hi <= 1.05 * lo)
 
 
-def timed(command):
-    start = time.monotonic()
-    result = subprocess.run(command, capture_output=True, text=True)
-    elapsed = time.monotonic() - start
-    if result.returncode != 0:
-        sys.exit(f'{" ".join(command)} failed:\n{result.stdout}\n{result.stderr}')
-    return elapsed
+def timed(command, repeat=1):
+    """The whole process's wall time: the median of `repeat` runs (one
+    slow or lucky run of a 0.1 s render must not decide a ratio)."""
+    times = []
+    for _ in range(repeat):
+        start = time.monotonic()
+        result = subprocess.run(command, capture_output=True, text=True)
+        times.append(time.monotonic() - start)
+        if result.returncode != 0:
+            sys.exit(f'{" ".join(command)} failed:\n{result.stdout}\n{result.stderr}')
+    return sorted(times)[len(times) // 2]
 
 
 def time_for(points, target, unbiased):
@@ -312,6 +317,7 @@ def main():
     parser.add_argument('--reference-spp', type=int, default=16)
     parser.add_argument('--threads', type=int, default=2)
     parser.add_argument('--target', type=float, default=0.01)
+    parser.add_argument('--repeat', type=int, default=1, help='runs per setting, each timed by their median')
     parser.add_argument('--skip-build', action='store_true')
     parser.add_argument('--build-only', action='store_true')
     parser.add_argument('--lightcuts', default=os.path.join(ROOT, 'target', 'release', 'lightcuts'))
@@ -356,16 +362,17 @@ def main():
         image = os.path.abspath(os.path.join(args.out, f'{name}-pbrt-{spp}.exr'))
         source = os.path.join(args.out, f'{name}-{spp}.pbrt')
         write_pbrt(scene, source, width, height, spp, image)
-        seconds = timed([pbrt, '--nthreads', str(args.threads), source])
+        seconds = timed([pbrt, '--nthreads', str(args.threads), source], args.repeat)
         rows.append(('pbrt-v4', f'path maxdepth 1, bvh, {spp} spp', seconds, *error(image)))
         print(rows[-1], file=sys.stderr)
     for setting in args.ours.split(';'):
         image = os.path.join(args.out, f'{name}-ours-{re.sub(r"[^a-z0-9]+", "", setting)}.exr')
-        seconds = timed([args.lightcuts, 'render', twin, '-o', image] + setting.split() + common)
+        seconds = timed([args.lightcuts, 'render', twin, '-o', image] + setting.split() + common, args.repeat)
         rows.append(('lightcuts', setting, seconds, *error(image)))
         print(rows[-1], file=sys.stderr)
 
-    print(f'{name} (Lambertian twin), {args.resolution}, {args.threads} threads; reference: lightcuts '
+    print(f'{name} (Lambertian twin), {args.resolution}, {args.threads} threads, median of {args.repeat} runs; '
+          f'reference: lightcuts '
           f'--exact --spp {args.reference_spp}; {int(smooth.sum())} smooth pixels of {smooth.size}')
     print()
     print('| renderer | setting | time (s) | mean error, smooth pixels | mean luminance / reference |')
