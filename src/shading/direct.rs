@@ -42,20 +42,8 @@ impl Lanes {
     /// four are taken.
     #[inline(always)]
     pub fn push(&mut self, light: &TreeLight) -> bool {
-        let k = self.count;
-        if k >= 4 {
-            return false;
-        }
-        for axis in 0..3 {
-            self.point[axis][k] = light.point[axis];
-            self.normal[axis][k] = light.normal[axis];
-            self.edges[0][axis][k] = light.edges[0][axis];
-            self.edges[1][axis][k] = light.edges[1][axis];
-        }
-        self.spread[0][k] = light.spread[0];
-        self.spread[1][k] = light.spread[1];
-        self.count = k + 1;
-        true
+        let [e0, e1] = light.edges;
+        self.put(light.point.to_array(), light.normal.to_array(), [e0.to_array(), e1.to_array()], light.spread)
     }
 
     /// Puts lane `lane` of `from` in the next lane; false when all four are
@@ -63,18 +51,27 @@ impl Lanes {
     /// value in any lane of any quad.
     #[inline(always)]
     pub fn push_lane(&mut self, from: &Lanes, lane: usize) -> bool {
+        let at = |v: &[[f32; 4]; 3]| v.map(|axis| axis[lane]);
+        let spread = from.spread.map(|s| s[lane]);
+        self.put(at(&from.point), at(&from.normal), [at(&from.edges[0]), at(&from.edges[1])], spread)
+    }
+
+    /// Writes one light's data in the next lane; false when all four are
+    /// taken.
+    #[inline(always)]
+    fn put(&mut self, point: [f32; 3], normal: [f32; 3], edges: [[f32; 3]; 2], spread: [f32; 2]) -> bool {
         let k = self.count;
         if k >= 4 {
             return false;
         }
         for axis in 0..3 {
-            self.point[axis][k] = from.point[axis][lane];
-            self.normal[axis][k] = from.normal[axis][lane];
-            self.edges[0][axis][k] = from.edges[0][axis][lane];
-            self.edges[1][axis][k] = from.edges[1][axis][lane];
+            self.point[axis][k] = point[axis];
+            self.normal[axis][k] = normal[axis];
+            self.edges[0][axis][k] = edges[0][axis];
+            self.edges[1][axis][k] = edges[1][axis];
         }
-        self.spread[0][k] = from.spread[0][lane];
-        self.spread[1][k] = from.spread[1][lane];
+        self.spread[0][k] = spread[0];
+        self.spread[1][k] = spread[1];
         self.count = k + 1;
         true
     }

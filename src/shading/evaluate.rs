@@ -69,13 +69,7 @@ impl Choices {
     /// credited to (a light group).
     #[inline(always)]
     pub fn push(&mut self, kind: LightKind, light: &TreeLight, weight: DVec3, slot: u32) {
-        self.start_quad(kind);
-        let quad = &mut self.quads[self.used - 1];
-        let k = quad.lanes.count & 3;
-        quad.weights[k] = weight;
-        quad.slots[k] = slot;
-        quad.lanes.push(light);
-        self.len += 1;
+        self.push_with(kind, weight, slot, |lanes| lanes.push(light));
     }
 
     /// Appends `other`'s lights after these, in order, filling every quad
@@ -84,21 +78,15 @@ impl Choices {
     pub fn append_packed(&mut self, other: &Choices) {
         for quad in &other.quads[..other.used] {
             for k in 0..quad.lanes.count {
-                self.start_quad(quad.kind);
-                let last = &mut self.quads[self.used - 1];
-                let lane = last.lanes.count;
-                last.weights[lane] = quad.weights[k];
-                last.slots[lane] = quad.slots[k];
-                last.lanes.push_lane(&quad.lanes, k);
-                self.len += 1;
+                self.push_with(quad.kind, quad.weights[k], quad.slots[k], |lanes| lanes.push_lane(&quad.lanes, k));
             }
         }
     }
 
-    /// Makes the last quad in use one of `kind` with a free lane: a new one
-    /// when the last is full or of another kind.
+    /// [`Choices::push`] with the light's data written by `fill` into the
+    /// next lane of the last quad.
     #[inline(always)]
-    fn start_quad(&mut self, kind: LightKind) {
+    fn push_with(&mut self, kind: LightKind, weight: DVec3, slot: u32, fill: impl FnOnce(&mut Lanes) -> bool) {
         let full = self.used == 0 || {
             let last = &self.quads[self.used - 1];
             last.lanes.count == 4 || last.kind != kind
@@ -112,6 +100,12 @@ impl Choices {
             quad.lanes.count = 0;
             self.used += 1;
         }
+        let quad = &mut self.quads[self.used - 1];
+        let k = quad.lanes.count & 3;
+        quad.weights[k] = weight;
+        quad.slots[k] = slot;
+        fill(&mut quad.lanes);
+        self.len += 1;
     }
 
     /// Appends `other`'s lights after these, in order.
