@@ -108,7 +108,9 @@ pub fn balance(q: usize, luminances: &[f64]) -> f64 {
 /// value at p, times its MIS weight over the hits on p's surface, is added
 /// to `results[p]`'s radiance and credited to its group's slot; p's shadow
 /// rays too. Deterministic: each hit's sum runs in the order of q, then
-/// of q's draws.
+/// of q's draws. Inlined into its caller's instruction set (run it under
+/// `util::simd::best`), as every hot path is.
+#[inline(always)]
 pub fn estimate(
     evaluators: &[Option<LightEvaluator<'_, '_>>],
     same_surface: &[bool],
@@ -122,6 +124,7 @@ pub fn estimate(
 
 /// [`estimate`] with the MIS weight given as `weight(q, luminances)` (the
 /// renderer's is [`balance`]; tests pass wrong ones).
+#[inline(always)]
 pub(crate) fn estimate_with(
     evaluators: &[Option<LightEvaluator<'_, '_>>],
     same_surface: &[bool],

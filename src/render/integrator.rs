@@ -115,13 +115,24 @@ pub struct Scratch {
     pub(super) anchors: Anchors,
     /// Reuse between pixels (docs/design.md §10.11): a stochastic cut's
     /// buffers per pixel of a block (each keeps its pixel's cuts over the
-    /// pixel's samples), the block's draws, and the direct light of the
-    /// tile's camera hits found by their blocks, by sample key, with the
-    /// hit's distance.
+    /// pixel's samples), the block's draws, and the tile's camera samples
+    /// as their blocks traced and lit them, by sample key.
     reuse_cuts: Vec<StochasticScratch>,
     reuse_drawn: Vec<Choices>,
     reuse: ReuseScratch,
-    pub(super) reused: HashMap<SampleKey, (f32, CutResult)>,
+    pub(super) reused: HashMap<SampleKey, BlockSample>,
+}
+
+/// A camera sample as its reuse block found it (docs/design.md §10.11):
+/// the camera ray as traced (its start past any culled faces), its first
+/// hit, and the hit's direct light from the trees (None: no hit, or an
+/// unlit one). [`Integrator::trace`] takes the hit rather than trace the
+/// same ray again.
+#[derive(Debug, Clone)]
+pub struct BlockSample {
+    ray: crate::embree::Ray,
+    hit: Option<crate::embree::Hit>,
+    light: Option<CutResult>,
 }
 
 impl Scratch {
@@ -323,7 +334,16 @@ impl<'a> Integrator<'a> {
         // estimation, design.md §6.7).
         let mut sees_emitters = true;
         for depth in 0..vertices {
-            let Some(hit) = self.first_hit(&mut ray) else {
+            // A camera ray its reuse block traced already (design §10.11).
+            let block_hit = if depth == 0 { scratch.reused.get(&sample).map(|b| (b.ray, b.hit)) } else { None };
+            let hit = match block_hit {
+                Some((traced, hit)) => {
+                    ray = traced;
+                    hit
+                }
+                None => self.first_hit(&mut ray),
+            };
+            let Some(hit) = hit else {
                 // The environment, seen directly or in a mirror.
                 let seen_directly = depth == 0;
                 let environment =
@@ -428,19 +448,23 @@ impl<'a> Integrator<'a> {
     /// the camera hits of one pixel block at one sample index, `rays[k]`
     /// the camera ray of the sample of key `keys[k]`. Each hit draws its
     /// stochastic cut's lights, and each is lit by every hit's draws
-    /// (`lightcut::reuse`). Returns, per pixel, the hit's distance and its
-    /// direct light from the trees (None: nothing to shade), as
-    /// [`Integrator::trace`] would find it at that hit with its own cut
-    /// alone, but from all the block's draws.
+    /// (`lightcut::reuse`). Returns, per pixel, its camera ray as traced,
+    /// the ray's first hit, and the hit's direct light from the trees
+    /// (None: nothing to shade), as [`Integrator::trace`] would find it at
+    /// that hit with its own cut alone, but from all the block's draws.
     pub fn reuse_block_light(
         &self,
         rays: &mut [crate::embree::Ray],
         keys: &[SampleKey],
         scratch: &mut Scratch,
         stats: &mut ShadingStats,
-    ) -> Vec<Option<(f32, CutResult)>> {
+    ) -> Vec<BlockSample> {
         let DirectLighting::StochasticLightcuts { trees, settings } = self.direct else {
-            return rays.iter().map(|_| None).collect();
+            let traced = |ray: &mut crate::embree::Ray| {
+                let hit = self.first_hit(ray);
+                BlockSample { ray: *ray, hit, light: None }
+            };
+            return rays.iter_mut().map(traced).collect();
         };
         let timed = crate::embree::timing().then(|| (Instant::now(), crate::embree::thread_timed_nanos()));
         let groups = self.group_slots();
@@ -449,9 +473,11 @@ impl<'a> Integrator<'a> {
         scratch.reuse_drawn.resize_with(n, Choices::default);
         let block_key = reuse_block_key(settings.reuse_block, keys[0]);
         let mut points = Vec::with_capacity(n);
+        let mut hits = Vec::with_capacity(n);
         for (k, (ray, &key)) in rays.iter_mut().zip(keys).enumerate() {
-            let mut point =
-                self.first_hit(ray).map(|hit| self.vertex(ray, &hit, key, 0).0).filter(|sp| !sp.material.unlit);
+            let hit = self.first_hit(ray);
+            hits.push(hit);
+            let mut point = hit.map(|hit| self.vertex(ray, &hit, key, 0).0).filter(|sp| !sp.material.unlit);
             if let Some(sp) = &mut point {
                 // The block's stratified set (design §10.11).
                 sp.sample = Some(lightcut::reuse::block_sample(block_key, n, k, key[3] as u32, self.spp));
@@ -492,7 +518,8 @@ impl<'a> Integrator<'a> {
             let embree = crate::embree::thread_timed_nanos() - embree_before;
             stats.cut_nanos += (start.elapsed().as_nanos() as u64).saturating_sub(embree);
         }
-        points.iter().zip(results).map(|(p, r)| p.as_ref().map(|sp| (sp.distance, r))).collect()
+        let lit = points.iter().zip(results).map(|(p, r)| p.as_ref().map(|_| r));
+        rays.iter().zip(hits).zip(lit).map(|((&ray, hit), light)| BlockSample { ray, hit, light }).collect()
     }
 
     /// The pixel sample of a camera path's `depth`-th vertex: its pixel's
@@ -903,8 +930,7 @@ impl<'a> Integrator<'a> {
                         }
                         None => lightcut::evaluate(trees, sp, embree, &settings, &mut scratch.cut, groups),
                     }
-                } else if let Some((_, found)) =
-                    scratch.reused.remove(&sample).filter(|(distance, _)| depth == 0 && *distance == sp.distance)
+                } else if let Some(found) = scratch.reused.remove(&sample).filter(|_| depth == 0).and_then(|b| b.light)
                 {
                     // Found by the hit's pixel block (design §10.11).
                     found

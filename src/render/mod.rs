@@ -257,7 +257,8 @@ fn render_tile(
             let ray = pixel_ray.sample(s);
             let key = [settings.seed, u64::from(x), u64::from(y), u64::from(s)];
             let sample = integrator.trace(ray, key, settings.transparent, scratch, &mut groups, &mut gathered);
-            stats.camera_rays += 1;
+            // With reuse, the block traced this camera ray and counted it.
+            stats.camera_rays += u64::from(integrator.reuse_block().is_none());
             radiance += sample.radiance;
             opaque += u32::from(sample.opaque);
             pixel_stats.add(&sample.stats);
@@ -353,14 +354,15 @@ impl<'c> PixelRays<'c> {
     }
 }
 
-/// Reuse between pixels (docs/design.md §10.11): the direct light of every
-/// camera hit of `tile`, found by its `block` x `block` pixel block at its
-/// sample index, into `scratch` for [`Integrator::trace`] to take. Blocks
-/// are fixed by the film (their corners at multiples of `block`, cut by its
-/// edges), not by the tile: a tile that holds part of a block casts the
-/// whole block's rays, so each pixel's light is the same in any tile
-/// split. What the other pixels' rays cost counts in the pass's totals
-/// (`stats`), not in a pixel's AOVs. Returns the camera rays cast.
+/// Reuse between pixels (docs/design.md §10.11): every camera sample of
+/// `tile` traced and its hit lit by its `block` x `block` pixel block at
+/// its sample index, into `scratch` for [`Integrator::trace`] to take (so
+/// the pixel loop traces no camera ray again). Blocks are fixed by the
+/// film (their corners at multiples of `block`, cut by its edges), not by
+/// the tile: a tile that holds part of a block casts the whole block's
+/// rays, so each pixel's light is the same in any tile split. What the
+/// other pixels' rays cost counts in the pass's totals (`stats`), not in a
+/// pixel's AOVs. Returns the camera rays cast.
 fn reuse_blocks(
     integrator: &Integrator<'_>,
     camera: &Camera,
@@ -387,8 +389,7 @@ fn reuse_blocks(
                 camera_rays += rays.len() as u64;
                 let found = integrator.reuse_block_light(&mut rays, &keys, scratch, stats);
                 for ((p, key), found) in pixels.iter().zip(keys).zip(found) {
-                    let inside = (tile.x0..tile.x1).contains(&p.x) && (tile.y0..tile.y1).contains(&p.y);
-                    if let (true, Some(found)) = (inside, found) {
+                    if (tile.x0..tile.x1).contains(&p.x) && (tile.y0..tile.y1).contains(&p.y) {
                         scratch.reused.insert(key, found);
                     }
                 }
