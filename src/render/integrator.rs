@@ -6,12 +6,12 @@
 //! finite f32 only when a pixel is stored (`render::film::film_value`, which
 //! counts every non-finite value it meets).
 
-use std::collections::HashMap;
 use std::time::Instant;
 
 use glam::{DVec3, Vec3};
 
 use super::emitter_sampling::{EmitterChoice, EmitterDraw, EmitterSampling};
+use super::film::PixelBounds;
 use crate::light::Lights;
 use crate::light_tree::LightTrees;
 use crate::lightcut::multidimensional::{GatherPoint, GatherScratch};
@@ -120,7 +120,48 @@ pub struct Scratch {
     reuse_cuts: Vec<StochasticScratch>,
     reuse_drawn: Vec<Choices>,
     reuse: ReuseScratch,
-    pub(super) reused: HashMap<SampleKey, BlockSample>,
+    pub(super) reused: BlockSamples,
+}
+
+/// The camera samples of one tile as their reuse blocks found them, a
+/// slot per pixel and sample index of the tile.
+#[derive(Debug, Default)]
+pub struct BlockSamples {
+    tile: Option<PixelBounds>,
+    spp: usize,
+    slots: Vec<Option<BlockSample>>,
+}
+
+impl BlockSamples {
+    /// Empty slots for every sample of `tile` at `spp` samples a pixel.
+    pub fn start(&mut self, tile: PixelBounds, spp: u32) {
+        self.tile = Some(tile);
+        self.spp = spp as usize;
+        self.slots.clear();
+        self.slots.resize(tile.area() * self.spp, None);
+    }
+
+    /// The slot of the sample of key (seed, x, y, s): None outside the tile.
+    fn slot(&mut self, [_, x, y, s]: SampleKey) -> Option<&mut Option<BlockSample>> {
+        let tile = self.tile?;
+        let dx = x.checked_sub(u64::from(tile.x0)).filter(|&dx| dx < u64::from(tile.width()))?;
+        let dy = y.checked_sub(u64::from(tile.y0)).filter(|&dy| dy < u64::from(tile.height()))?;
+        let s = (s < self.spp as u64).then_some(s)?;
+        let index = usize::try_from((dy * u64::from(tile.width()) + dx) * self.spp as u64 + s).ok()?;
+        self.slots.get_mut(index)
+    }
+
+    /// Keeps `sample` for [`Integrator::trace`] (dropped outside the tile).
+    pub fn insert(&mut self, key: SampleKey, sample: BlockSample) {
+        if let Some(slot) = self.slot(key) {
+            *slot = Some(sample);
+        }
+    }
+
+    fn clear(&mut self) {
+        self.tile = None;
+        self.slots.clear();
+    }
 }
 
 /// A camera sample as its reuse block found it (docs/design.md §10.11):
@@ -335,7 +376,11 @@ impl<'a> Integrator<'a> {
         let mut sees_emitters = true;
         for depth in 0..vertices {
             // A camera ray its reuse block traced already (design §10.11).
-            let block_hit = if depth == 0 { scratch.reused.get(&sample).map(|b| (b.ray, b.hit)) } else { None };
+            let block_hit = if depth == 0 {
+                scratch.reused.slot(sample).and_then(|b| b.as_ref()).map(|b| (b.ray, b.hit))
+            } else {
+                None
+            };
             let hit = match block_hit {
                 Some((traced, hit)) => {
                     ray = traced;
@@ -930,7 +975,8 @@ impl<'a> Integrator<'a> {
                         }
                         None => lightcut::evaluate(trees, sp, embree, &settings, &mut scratch.cut, groups),
                     }
-                } else if let Some(found) = scratch.reused.remove(&sample).filter(|_| depth == 0).and_then(|b| b.light)
+                } else if let Some(found) =
+                    scratch.reused.slot(sample).filter(|_| depth == 0).and_then(|b| b.as_mut()?.light.take())
                 {
                     // Found by the hit's pixel block (design §10.11).
                     found

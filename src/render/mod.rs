@@ -374,6 +374,7 @@ fn reuse_blocks(
 ) -> u64 {
     let mut camera_rays = 0;
     let mut pixels = Vec::new();
+    scratch.reused.start(tile, settings.spp);
     for by in (tile.y0 / block * block..tile.y1).step_by(block as usize) {
         for bx in (tile.x0 / block * block..tile.x1).step_by(block as usize) {
             pixels.clear();
@@ -388,10 +389,8 @@ fn reuse_blocks(
                     pixels.iter().map(|p| [settings.seed, u64::from(p.x), u64::from(p.y), u64::from(s)]).collect();
                 camera_rays += rays.len() as u64;
                 let found = integrator.reuse_block_light(&mut rays, &keys, scratch, stats);
-                for ((p, key), found) in pixels.iter().zip(keys).zip(found) {
-                    if (tile.x0..tile.x1).contains(&p.x) && (tile.y0..tile.y1).contains(&p.y) {
-                        scratch.reused.insert(key, found);
-                    }
+                for (key, found) in keys.into_iter().zip(found) {
+                    scratch.reused.insert(key, found);
                 }
             }
         }
