@@ -116,7 +116,7 @@ pub struct Scratch {
     /// Reuse between pixels (docs/design.md §10.11): a stochastic cut's
     /// buffers per pixel of a block (each keeps its pixel's cuts over the
     /// pixel's samples), the block's draws, and the tile's camera samples
-    /// as their blocks traced and lit them, by sample key.
+    /// as their blocks traced and lit them, a slot per pixel and sample.
     reuse_cuts: Vec<StochasticScratch>,
     reuse_drawn: Vec<Choices>,
     reuse: ReuseScratch,
