@@ -94,6 +94,33 @@ impl SurfacePoint<'_> {
         std::ptr::from_ref(self.material) as usize
     }
 
+    /// The least cosine between this point's mirror direction `r` and
+    /// another point's for which the glossy lobe towards a light at the
+    /// other's peak keeps at least 1 / `ratio` of its peak value here
+    /// (docs/design.md §10.9, "The lobe's turn"). Phong's cos(r, l)^n falls
+    /// to cos(delta)^n at delta from its peak: cos delta >= ratio^(-1/n).
+    /// GGX's D falls from its peak by at most (1 + tan^2 theta_h / alpha^2)^2
+    /// at theta_h from the normal, and mirror directions delta apart put a
+    /// light theta_h = delta / 2 off the half-vector's peak: tan^2(delta / 2)
+    /// = (1 - cos delta) / (1 + cos delta) <= a = alpha^2 (sqrt(ratio) - 1),
+    /// so cos delta >= (1 - a) / (1 + a). -1 (any turn) where no glossy lobe
+    /// takes lights (none, or a perfect mirror's).
+    #[must_use]
+    pub fn lobe_turn_cos(&self, ratio: f32) -> f32 {
+        if let Some(pbr) = &self.pbr {
+            if pbr.is_smooth() {
+                return -1.0;
+            }
+            let a = pbr.alpha * pbr.alpha * (ratio.sqrt() - 1.0);
+            return (1.0 - a) / (1.0 + a);
+        }
+        let material = self.material;
+        if material.exponent > 0.0 && material.specular.max_element() > 0.0 {
+            return ratio.powf(-1.0 / material.exponent);
+        }
+        -1.0
+    }
+
     /// Origin for rays leaving the surface on the viewer's side.
     #[must_use]
     pub fn offset_origin(&self) -> Vec3 {
@@ -240,5 +267,46 @@ mod tests {
         // A direction above the surface is left as it is.
         let sp = point(&material, Vec3::Z, wo);
         assert_eq!(sp.mirror_ray().direction, sp.r);
+    }
+
+    /// At the cosine `lobe_turn_cos` returns, a light at one point's peak
+    /// keeps exactly 1 / ratio of the other's peak value for Phong, and
+    /// between cos^4(theta_h) / ratio and 1 / ratio of it for GGX (the
+    /// renderer's own D); a surface with no lobe that takes lights (a
+    /// diffuse one, a perfect mirror) allows any turn.
+    #[test]
+    fn the_lobe_turn_keeps_a_light_at_the_other_peak_within_the_ratio() {
+        use crate::shading::pbr::{distribution_of_sine, Pbr, MIN_ALPHA};
+        use wide::f32x4;
+        let mut phong = Material::diffuse("phong", Albedo::Constant(Vec3::splat(0.5)));
+        phong.specular = Vec3::splat(0.3);
+        for (exponent, ratio) in [(40.0f32, 4.0f32), (500.0, 2.0), (3.0, 16.0)] {
+            phong.exponent = exponent;
+            let c = point(&phong, Vec3::Z, Vec3::Z).lobe_turn_cos(ratio);
+            let kept = f64::from(c).powf(f64::from(exponent));
+            assert!((kept * f64::from(ratio) - 1.0).abs() < 1e-5, "Phong {exponent}: cos^n = {kept} at {c}");
+        }
+        let diffuse = Material::diffuse("diffuse", Albedo::Constant(Vec3::splat(0.5)));
+        assert_eq!(point(&diffuse, Vec3::Z, Vec3::Z).lobe_turn_cos(4.0), -1.0);
+        for roughness in [0.08f32, 0.25, 0.5, 0.9] {
+            let mut sp = point(&diffuse, Vec3::Z, Vec3::Z);
+            sp.pbr = Some(Pbr::new(Vec3::ONE, 1.0, roughness, 1.0, Vec3::ONE));
+            let c = sp.lobe_turn_cos(4.0);
+            let alpha2 = roughness.powi(4);
+            let d = |theta_h: f32| {
+                distribution_of_sine(f32x4::splat(theta_h.sin().powi(2)), f32x4::splat(alpha2)).to_array()[0]
+            };
+            let theta_h = 0.5 * c.acos();
+            let falls = d(0.0) / d(theta_h);
+            let least = 4.0 * theta_h.cos().powi(4);
+            assert!(
+                falls <= 4.0 * 1.001 && falls >= least * 0.999,
+                "roughness {roughness}: D falls {falls}x at {theta_h} rad, not within [{least}, 4]"
+            );
+        }
+        let mut mirror = point(&diffuse, Vec3::Z, Vec3::Z);
+        mirror.pbr = Some(Pbr::new(Vec3::ONE, 1.0, 0.5 * MIN_ALPHA.sqrt(), 1.0, Vec3::ONE));
+        assert!(mirror.pbr.as_ref().unwrap().is_smooth());
+        assert_eq!(mirror.lobe_turn_cos(4.0), -1.0);
     }
 }

@@ -620,7 +620,7 @@ fn check_pixel_cut(cut_draws: usize) {
                     if partial && cut_draws == 0 {
                         // Drop the kept cut's largest node.
                         kept_cut.nodes.remove(largest);
-                        kept_cut.cuts[0].2.end -= 1;
+                        kept_cut.cuts[0].nodes.end -= 1;
                     } else if partial {
                         // Never draw it: its interval of the cdf emptied.
                         kept_cut.cdf[largest] = if largest == 0 { 0.0 } else { kept_cut.cdf[largest - 1] };
@@ -652,4 +652,98 @@ fn check_pixel_cut(cut_draws: usize) {
     assert!(shared_rows.iter().filter(|r| r.2 > 0.0).count() >= 8, "most points must be sampled: {shared_rows:?}");
     assert_eq!(biased_points(&shared_rows), 0, "(exact, mean, standard error) per point: {shared_rows:?}");
     assert!(biased_points(&partial_rows) >= 4, "a partial cut must be caught: {partial_rows:?}");
+}
+
+/// A sharp glossy lobe turns between a pixel's samples (design §10.9,
+/// "The lobe's turn"): with lights drawn over the kept cut, a later sample
+/// whose mirror direction turned past `lobe_turn_cos` draws by the kept
+/// nodes weighed at its own point (the test fails if it draws by the kept
+/// distribution); one within the turn, or on the diffuse floor, by the
+/// kept distribution; and the reweighed draws are unbiased.
+#[test]
+fn a_turned_sharp_lobe_draws_by_its_own_weights_of_the_kept_nodes() {
+    let settings = CutSettings { error: 0.05, max_cut: 64, pixel_cut: true, cut_draws: 2, ..CutSettings::default() };
+    let scene = SceneText::new(32, 24)
+        .camera([0.0, 4.0, 7.0], [0.0, 0.5, 0.0], 55.0)
+        .material("floor", [0.7, 0.7, 0.7], "")
+        .material("metal", [0.9, 0.9, 0.9], "type = \"pbr\"\nmetallic = 1.0\nroughness = 0.2\n")
+        .floor(0.0, 6.0, "floor")
+        .sphere([-0.8, 1.0, 0.0], 1.0, "metal")
+        .raw(OMNI)
+        .load(std::path::Path::new("stochastic.toml"))
+        .unwrap();
+    let lights = Lights::from_scene(&scene);
+    let device = Device::try_new().unwrap();
+    let geometry = Geometry::try_new(&device, &scene, std::slice::from_ref(&lights)).unwrap();
+    let trees = crate::lightcut::build_trees(std::slice::from_ref(&lights), 5);
+    let camera = scene.camera(32, 24);
+    let embree = &geometry.embree;
+    let (mut scratch, mut batch) = (StochasticScratch::default(), BatchBuffers::default());
+    fn at<'a>(sp: &SurfacePoint<'a>, pixel: u64, index: u32) -> SurfacePoint<'a> {
+        SurfacePoint { sample: Some(PixelSample { pixel, index, count: 2 }), ..sp.clone() }
+    }
+    let ids =
+        |nodes: &[Node]| -> Vec<(TreeIndex, u32, u8)> { nodes.iter().map(|n| (n.tree, n.block, n.slot)).collect() };
+    let (mut turned, mut within, mut diffuse) = (0, 0, 0);
+    let mut rows = Vec::new();
+    let mut pixel = Rng::seeded(5);
+    for i in 0..4000u64 {
+        if turned >= 12 && within >= 4 && diffuse >= 8 {
+            break;
+        }
+        let (x, y, shift) = (pixel.range_f32(0.0, 31.0), pixel.range_f32(0.0, 23.0), pixel.range_f32(0.0, 0.4));
+        let [ray_a, ray_b] = [camera.ray(x, y), camera.ray(x + shift, y + shift)];
+        let (Some(hit_a), Some(hit_b)) = (embree.intersect(&ray_a), embree.intersect(&ray_b)) else { continue };
+        let (a, b) = (geometry.surface(&ray_a, &hit_a), geometry.surface(&ray_b, &hit_b));
+        if !SurfaceKey::of(a.material_address(), &a).holds_within(b.material_address(), &b, PIXEL_CUT_NORMAL_COS) {
+            continue;
+        }
+        let lobe = b.pbr.is_some();
+        let turns = b.r.dot(a.r) < b.lobe_turn_cos(LOBE_TURN_RATIO);
+        evaluate(&trees, &at(&a, mix64(i), 0), embree, &settings, &mut Rng::seeded(1), &mut scratch, 0);
+        let kept = ids(&scratch.pixel_cuts.nodes[scratch.pixel_cuts.cuts[0].nodes.clone()]);
+        if kept.len() < 3 {
+            continue; // a point no light reaches keeps the roots
+        }
+        scratch.cut.clear();
+        scratch.cdf.clear();
+        evaluate(&trees, &at(&b, mix64(i), 1), embree, &settings, &mut Rng::seeded(1), &mut scratch, 0);
+        if turns {
+            assert!(lobe, "only a glossy lobe turns");
+            turned += 1;
+            assert_eq!(ids(&scratch.cut), kept, "the turned sample must draw over the kept nodes");
+            let bounds = PointBounds::new(&b, trees.scale);
+            let mut own = Vec::new();
+            cut_distribution(&trees, &walk_importance(&bounds), &scratch.cut, &mut own);
+            assert_eq!(scratch.cdf, own, "the turned sample must weigh the kept nodes at its own point");
+            if rows.len() < 8 {
+                let mut exact = LightBatch::new(embree, &b, &mut batch);
+                lights.for_each(|light| exact.add(&light));
+                let exact = luminance64(exact.finish().radiance);
+                let values: Vec<f64> = (0..SEEDS)
+                    .map(|seed| {
+                        let mut rng = Rng::from_key(&[seed, i]);
+                        evaluate(&trees, &at(&a, mix64(seed), 0), embree, &settings, &mut rng, &mut scratch, 0);
+                        let later =
+                            evaluate(&trees, &at(&b, mix64(seed), 1), embree, &settings, &mut rng, &mut scratch, 0);
+                        luminance64(later.radiance)
+                    })
+                    .collect();
+                let mean = values.iter().sum::<f64>() / SEEDS as f64;
+                let variance = values.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (SEEDS - 1) as f64;
+                rows.push((exact, mean, (variance / SEEDS as f64).sqrt()));
+            }
+        } else {
+            assert!(scratch.cdf.is_empty(), "a sample within the turn must draw by the kept distribution");
+            if lobe {
+                within += 1;
+            } else {
+                diffuse += 1;
+            }
+        }
+    }
+    eprintln!("turned {turned}, within the turn {within}, diffuse {diffuse}; (exact, mean, se): {rows:?}");
+    assert!(turned >= 12 && within >= 4 && diffuse >= 8, "turned {turned}, within {within}, diffuse {diffuse}");
+    assert!(rows.iter().filter(|r| r.0 > 0.0 && r.2 > 0.0).count() >= 4, "most points must be lit: {rows:?}");
+    assert_eq!(biased_points(&rows), 0, "(exact, mean, standard error) per point: {rows:?}");
 }
