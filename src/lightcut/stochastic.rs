@@ -145,7 +145,8 @@ const PIXEL_CUT_NORMAL_COS: f32 = 0.995;
 /// share alone. On `scenes/shiny.toml`'s chrome sphere at 16 spp, three
 /// draws: 13.3% mean error without the test, 4.0% past a fall of 16,
 /// 3.2% past 4, 3.1% past 2 and weighed again at every sample; 4 leaves
-/// every Phong scene's picture as it was (docs/measurements.md, "A sharp
+/// the Phong scenes measured (the motion and dof windows, grid10k, the
+/// atrium) as they were, bit for bit (docs/measurements.md, "A sharp
 /// lobe's turn between a pixel's samples").
 const LOBE_TURN_RATIO: f32 = 4.0;
 
