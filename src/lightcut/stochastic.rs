@@ -187,16 +187,14 @@ struct KeptCut {
 /// What a sample's lights are drawn over when they are drawn over the
 /// cut (`cut_draws` > 0), the cut's nodes and their probabilities.
 enum DrawnOver {
-    /// `StochasticScratch::nodes`' `in_cut` nodes (the cut chosen at this
-    /// point; a kept cut is copied there only without draws over the cut),
-    /// weighed here.
-    Chosen,
+    /// `StochasticScratch::nodes`' `in_cut` nodes, weighed at this point:
+    /// the cut chosen here, or a kept cut copied there (without draws over
+    /// the cut, or where the point's glossy lobe has turned too far from
+    /// the kept point's, [`LOBE_TURN_RATIO`]).
+    Here,
     /// A kept cut's nodes and cumulative probabilities (`PixelCuts::nodes`
     /// and `PixelCuts::cdf`, this range of both).
     Kept(std::ops::Range<usize>),
-    /// A kept cut's nodes, weighed at this point: its glossy lobe has
-    /// turned too far from the kept point's ([`LOBE_TURN_RATIO`]).
-    Reweighed(std::ops::Range<usize>),
 }
 
 impl PixelCuts {
@@ -376,7 +374,7 @@ fn draw_through(
     }
     let (cut_nodes, drawn_over) = match sp.sample.filter(|_| settings.pixel_cut) {
         Some(sample) => pixel_cut(at, range, scratch, sample),
-        None => (choose_cut(trees, range, settings, bounds, scratch), DrawnOver::Chosen),
+        None => (choose_cut(trees, range, settings, bounds, scratch), DrawnOver::Here),
     };
     result.nodes += cut_nodes as u64;
 
@@ -388,14 +386,7 @@ fn draw_through(
         let StochasticScratch { nodes, cut, cdf, pixel_cuts, walks, drawn, .. } = scratch;
         let over = match drawn_over {
             DrawnOver::Kept(r) => (&pixel_cuts.nodes[r.clone()], &pixel_cuts.cdf[r]),
-            DrawnOver::Reweighed(r) => {
-                cut.clear();
-                cut.extend_from_slice(&pixel_cuts.nodes[r]);
-                cdf.clear();
-                cut_distribution(trees, importance, cut, cdf);
-                (&cut[..], &cdf[..])
-            }
-            DrawnOver::Chosen => {
+            DrawnOver::Here => {
                 cut.clear();
                 cut.extend(nodes.iter().filter(|n| n.in_cut));
                 cdf.clear();
@@ -654,10 +645,10 @@ fn choose_cut(
 /// the cut decides only how the lights are shared out among walks, and
 /// each walk draws by the importance at its own point. Returns the cut's
 /// size, and what lights drawn over the cut (`cut_draws` > 0) are drawn
-/// over: a kept cut's nodes with the kept distribution, or weighed again
-/// here where the point's glossy lobe has turned too far from the kept
-/// point's ([`LOBE_TURN_RATIO`]); otherwise the cut is `scratch.nodes`'
-/// `in_cut` nodes.
+/// over: a kept cut's nodes with the kept distribution, unless the point's
+/// glossy lobe has turned too far from the kept point's
+/// ([`LOBE_TURN_RATIO`]); otherwise the cut is `scratch.nodes`' `in_cut`
+/// nodes, weighed here.
 #[inline(always)]
 fn pixel_cut(
     at: &AtPoint<'_, '_, impl Importance>,
@@ -674,13 +665,12 @@ fn pixel_cut(
     if let Some(s) = surface {
         if let Some(cut) = kept.cuts.iter().find(|cut| cut.surface == s && cut.trees_from == trees_from) {
             let nodes = cut.nodes.clone();
-            if settings.cut_draws > 0 {
-                let turned = sp.r.dot(cut.mirror) < sp.lobe_turn_cos(LOBE_TURN_RATIO);
-                return (nodes.len(), if turned { DrawnOver::Reweighed(nodes) } else { DrawnOver::Kept(nodes) });
+            if settings.cut_draws > 0 && sp.r.dot(cut.mirror) >= sp.lobe_turn_cos(LOBE_TURN_RATIO) {
+                return (nodes.len(), DrawnOver::Kept(nodes));
             }
             scratch.nodes.clear();
             scratch.nodes.extend_from_slice(&kept.nodes[nodes]);
-            return (scratch.nodes.len(), DrawnOver::Chosen);
+            return (scratch.nodes.len(), DrawnOver::Here);
         }
     }
     let size = choose_cut(trees, range, settings, bounds, scratch);
@@ -691,14 +681,14 @@ fn pixel_cut(
             kept.surfaces.push(SurfaceKey::of(material, sp));
             kept.surfaces.len() - 1
         }
-        None => return (size, DrawnOver::Chosen),
+        None => return (size, DrawnOver::Here),
     };
     let start = kept.nodes.len();
     kept.nodes.extend(scratch.nodes.iter().filter(|n| n.in_cut));
     let nodes = start..kept.nodes.len();
     kept.cuts.push(KeptCut { surface: s, trees_from, nodes: nodes.clone(), mirror: sp.r });
     if settings.cut_draws == 0 {
-        return (size, DrawnOver::Chosen);
+        return (size, DrawnOver::Here);
     }
     cut_distribution(trees, importance, &kept.nodes[nodes.clone()], &mut kept.cdf);
     (size, DrawnOver::Kept(nodes))

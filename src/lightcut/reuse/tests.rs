@@ -9,9 +9,10 @@ use super::*;
 use crate::embree::Device;
 use crate::light::Lights;
 use crate::lightcut::stochastic::tests as stochastic_tests;
+use crate::lightcut::stochastic::tests::biased_points;
 use crate::lightcut::stochastic::{draw_lights, StochasticScratch, STOCHASTIC_DEFAULTS};
 use crate::lightcut::CutSettings;
-use crate::shading::{BatchBuffers, Geometry, LightBatch, SurfacePoint};
+use crate::shading::{BatchBuffers, Geometry, SurfacePoint};
 use crate::util::sampling::{mix64, Rng};
 
 const SEEDS: u64 = 1024;
@@ -96,20 +97,11 @@ fn estimates(
             }
         }
         for (sp, values) in block.iter().zip(sums) {
-            let mut exact = LightBatch::new(&geometry.embree, sp, &mut batch);
-            lights.for_each(|light| exact.add(&light));
-            let exact = luminance64(exact.finish().radiance);
-            let mean = values.iter().sum::<f64>() / SEEDS as f64;
-            let variance = values.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (SEEDS - 1) as f64;
-            rows.push((exact, mean, (variance / SEEDS as f64).sqrt()));
+            let exact = stochastic_tests::exact_luminance(&lights, &geometry.embree, sp, &mut batch);
+            rows.push(stochastic_tests::row(exact, &values));
         }
     }
     rows
-}
-
-/// Points whose mean is more than 4 standard errors from the exact sum.
-fn biased_points(rows: &[(f64, f64, f64)]) -> usize {
-    rows.iter().filter(|(exact, mean, se)| (mean - exact).abs() > 4.0 * se + 1e-9 * exact.abs()).count()
 }
 
 /// Reuse is unbiased with the block's stratified numbers (as rendered)

@@ -139,9 +139,7 @@ fn estimates_with(scene: &Scene, biased: bool, resampled_rays: usize, cut_draws:
     let (mut scratch, mut batch) = (StochasticScratch::default(), BatchBuffers::default());
     let mut rows = Vec::new();
     with_points(scene, 16, |lights, geometry, trees, sp| {
-        let mut exact = LightBatch::new(&geometry.embree, sp, &mut batch);
-        lights.for_each(|light| exact.add(&light));
-        let exact = luminance64(exact.finish().radiance);
+        let exact = exact_luminance(lights, &geometry.embree, sp, &mut batch);
         let bounds = PointBounds::new(sp, trees.scale);
         let shipped = walk_importance(&bounds);
         let wrong = |tree: &CutTree, blocks: [usize; 2]| {
@@ -164,15 +162,34 @@ fn estimates_with(scene: &Scene, biased: bool, resampled_rays: usize, cut_draws:
                 luminance64(found.radiance)
             })
             .collect();
-        let mean = values.iter().sum::<f64>() / SEEDS as f64;
-        let variance = values.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (SEEDS - 1) as f64;
-        rows.push((exact, mean, (variance / SEEDS as f64).sqrt()));
+        rows.push(row(exact, &values));
     });
     rows
 }
 
+/// The luminance of the exact sum at `sp`: every light, one shadow ray each.
+pub(in crate::lightcut) fn exact_luminance(
+    lights: &Lights,
+    embree: &EmbreeScene,
+    sp: &SurfacePoint<'_>,
+    batch: &mut BatchBuffers,
+) -> f64 {
+    let mut exact = LightBatch::new(embree, sp, batch);
+    lights.for_each(|light| exact.add(&light));
+    luminance64(exact.finish().radiance)
+}
+
+/// (exact, mean, standard error of the mean) of one point's estimates,
+/// one per seed.
+pub(in crate::lightcut) fn row(exact: f64, values: &[f64]) -> (f64, f64, f64) {
+    let n = values.len() as f64;
+    let mean = values.iter().sum::<f64>() / n;
+    let variance = values.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (n - 1.0);
+    (exact, mean, (variance / n).sqrt())
+}
+
 /// Points whose mean is more than 4 standard errors from the exact sum.
-fn biased_points(rows: &[(f64, f64, f64)]) -> usize {
+pub(in crate::lightcut) fn biased_points(rows: &[(f64, f64, f64)]) -> usize {
     rows.iter().filter(|(exact, mean, se)| (mean - exact).abs() > 4.0 * se + 1e-9 * exact.abs()).count()
 }
 
@@ -434,9 +451,7 @@ fn stratified_samples_of_a_pixel_are_unbiased_and_less_noisy() {
     let mut batch = BatchBuffers::default();
     let mut ratios = Vec::new();
     with_points(&scene(OMNI), 8, |lights, geometry, trees, sp| {
-        let mut exact = LightBatch::new(&geometry.embree, sp, &mut batch);
-        lights.for_each(|light| exact.add(&light));
-        let exact = luminance64(exact.finish().radiance);
+        let exact = exact_luminance(lights, &geometry.embree, sp, &mut batch);
         let variance_of = |stratified: bool, scratch: &mut StochasticScratch| {
             let means: Vec<f64> = (0..PIXELS)
                 .map(|pixel| {
@@ -601,9 +616,7 @@ fn check_pixel_cut(cut_draws: usize) {
     }
     let (mut shared_rows, mut partial_rows, mut other_cuts) = (Vec::new(), Vec::new(), 0);
     for (i, [a, b]) in same.iter().take(16).enumerate() {
-        let mut exact = LightBatch::new(embree, b, &mut batch);
-        lights.for_each(|light| exact.add(&light));
-        let exact = luminance64(exact.finish().radiance);
+        let exact = exact_luminance(&lights, embree, b, &mut batch);
         evaluate(&trees, b, embree, &own_settings, &mut Rng::seeded(1), &mut scratch, 0);
         let own = cut_of(&scratch);
         for partial in [false, true] {
@@ -634,13 +647,10 @@ fn check_pixel_cut(cut_draws: usize) {
                     luminance64(later.radiance)
                 })
                 .collect();
-            let mean = values.iter().sum::<f64>() / SEEDS as f64;
-            let variance = values.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (SEEDS - 1) as f64;
-            let row = (exact, mean, (variance / SEEDS as f64).sqrt());
             if partial {
-                partial_rows.push(row)
+                partial_rows.push(row(exact, &values))
             } else {
-                shared_rows.push(row)
+                shared_rows.push(row(exact, &values))
             }
         }
     }
@@ -717,9 +727,7 @@ fn a_turned_sharp_lobe_draws_by_its_own_weights_of_the_kept_nodes() {
             cut_distribution(&trees, &walk_importance(&bounds), &scratch.cut, &mut own);
             assert_eq!(scratch.cdf, own, "the turned sample must weigh the kept nodes at its own point");
             if rows.len() < 8 {
-                let mut exact = LightBatch::new(embree, &b, &mut batch);
-                lights.for_each(|light| exact.add(&light));
-                let exact = luminance64(exact.finish().radiance);
+                let exact = exact_luminance(&lights, embree, &b, &mut batch);
                 let values: Vec<f64> = (0..SEEDS)
                     .map(|seed| {
                         let mut rng = Rng::from_key(&[seed, i]);
@@ -729,9 +737,7 @@ fn a_turned_sharp_lobe_draws_by_its_own_weights_of_the_kept_nodes() {
                         luminance64(later.radiance)
                     })
                     .collect();
-                let mean = values.iter().sum::<f64>() / SEEDS as f64;
-                let variance = values.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (SEEDS - 1) as f64;
-                rows.push((exact, mean, (variance / SEEDS as f64).sqrt()));
+                rows.push(row(exact, &values));
             }
         } else {
             assert!(scratch.cdf.is_empty(), "a sample within the turn must draw by the kept distribution");
