@@ -70,6 +70,22 @@ fn node_key(tree: TreeIndex, block: u32, slot: u8) -> u64 {
     (u64::from(tree) << 40) | (u64::from(block) << 8) | u64::from(slot)
 }
 
+/// The key of the number a cut through the trees from `trees_from` draws
+/// its lights over the cut by ([`PixelSample::number`], design §10.10): apart
+/// from every node's (a tree index sits in lower bits).
+#[inline(always)]
+fn cut_key(trees_from: usize) -> u64 {
+    u64::MAX ^ trees_from as u64
+}
+
+/// The key of the sequence of numbers the `c`-th cut a pixel keeps draws
+/// its lights by ([`PixelSample::in_turn`], design §10.10): apart from
+/// [`cut_key`]'s and every node's.
+#[inline(always)]
+fn kept_cut_key(trees_from: usize, c: usize) -> u64 {
+    cut_key(trees_from) ^ ((c as u64 + 1) << 48)
+}
+
 /// One node of the cut being chosen: slot `slot` of block `block`.
 #[derive(Debug, Clone, Copy)]
 struct Node {
@@ -182,6 +198,9 @@ struct KeptCut {
     nodes: std::ops::Range<usize>,
     /// `SurfacePoint::r` of the point the cut was chosen at.
     mirror: Vec3,
+    /// The samples that have drawn by its distribution so far: the next
+    /// takes that number of the cut's sequence ([`PixelSample::in_turn`]).
+    uses: u32,
 }
 
 /// What a sample's lights are drawn over when they are drawn over the
@@ -193,8 +212,9 @@ enum DrawnOver {
     /// the kept point's, [`LOBE_TURN_RATIO`]).
     Here,
     /// A kept cut's nodes and cumulative probabilities (`PixelCuts::nodes`
-    /// and `PixelCuts::cdf`, this range of both).
-    Kept(std::ops::Range<usize>),
+    /// and `PixelCuts::cdf`, this range of both), and the sample's number
+    /// for its draws: the next of the cut's sequence.
+    Kept(std::ops::Range<usize>, f64),
 }
 
 impl PixelCuts {
@@ -382,16 +402,16 @@ fn draw_through(
     if settings.cut_draws > 0 {
         // One number for the cut's draws, keyed by its first tree (apart
         // from every node's key: the tree index sits in other bits).
-        let u = sample.number(u64::MAX ^ range_start as u64, rng.next_f64());
+        let xi = rng.next_f64();
         let StochasticScratch { nodes, cut, cdf, pixel_cuts, walks, drawn, .. } = scratch;
-        let over = match drawn_over {
-            DrawnOver::Kept(r) => (&pixel_cuts.nodes[r.clone()], &pixel_cuts.cdf[r]),
+        let (over, u) = match drawn_over {
+            DrawnOver::Kept(r, u) => ((&pixel_cuts.nodes[r.clone()], &pixel_cuts.cdf[r]), u),
             DrawnOver::Here => {
                 cut.clear();
                 cut.extend(nodes.iter().filter(|n| n.in_cut));
                 cdf.clear();
                 cut_distribution(trees, importance, cut, cdf);
-                (&cut[..], &cdf[..])
+                ((&cut[..], &cdf[..]), sample.number(cut_key(range_start), xi))
             }
         };
         draw_over_cut(trees, over, u, settings.cut_draws, walks, drawn);
@@ -663,10 +683,13 @@ fn pixel_cut(
     let material = sp.material_address();
     let surface = kept.surfaces.iter().position(|key| key.holds_within(material, sp, PIXEL_CUT_NORMAL_COS));
     if let Some(s) = surface {
-        if let Some(cut) = kept.cuts.iter().find(|cut| cut.surface == s && cut.trees_from == trees_from) {
+        if let Some(c) = kept.cuts.iter().position(|cut| cut.surface == s && cut.trees_from == trees_from) {
+            let cut = &mut kept.cuts[c];
             let nodes = cut.nodes.clone();
             if settings.cut_draws > 0 && sp.r.dot(cut.mirror) >= sp.lobe_turn_cos(LOBE_TURN_RATIO) {
-                return (nodes.len(), DrawnOver::Kept(nodes));
+                let u = sample.in_turn(kept_cut_key(trees_from, c), cut.uses);
+                cut.uses += 1;
+                return (nodes.len(), DrawnOver::Kept(nodes, u));
             }
             scratch.nodes.clear();
             scratch.nodes.extend_from_slice(&kept.nodes[nodes]);
@@ -686,12 +709,13 @@ fn pixel_cut(
     let start = kept.nodes.len();
     kept.nodes.extend(scratch.nodes.iter().filter(|n| n.in_cut));
     let nodes = start..kept.nodes.len();
-    kept.cuts.push(KeptCut { surface: s, trees_from, nodes: nodes.clone(), mirror: sp.r });
+    let u = sample.in_turn(kept_cut_key(trees_from, kept.cuts.len()), 0);
+    kept.cuts.push(KeptCut { surface: s, trees_from, nodes: nodes.clone(), mirror: sp.r, uses: 1 });
     if settings.cut_draws == 0 {
         return (size, DrawnOver::Here);
     }
     cut_distribution(trees, importance, &kept.nodes[nodes.clone()], &mut kept.cdf);
-    (size, DrawnOver::Kept(nodes))
+    (size, DrawnOver::Kept(nodes, u))
 }
 
 /// Adds slots `slots` of block `b` of tree `tree` to the cut; returns the

@@ -127,6 +127,22 @@ impl PixelSample {
         (u - u.floor()).clamp(0.0, ONE_BELOW)
     }
 
+    /// Number `n` of `key`'s sequence at this pixel, for a key that only
+    /// some of the pixel's samples reach, each taking the next number (the
+    /// uses of a cut the pixel keeps for one surface, docs/design.md
+    /// §10.10): the base-2 radical inverse of `n` (van der Corput's
+    /// sequence) rotated by the key's shift. Any first n numbers of the
+    /// sequence leave no gap wider than 2 / n, whichever samples took
+    /// them, where the strata of [`PixelSample::number`] fall wherever the
+    /// samples' indices do; each number is uniform whatever `n` (the shift
+    /// is).
+    #[inline(always)]
+    #[must_use]
+    pub fn in_turn(self, key: u64, n: u32) -> f64 {
+        let u = f64::from(n.reverse_bits()) * (1.0 / 4_294_967_296.0) + self.shift(key).0;
+        (u - u.floor()).clamp(0.0, ONE_BELOW)
+    }
+
     /// A point in [0, 1)^2 for `key`: point `index` of the pixel's `count`
     /// of a Hammersley set rotated by the key's shift ([`hammersley`]).
     #[inline(always)]
@@ -197,6 +213,45 @@ pub fn concentric_disc(u: [f32; 2]) -> [f32; 2] {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Any first n numbers of a key's sequence, shifted back, leave no gap
+    /// wider than 2 / n on the circle [0, 1) (n / N, the strata of
+    /// `number` taken by n consecutive indices of N, leave one of 1 - n / N);
+    /// and number n is uniform over pixels for every n (64 bins within 5
+    /// standard errors).
+    #[test]
+    fn a_sequence_taken_in_turn_spreads_and_each_number_is_uniform() {
+        const PIXELS: u64 = 65_536;
+        const BINS: usize = 64;
+        const TAKEN: u32 = 24;
+        let mut histograms = vec![[0u64; BINS]; TAKEN as usize];
+        for pixel in 0..PIXELS {
+            let sample = PixelSample { pixel: mix64(pixel), index: 0, count: 256 };
+            let shift = sample.in_turn(7, 0);
+            let mut points = Vec::new();
+            for n in 0..TAKEN {
+                let u = sample.in_turn(7, n);
+                assert!((0.0..1.0).contains(&u), "{u}");
+                histograms[n as usize][(u * BINS as f64) as usize] += 1;
+                if pixel < 64 {
+                    points.push((u - shift).rem_euclid(1.0));
+                    points.sort_by(f64::total_cmp);
+                    let gaps =
+                        points.windows(2).map(|w| w[1] - w[0]).chain([1.0 - points[points.len() - 1] + points[0]]);
+                    let widest = gaps.fold(0.0, f64::max);
+                    let k = points.len() as f64;
+                    assert!(widest <= 2.0 / k + 1e-12, "pixel {pixel}: the first {k} leave a gap of {widest}");
+                }
+            }
+        }
+        let expected = PIXELS as f64 / BINS as f64;
+        for (n, histogram) in histograms.iter().enumerate() {
+            for (bin, &count) in histogram.iter().enumerate() {
+                let deviation = (count as f64 - expected) / expected.sqrt();
+                assert!(deviation.abs() < 5.0, "number {n}, bin {bin}: {count} against {expected}");
+            }
+        }
+    }
 
     #[test]
     fn hammersley_points_fill_every_stratum_once_and_map_into_the_disc() {

@@ -492,6 +492,66 @@ fn stratified_samples_of_a_pixel_are_unbiased_and_less_noisy() {
     assert!(pooled < 0.5, "variance of stratified over independent pixels, per point: {ratios:?}");
 }
 
+/// A kept cut's draws (design §10.10) take its sequence in turn
+/// ([`PixelSample::in_turn`]), not the strata of the samples' indices:
+/// 16 samples of a 256-sample pixel at one point, indices 0 to 15 (the
+/// samples a moving object leaves on one surface need not spread over the
+/// pixel's indices; these take a sixteenth of the strata), one light drawn
+/// over the kept cut each. Their mean is the exact sum on average over
+/// pixels, and its variance is below half that of 16 independent draws;
+/// drawn by the indices' strata, the 16 numbers fall within a sixteenth
+/// of [0, 1) and the variance is above the independent draws', so the test
+/// fails without the sequence.
+#[test]
+fn a_kept_cuts_draws_take_its_sequence_in_turn() {
+    const PIXELS: u64 = 512;
+    const USES: u32 = 16;
+    let settings = CutSettings { error: 0.1, max_cut: 8, pixel_cut: true, cut_draws: 1, ..CutSettings::default() };
+    let mut scratch = StochasticScratch::default();
+    let mut batch = BatchBuffers::default();
+    let mut ratios = Vec::new();
+    with_points(&scene(OMNI), 8, |lights, geometry, trees, sp| {
+        let exact = exact_luminance(lights, &geometry.embree, sp, &mut batch);
+        let variance_of = |kept: bool, scratch: &mut StochasticScratch| {
+            let means: Vec<f64> = (0..PIXELS)
+                .map(|pixel| {
+                    (0..USES)
+                        .map(|index| {
+                            let mut rng = Rng::from_key(&[pixel, u64::from(index)]);
+                            let sample = if kept {
+                                PixelSample { pixel, index, count: 256 }
+                            } else {
+                                PixelSample { pixel: mix64(pixel * 64 + u64::from(index)), index: 0, count: 1 }
+                            };
+                            let sp = SurfacePoint { sample: Some(sample), ..sp.clone() };
+                            let found = evaluate(trees, &sp, &geometry.embree, &settings, &mut rng, scratch, 0);
+                            luminance64(found.radiance)
+                        })
+                        .sum::<f64>()
+                        / f64::from(USES)
+                })
+                .collect();
+            let mean = means.iter().sum::<f64>() / PIXELS as f64;
+            let variance = means.iter().map(|m| (m - mean).powi(2)).sum::<f64>() / (PIXELS - 1) as f64;
+            (mean, variance)
+        };
+        let (mean, variance) = variance_of(true, &mut scratch);
+        let (independent_mean, independent) = variance_of(false, &mut scratch);
+        if independent == 0.0 {
+            return; // every light of this point is in exact nodes
+        }
+        for (m, v) in [(mean, variance), (independent_mean, independent)] {
+            let se = (v / PIXELS as f64).sqrt();
+            assert!((m - exact).abs() <= 4.0 * se + 1e-9 * exact, "mean {m} against {exact} (standard error {se})");
+        }
+        ratios.push(variance / independent);
+    });
+    assert!(ratios.len() >= 4, "most points must be sampled: {ratios:?}");
+    let pooled = ratios.iter().sum::<f64>() / ratios.len() as f64;
+    eprintln!("variance of a kept cut's sequence over independent draws: mean {pooled:.3}, per point {ratios:.3?}");
+    assert!(pooled < 0.5, "variance of a kept cut's sequence over independent draws, per point: {ratios:?}");
+}
+
 /// A pixel's cut (design §10.9) chosen at one shading point A (the
 /// pixel's first sample) and walked at another, B (its second), 1.4
 /// pixels away on the same surface: at 16 such pairs B's mean over
