@@ -400,8 +400,10 @@ fn draw_through(
 
     let sample = sp.sample.unwrap_or(PixelSample::ALONE);
     if settings.cut_draws > 0 {
-        // One number for the cut's draws, keyed by its first tree (apart
-        // from every node's key: the tree index sits in other bits).
+        // One number for the cut's draws: a kept cut's is the next of its
+        // own sequence (design §10.10); a cut weighed here takes the pixel
+        // sample's, keyed by its first tree. `xi` is drawn either way, so
+        // the sample's later numbers do not depend on which.
         let xi = rng.next_f64();
         let StochasticScratch { nodes, cut, cdf, pixel_cuts, walks, drawn, .. } = scratch;
         let (over, u) = match drawn_over {
@@ -709,13 +711,14 @@ fn pixel_cut(
     let start = kept.nodes.len();
     kept.nodes.extend(scratch.nodes.iter().filter(|n| n.in_cut));
     let nodes = start..kept.nodes.len();
-    let u = sample.in_turn(kept_cut_key(trees_from, kept.cuts.len()), 0);
+    let c = kept.cuts.len();
     kept.cuts.push(KeptCut { surface: s, trees_from, nodes: nodes.clone(), mirror: sp.r, uses: 1 });
     if settings.cut_draws == 0 {
         return (size, DrawnOver::Here);
     }
     cut_distribution(trees, importance, &kept.nodes[nodes.clone()], &mut kept.cdf);
-    (size, DrawnOver::Kept(nodes, u))
+    // The first number of the cut's sequence: this sample is its first use.
+    (size, DrawnOver::Kept(nodes, sample.in_turn(kept_cut_key(trees_from, c), 0)))
 }
 
 /// Adds slots `slots` of block `b` of tree `tree` to the cut; returns the
