@@ -444,37 +444,54 @@ fn stratified_numbers_are_uniform_and_one_per_stratum() {
 /// numbers (a new pixel key per sample) give the sixteenth, and are caught.
 #[test]
 fn stratified_samples_of_a_pixel_are_unbiased_and_less_noisy() {
-    const PIXELS: u64 = 512;
     const SPP: u32 = 16;
     let settings = CutSettings { error: 0.1, max_cut: 8, ..CutSettings::default() };
+    let ratios = variance_ratios(&settings, SPP, |pixel, index| PixelSample { pixel, index, count: SPP });
+    assert!(ratios.len() >= 4, "most points must be sampled: {ratios:?}");
+    // Pooled over the points: the stratified pixels' variance is well below
+    // the independent ones'.
+    let pooled = ratios.iter().sum::<f64>() / ratios.len() as f64;
+    eprintln!("variance of stratified over independent pixels: mean {pooled:.3}, per point {ratios:.3?}");
+    assert!(pooled < 0.5, "variance of stratified over independent pixels, per point: {ratios:?}");
+}
+
+/// At 8 shading points, a pixel's mean over `spp` samples, each numbered by
+/// `sample(pixel, index)`, and over `spp` independent samples (a new pixel
+/// key per sample), each over 512 pixels: both means must be the exact sum
+/// within 4 standard errors. Returns the variance of the first over the
+/// second's, per point with any sampled light.
+fn variance_ratios(settings: &CutSettings, spp: u32, sample: impl Fn(u64, u32) -> PixelSample) -> Vec<f64> {
+    const PIXELS: u64 = 512;
     let mut scratch = StochasticScratch::default();
     let mut batch = BatchBuffers::default();
     let mut ratios = Vec::new();
     with_points(&scene(OMNI), 8, |lights, geometry, trees, sp| {
         let exact = exact_luminance(lights, &geometry.embree, sp, &mut batch);
-        let variance_of = |stratified: bool, scratch: &mut StochasticScratch| {
+        let variance_of = |independent: bool, scratch: &mut StochasticScratch| {
             let means: Vec<f64> = (0..PIXELS)
                 .map(|pixel| {
-                    (0..SPP)
+                    (0..spp)
                         .map(|index| {
                             let mut rng = Rng::from_key(&[pixel, u64::from(index)]);
-                            let key = if stratified { pixel } else { mix64(pixel * 64 + u64::from(index)) };
-                            let count = if stratified { SPP } else { 1 };
-                            let sp =
-                                SurfacePoint { sample: Some(PixelSample { pixel: key, index, count }), ..sp.clone() };
-                            let found = evaluate(trees, &sp, &geometry.embree, &settings, &mut rng, scratch, 0);
+                            let numbered = if independent {
+                                PixelSample { pixel: mix64(pixel * 64 + u64::from(index)), index, count: 1 }
+                            } else {
+                                sample(pixel, index)
+                            };
+                            let sp = SurfacePoint { sample: Some(numbered), ..sp.clone() };
+                            let found = evaluate(trees, &sp, &geometry.embree, settings, &mut rng, scratch, 0);
                             luminance64(found.radiance)
                         })
                         .sum::<f64>()
-                        / f64::from(SPP)
+                        / f64::from(spp)
                 })
                 .collect();
             let mean = means.iter().sum::<f64>() / PIXELS as f64;
             let variance = means.iter().map(|m| (m - mean).powi(2)).sum::<f64>() / (PIXELS - 1) as f64;
             (mean, variance)
         };
-        let (mean, variance) = variance_of(true, &mut scratch);
-        let (independent_mean, independent) = variance_of(false, &mut scratch);
+        let (mean, variance) = variance_of(false, &mut scratch);
+        let (independent_mean, independent) = variance_of(true, &mut scratch);
         if independent == 0.0 {
             return; // every light of this point is in exact nodes
         }
@@ -484,12 +501,7 @@ fn stratified_samples_of_a_pixel_are_unbiased_and_less_noisy() {
         }
         ratios.push(variance / independent);
     });
-    assert!(ratios.len() >= 4, "most points must be sampled: {ratios:?}");
-    // Pooled over the points: the stratified pixels' variance is well below
-    // the independent ones'.
-    let pooled = ratios.iter().sum::<f64>() / ratios.len() as f64;
-    eprintln!("variance of stratified over independent pixels: mean {pooled:.3}, per point {ratios:.3?}");
-    assert!(pooled < 0.5, "variance of stratified over independent pixels, per point: {ratios:?}");
+    ratios
 }
 
 /// A kept cut's draws (design §10.10) take its sequence in turn
@@ -504,48 +516,9 @@ fn stratified_samples_of_a_pixel_are_unbiased_and_less_noisy() {
 /// fails without the sequence.
 #[test]
 fn a_kept_cuts_draws_take_its_sequence_in_turn() {
-    const PIXELS: u64 = 512;
     const USES: u32 = 16;
     let settings = CutSettings { error: 0.1, max_cut: 8, pixel_cut: true, cut_draws: 1, ..CutSettings::default() };
-    let mut scratch = StochasticScratch::default();
-    let mut batch = BatchBuffers::default();
-    let mut ratios = Vec::new();
-    with_points(&scene(OMNI), 8, |lights, geometry, trees, sp| {
-        let exact = exact_luminance(lights, &geometry.embree, sp, &mut batch);
-        let variance_of = |kept: bool, scratch: &mut StochasticScratch| {
-            let means: Vec<f64> = (0..PIXELS)
-                .map(|pixel| {
-                    (0..USES)
-                        .map(|index| {
-                            let mut rng = Rng::from_key(&[pixel, u64::from(index)]);
-                            let sample = if kept {
-                                PixelSample { pixel, index, count: 256 }
-                            } else {
-                                PixelSample { pixel: mix64(pixel * 64 + u64::from(index)), index: 0, count: 1 }
-                            };
-                            let sp = SurfacePoint { sample: Some(sample), ..sp.clone() };
-                            let found = evaluate(trees, &sp, &geometry.embree, &settings, &mut rng, scratch, 0);
-                            luminance64(found.radiance)
-                        })
-                        .sum::<f64>()
-                        / f64::from(USES)
-                })
-                .collect();
-            let mean = means.iter().sum::<f64>() / PIXELS as f64;
-            let variance = means.iter().map(|m| (m - mean).powi(2)).sum::<f64>() / (PIXELS - 1) as f64;
-            (mean, variance)
-        };
-        let (mean, variance) = variance_of(true, &mut scratch);
-        let (independent_mean, independent) = variance_of(false, &mut scratch);
-        if independent == 0.0 {
-            return; // every light of this point is in exact nodes
-        }
-        for (m, v) in [(mean, variance), (independent_mean, independent)] {
-            let se = (v / PIXELS as f64).sqrt();
-            assert!((m - exact).abs() <= 4.0 * se + 1e-9 * exact, "mean {m} against {exact} (standard error {se})");
-        }
-        ratios.push(variance / independent);
-    });
+    let ratios = variance_ratios(&settings, USES, |pixel, index| PixelSample { pixel, index, count: 256 });
     assert!(ratios.len() >= 4, "most points must be sampled: {ratios:?}");
     let pooled = ratios.iter().sum::<f64>() / ratios.len() as f64;
     eprintln!("variance of a kept cut's sequence over independent draws: mean {pooled:.3}, per point {ratios:.3?}");
