@@ -215,3 +215,31 @@ fn a_camera_inside_geometry() {
         assert!(image.channels["A"].iter().all(|&a| a == 1.0), "every ray hits the inside of the sphere");
     }
 }
+
+/// An emitter is held to the same extremes as the point lights: a
+/// rectangle from a millimetre to 8e15 m across (its corners near the
+/// coordinate limit), rendered in every mode and along paths, gives a
+/// finite, lit image. An emitter 4.3e9 m across once made every pixel NaN
+/// (its triangles' areas overflowed `f32`).
+#[test]
+fn emitters_from_a_millimetre_to_the_coordinate_limit() {
+    let dir = TempDir::new("extreme-emitters");
+    for size in [1e-3f64, 1.0, 4.3e9, 8e15] {
+        // Facing down (u x v along -y), centred 3 m above the floor.
+        let light = format!(
+            "[[lights]]\ntype = \"area\"\ncorner = [{:e}, 3, {:e}]\nu = [{size:e}, 0, 0]\nv = [0, 0, {:e}]\nradiance = [{:e}, {:e}, {:e}]\n",
+            -size / 2.0,
+            -size / 2.0,
+            size,
+            1.0 / size.min(1.0).powi(2),
+            1.0 / size.min(1.0).powi(2),
+            1.0 / size.min(1.0).powi(2),
+        );
+        let text = scene(1.0, &light);
+        for mode in MODES.iter().map(|m| m.to_vec()).chain([vec!["--exact", "--indirect", "path", "--max-depth", "3"]])
+        {
+            let image = render_text(&dir, "emitter", &text, &mode);
+            assert!(luminance(&image).iter().any(|&l| l > 0.0), "{size} {mode:?}: black");
+        }
+    }
+}

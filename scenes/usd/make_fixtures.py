@@ -20,7 +20,9 @@ UsdLux schema and closed forms, not by the renderer:
   the import reads (an indexed, face-varying mesh split by GeomSubsets, a
   textured material, gprims, an internal instanceable reference, a point
   instancer, time samples, every UsdLux light, a camera), as text and as a
-  crate file, for tests/fuzz.rs to mutate.
+  crate file, for tests/fuzz.rs to mutate; fuzz/texture.jpg, a 16 x 16
+  baseline JPEG of one colour (Pillow, when installed), for the tests of
+  texture headers and the fuzzer's JPEG mutants.
 - broken/huge-count.usdc is not written here: it is fuzz/stage.usdc with
   byte 100 set to 207 (found by mutating each byte), an array count that asks
   the reader for 3.5 TB; tests/usd.rs checks that the command reports it.
@@ -488,6 +490,11 @@ def write_fuzz():
     stage.SetStartTimeCode(1)
     stage.SetEndTimeCode(10)
     write_png(os.path.join(out, 'texture.png'), [[(200, 30, 30), (30, 200, 30)], [(30, 30, 200), (220, 220, 220)]])
+    try:
+        from PIL import Image
+        Image.new('RGB', (16, 16), (100, 150, 200)).save(os.path.join(out, 'texture.jpg'), quality=90)
+    except ImportError:
+        print('Pillow is not installed: fuzz/texture.jpg left as it is')
     material = UsdShade.Material.Define(stage, '/World/Looks/Textured')
     shader = UsdShade.Shader.Define(stage, '/World/Looks/Textured/Surface')
     shader.CreateIdAttr('UsdPreviewSurface')

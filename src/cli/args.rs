@@ -320,8 +320,8 @@ pub struct PassArgs {
     /// Seed of every random choice (sample positions, representatives, VPLs).
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
-    /// Worker threads (0: one per CPU). The image does not depend on it.
-    #[arg(long, default_value_t = 0)]
+    /// Worker threads (0: one per CPU; at most 1024). The image does not depend on it.
+    #[arg(long, default_value_t = 0, value_parser = parse_threads)]
     pub threads: usize,
     /// Render only this half-open window of the full frame, in pixels.
     #[arg(long, value_name = "x0,x1,y0,y1", value_parser = parse_pixel_bounds)]
@@ -427,8 +427,11 @@ pub fn pass_settings(
     let (width, height) = resolution.unwrap_or((scene.film.width, scene.film.height));
     check_resolution(&scene.path, "--resolution", width, height)?;
     let spp = spp.unwrap_or(scene.film.spp);
-    if spp == 0 {
-        return Err(CliError::Usage { flag: "--spp", message: "must be at least 1".into() });
+    if !(1..=crate::scene::MAX_SPP).contains(&spp) {
+        return Err(CliError::Usage {
+            flag: "--spp",
+            message: format!("must be from 1 to {}, got {spp}", crate::scene::MAX_SPP),
+        });
     }
     let bounds = match pixel_bounds {
         None => PixelBounds::full(width, height),
@@ -468,6 +471,15 @@ pub fn parse_tile(s: &str) -> Result<(u32, u32), String> {
 }
 
 /// Parses `WxH`.
+/// Parses a thread count: 0 (one per CPU) to [`MAX_THREADS`](crate::render::MAX_THREADS).
+pub fn parse_threads(s: &str) -> Result<usize, String> {
+    let most = crate::render::MAX_THREADS;
+    match s.trim().parse::<usize>() {
+        Ok(n) if n <= most => Ok(n),
+        _ => Err(format!("must be a whole number from 0 (one per CPU) to {most}, got '{s}'")),
+    }
+}
+
 pub fn parse_resolution(s: &str) -> Result<(u32, u32), String> {
     let (w, h) = s.split_once(['x', 'X']).ok_or_else(|| format!("expected WIDTHxHEIGHT, got '{s}'"))?;
     let w: u32 = w.trim().parse().map_err(|_| format!("width '{w}' is not a positive integer"))?;

@@ -20,6 +20,7 @@ pub struct AssembleArgs {
 }
 
 pub fn run(args: &AssembleArgs) -> Result<(), CliError> {
+    crate::output::check_outputs(&[args.output.as_path()], &args.tiles)?;
     let done = assemble(&args.output, &args.tiles)?;
     println!(
         "{}: {}x{} from {} tiles (checked: {}; render time {:.3} s in all)",

@@ -6,8 +6,9 @@ use clap::Args;
 
 use super::CliError;
 use crate::output::compare::{compare_files, heat, Comparison};
-use crate::output::exr::write_diff_exr;
-use crate::output::preview::write_rgb_png;
+use crate::output::exr::stage_diff_exr;
+use crate::output::preview::stage_rgb_png;
+use crate::output::{check_outputs, Staged};
 
 #[derive(Debug, Args)]
 pub struct CompareArgs {
@@ -32,14 +33,20 @@ pub struct CompareArgs {
 }
 
 pub fn run(args: &CompareArgs) -> Result<(), CliError> {
+    let outputs: Vec<&std::path::Path> = args.diff.iter().chain(&args.diff_exr).map(PathBuf::as_path).collect();
+    check_outputs(&outputs, &[args.test.clone(), args.reference.clone()])?;
     let result = compare_files(&args.test, &args.reference, args.blocks.map(|b| b as usize))?;
-    if let Some(path) = &args.diff {
-        let rgb: Vec<u8> = result.relative.iter().flat_map(|&e| heat(e)).collect();
-        write_rgb_png(path, result.width as u32, result.height as u32, &rgb)?;
-    }
-    if let Some(path) = &args.diff_exr {
-        write_diff_exr(path, &result)?;
-    }
+    let png = args
+        .diff
+        .as_ref()
+        .map(|path| {
+            let rgb: Vec<u8> = result.relative.iter().flat_map(|&e| heat(e)).collect();
+            stage_rgb_png(path, result.width as u32, result.height as u32, &rgb)
+        })
+        .transpose()?;
+    let exr = args.diff_exr.as_ref().map(|path| stage_diff_exr(path, &result)).transpose()?;
+    png.map(Staged::commit).transpose()?;
+    exr.map(Staged::commit).transpose()?;
     print_comparison(&result.summary, args.json);
     Ok(())
 }

@@ -5,8 +5,9 @@ use super::farm::Claim;
 use super::progress::Progress;
 use super::CliError;
 use crate::light::LightKind;
-use crate::output::exr::{write_exr, ExrMetadata};
-use crate::output::preview::write_png;
+use crate::output::exr::{stage_exr, ExrMetadata};
+use crate::output::preview::stage_png;
+use crate::output::{check_outputs, Staged};
 use crate::render::session::{Mode, PassResult, Session};
 use crate::render::PassSettings;
 use crate::scene::{Indirect, Scene};
@@ -28,6 +29,9 @@ pub fn run(args: &RenderArgs) -> Result<(), CliError> {
         None
     };
     let scene = args.pass.load(&args.scene)?;
+    let outputs: Vec<&std::path::Path> = std::iter::once(args.output.as_path()).chain(args.png.as_deref()).collect();
+    // Before the render: a wrong output costs no render and destroys nothing.
+    check_outputs(&outputs, &scene.inputs)?;
     let (settings, mode) = args.resolve(&scene)?;
     let scene_hash = scene.content_hash()?;
     let session = Session::try_new(&scene, args.pass.threads)?;
@@ -51,10 +55,12 @@ pub fn run(args: &RenderArgs) -> Result<(), CliError> {
         world_to_camera: Some(camera.world_to_camera().to_cols_array()),
         world_to_ndc: Some(camera.world_to_ndc().to_cols_array()),
     };
-    write_exr(&args.output, &result.film, args.half, &meta)?;
-    if let Some(png) = &args.png {
-        write_png(png, &result.film, args.exposure)?;
-    }
+    // Both written before either is put in place: a PNG that cannot be
+    // written leaves the EXR's place as it was.
+    let exr = stage_exr(&args.output, &result.film, args.half, &meta)?;
+    let png = args.png.as_ref().map(|png| stage_png(png, &result.film, args.exposure)).transpose()?;
+    exr.commit()?;
+    png.map(Staged::commit).transpose()?;
     print_summary(&scene, &settings, mode, &result);
     if args.stats {
         print_full_stats(&result.stats, cpu_seconds, result.tree_bytes, session.pool.current_num_threads());

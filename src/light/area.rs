@@ -59,7 +59,7 @@ impl AreaEmitter {
             b = 1.0 - b;
         }
         let [p0, p1, p2] = mesh.triangles[triangle].map(|i| mesh.positions[i as usize]);
-        let normal = (p1 - p0).cross(p2 - p0).normalize_or_zero();
+        let normal = crate::util::triangle::normal([p0, p1, p2]);
         AreaSample { point: p0 + a * (p1 - p0) + b * (p2 - p0), normal, triangle, ab: Vec2::new(a, b) }
     }
 
@@ -126,7 +126,7 @@ impl AreaEmitters {
             let (mut lo, mut hi) = (Vec3::INFINITY, Vec3::NEG_INFINITY);
             for t in &mesh.triangles {
                 let [p0, p1, p2] = t.map(|i| mesh.positions[i as usize]);
-                let area = f64::from(0.5 * (p1 - p0).cross(p2 - p0).length());
+                let area = crate::util::triangle::area([p0, p1, p2]);
                 total += area;
                 weighted += ((p0 + p1 + p2) / 3.0).as_dvec3() * area;
                 cumulative.push(total);

@@ -46,7 +46,7 @@ pub struct EmitterTriangle {
 impl EmitterTriangle {
     #[must_use]
     pub fn area(&self) -> f32 {
-        0.5 * (self.p[1] - self.p[0]).cross(self.p[2] - self.p[0]).length()
+        crate::util::triangle::area(self.p) as f32
     }
 
     /// The point at barycentric coordinates (a, b): p0 + a (p1 - p0) + b (p2 - p0).
@@ -58,7 +58,7 @@ impl EmitterTriangle {
     /// Unit normal by the winding (p1 - p0) x (p2 - p0): the emitting side.
     #[must_use]
     pub fn normal(&self) -> Vec3 {
-        (self.p[1] - self.p[0]).cross(self.p[2] - self.p[0]).normalize_or_zero()
+        crate::util::triangle::normal(self.p)
     }
 }
 

@@ -9,7 +9,7 @@ use std::path::{Path, PathBuf};
 
 use exr::prelude::*;
 
-use super::{write_atomically, OutputError};
+use super::{stage, OutputError, Staged};
 use crate::render::{Film, BEAUTY};
 
 /// Header attributes describing how the image was made.
@@ -59,6 +59,17 @@ pub fn write_exr(
     half_beauty: bool,
     meta: &ExrMetadata,
 ) -> std::result::Result<(), OutputError> {
+    stage_exr(path, film, half_beauty, meta)?.commit()
+}
+
+/// [`write_exr`] up to the rename: the EXR written beside `path`, to be
+/// committed with the command's other outputs.
+pub fn stage_exr(
+    path: &Path,
+    film: &Film,
+    half_beauty: bool,
+    meta: &ExrMetadata,
+) -> std::result::Result<Staged, OutputError> {
     let b = film.bounds;
     let size = (b.width() as usize, b.height() as usize);
     let list: Vec<AnyChannel<FlatSamples>> = film
@@ -107,7 +118,7 @@ pub fn write_exr(
     image_attributes.chromaticities = Some(rec709());
     image_attributes.pixel_aspect = 1.0;
     let image = Image::new(image_attributes, layer);
-    write_atomically(path, |file| image.write().to_unbuffered(file).map_err(write_error(path)))
+    stage(path, |file| image.write().to_unbuffered(file).map_err(write_error(path)))
 }
 
 /// The error of encoding the EXR behind `path`.
@@ -115,9 +126,13 @@ fn write_error(path: &Path) -> impl FnOnce(::exr::error::Error) -> OutputError +
     move |source| OutputError::Exr { path: path.to_path_buf(), action: "write", source }
 }
 
-/// Writes a comparison as an EXR: per-channel absolute difference (R, G, B)
-/// and the relative error on luminance (`relative_error`).
-pub fn write_diff_exr(path: &Path, result: &super::compare::ComparisonResult) -> std::result::Result<(), OutputError> {
+/// A comparison as an EXR, staged (see [`Staged`]): per-channel absolute
+/// difference (R, G, B) and the relative error on luminance
+/// (`relative_error`).
+pub fn stage_diff_exr(
+    path: &Path,
+    result: &super::compare::ComparisonResult,
+) -> std::result::Result<Staged, OutputError> {
     let channel = |name: &str, v: Vec<f32>| AnyChannel::new(name, FlatSamples::F32(v));
     let d = &result.difference;
     let finite = |x: f64| x.min(f64::from(f32::MAX)) as f32;
@@ -128,5 +143,5 @@ pub fn write_diff_exr(path: &Path, result: &super::compare::ComparisonResult) ->
         channel("relative_error", result.relative.iter().map(|&e| finite(e)).collect()),
     ];
     let image = Image::from_channels((result.width, result.height), AnyChannels::sort(channels.into()));
-    write_atomically(path, |file| image.write().to_unbuffered(file).map_err(write_error(path)))
+    stage(path, |file| image.write().to_unbuffered(file).map_err(write_error(path)))
 }

@@ -23,6 +23,14 @@ pub enum OutputError {
     /// The directory an output was to be written in does not exist.
     #[error("{}: the directory '{}' does not exist", path.display(), directory.display())]
     NoDirectory { path: PathBuf, directory: PathBuf },
+    /// An output names something that is not a regular file (a device such
+    /// as `/dev/null`, a directory, a FIFO), which an output never replaces.
+    #[error("{}: is not a regular file; an output replaces only a regular file", path.display())]
+    NotRegular { path: PathBuf },
+    /// An output names a file the command reads (its scene, a texture, an
+    /// environment map, a tile), or another of its outputs.
+    #[error("{}: is also {what} '{}'; an output must be a file of its own", path.display(), other.display())]
+    NamesAnother { path: PathBuf, what: &'static str, other: PathBuf },
     /// Creating, writing, renaming or reading a file failed.
     #[error("{}: cannot {action}: {source}", path.display())]
     Io {
@@ -40,6 +48,14 @@ pub enum OutputError {
         action: &'static str,
         #[source]
         source: ::exr::error::Error,
+    },
+    /// An EXR to read whose header is refused before its pixels are read
+    /// (`scene::image::check_exr_header`), or that is not a regular file.
+    #[error("{}: {source}", path.display())]
+    ExrHeader {
+        path: PathBuf,
+        #[source]
+        source: crate::scene::image::ImageError,
     },
     /// The PNG encoder failed.
     #[error("{}: cannot write PNG: {source}", path.display())]
@@ -134,13 +150,49 @@ pub fn write_atomically(
     path: &Path,
     write: impl FnOnce(&mut File) -> Result<(), OutputError>,
 ) -> Result<(), OutputError> {
-    let directory = match path.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
-        _ => PathBuf::from("."),
-    };
-    if !directory.is_dir() {
-        return Err(OutputError::NoDirectory { path: path.to_path_buf(), directory });
+    stage(path, write)?.commit()
+}
+
+/// An output written in full to a temporary file beside its place, not yet
+/// renamed into it: a command that writes several outputs stages them all
+/// and commits them only when every one was written, so a failure of the
+/// last leaves every earlier place as it was. Dropped uncommitted, the
+/// temporary file is removed.
+pub struct Staged {
+    /// The temporary file; None once committed.
+    partial: Option<tempfile::NamedTempFile>,
+    path: PathBuf,
+}
+
+impl Staged {
+    /// Renames the temporary file into place.
+    pub fn commit(mut self) -> Result<(), OutputError> {
+        let Some(partial) = self.partial.take() else { return Ok(()) };
+        let partial_path = partial.path().to_path_buf();
+        let result = check_replaceable(&self.path).and_then(|_| {
+            partial.persist(&self.path).map(drop).map_err(|e| OutputError::Io {
+                path: self.path.clone(),
+                action: "rename the temporary file into place",
+                source: e.error,
+            })
+        });
+        temporary::unregister(&partial_path);
+        result
     }
+}
+
+impl Drop for Staged {
+    fn drop(&mut self) {
+        if let Some(partial) = &self.partial {
+            temporary::unregister(partial.path());
+        }
+    }
+}
+
+/// [`write_atomically`]'s first half: the file written through `write` to a
+/// temporary file beside `path`, checked to be a place an output may take.
+pub fn stage(path: &Path, write: impl FnOnce(&mut File) -> Result<(), OutputError>) -> Result<Staged, OutputError> {
+    let directory = check_replaceable(path)?;
     let name = path.file_name().map_or_else(|| "output".into(), |n| n.to_string_lossy().into_owned());
     let mut partial = tempfile::Builder::new()
         .prefix(&format!(".{name}."))
@@ -148,18 +200,80 @@ pub fn write_atomically(
         .permissions(plain_create_permissions())
         .tempfile_in(&directory)
         .map_err(OutputError::io(path, "create the temporary file"))?;
-    let partial_path = partial.path().to_path_buf();
-    temporary::register(&partial_path);
-    // Dropping the NamedTempFile on an error removes the temporary file.
-    let result = write(partial.as_file_mut()).and_then(|()| {
-        partial.persist(path).map(drop).map_err(|e| OutputError::Io {
-            path: path.to_path_buf(),
-            action: "rename the temporary file into place",
-            source: e.error,
-        })
-    });
-    temporary::unregister(&partial_path);
-    result
+    temporary::register(partial.path());
+    let staged_path = partial.path().to_path_buf();
+    if let Err(e) = write(partial.as_file_mut()) {
+        temporary::unregister(&staged_path);
+        return Err(e);
+    }
+    Ok(Staged { partial: Some(partial), path: path.to_path_buf() })
+}
+
+/// The directory `path` is written in, when an output may take `path`: the
+/// directory exists, and `path` is absent or a regular file (never a device,
+/// a directory or a FIFO: `-o /dev/null` once replaced the device node).
+fn check_replaceable(path: &Path) -> Result<PathBuf, OutputError> {
+    let directory = match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
+        _ => PathBuf::from("."),
+    };
+    if !directory.is_dir() {
+        return Err(OutputError::NoDirectory { path: path.to_path_buf(), directory });
+    }
+    match std::fs::metadata(path) {
+        Ok(meta) if !meta.is_file() => Err(OutputError::NotRegular { path: path.to_path_buf() }),
+        _ => Ok(directory),
+    }
+}
+
+/// Checks, before any work, that each of `outputs` may be written: its
+/// directory exists and takes a new file, it is absent or a regular file,
+/// and it names none of `inputs` (the files the command reads) nor another
+/// output. A command calls it before it renders, so that a wrong output
+/// costs no render and destroys nothing.
+pub fn check_outputs(outputs: &[&Path], inputs: &[PathBuf]) -> Result<(), OutputError> {
+    let identity = |p: &Path| -> Option<PathBuf> {
+        let directory = match p.parent() {
+            Some(d) if !d.as_os_str().is_empty() => d,
+            _ => Path::new("."),
+        };
+        Some(directory.canonicalize().ok()?.join(p.file_name()?))
+    };
+    for (i, &output) in outputs.iter().enumerate() {
+        let directory = check_replaceable(output)?;
+        // The directory takes a new file (write permission, a writable file system).
+        tempfile::Builder::new()
+            .prefix(".lightcuts-check.")
+            .tempfile_in(&directory)
+            .map_err(OutputError::io(output, "create a file in its directory"))?;
+        let Some(id) = identity(output) else { continue };
+        let same = |other: &Path| identity(other).is_some_and(|o| o == id) || same_file(output, other);
+        if let Some(input) = inputs.iter().find(|input| same(input)) {
+            return Err(OutputError::NamesAnother {
+                path: output.to_path_buf(),
+                what: "an input",
+                other: input.clone(),
+            });
+        }
+        if let Some(&other) = outputs[..i].iter().find(|&&other| same(other)) {
+            return Err(OutputError::NamesAnother {
+                path: output.to_path_buf(),
+                what: "another output",
+                other: other.to_path_buf(),
+            });
+        }
+    }
+    Ok(())
+}
+
+/// Whether `a` and `b` are the same existing file (one device and inode:
+/// a hard link, or a symbolic link to it).
+fn same_file(a: &Path, b: &Path) -> bool {
+    use std::os::unix::fs::MetadataExt as _;
+    match (std::fs::metadata(a), std::fs::metadata(b)) {
+        (Ok(a), Ok(b)) => a.dev() == b.dev() && a.ino() == b.ino(),
+        _ => false,
+    }
 }
 
 /// The mode `File::create` asks the kernel for; the kernel applies the

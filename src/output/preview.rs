@@ -3,7 +3,7 @@
 
 use std::path::Path;
 
-use super::{write_atomically, OutputError};
+use super::{stage, OutputError, Staged};
 use crate::render::Film;
 use crate::util::color::linear_to_srgb;
 
@@ -16,15 +16,25 @@ pub fn to_srgb8(linear: f32, scale: f32) -> u8 {
 
 /// Writes the film's window as an RGB PNG.
 pub fn write_png(path: &Path, film: &Film, exposure_stops: f32) -> Result<(), OutputError> {
+    stage_png(path, film, exposure_stops)?.commit()
+}
+
+/// [`write_png`] up to the rename (see [`super::Staged`]).
+pub fn stage_png(path: &Path, film: &Film, exposure_stops: f32) -> Result<Staged, OutputError> {
     let scale = exposure_stops.exp2();
     let data: Vec<u8> = film.rgb().iter().flat_map(|p| p.map(|c| to_srgb8(c, scale))).collect();
-    write_rgb_png(path, film.bounds.width(), film.bounds.height(), &data)
+    stage_rgb_png(path, film.bounds.width(), film.bounds.height(), &data)
 }
 
 /// Writes 8-bit RGB data as a PNG, atomically.
 pub fn write_rgb_png(path: &Path, width: u32, height: u32, rgb: &[u8]) -> Result<(), OutputError> {
+    stage_rgb_png(path, width, height, rgb)?.commit()
+}
+
+/// [`write_rgb_png`] up to the rename (see [`super::Staged`]).
+pub fn stage_rgb_png(path: &Path, width: u32, height: u32, rgb: &[u8]) -> Result<Staged, OutputError> {
     let png_error = |source| OutputError::Png { path: path.to_path_buf(), source };
-    write_atomically(path, |file| {
+    stage(path, |file| {
         let mut encoder = png::Encoder::new(std::io::BufWriter::new(file), width, height);
         encoder.set_color(png::ColorType::Rgb);
         encoder.set_depth(png::BitDepth::Eight);

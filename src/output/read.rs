@@ -42,6 +42,11 @@ impl ExrImage {
 }
 
 pub fn read_exr(path: &Path) -> std::result::Result<ExrImage, OutputError> {
+    use crate::scene::image::{check_exr_header, ImageError};
+    let refused = |source| OutputError::ExrHeader { path: path.to_path_buf(), source };
+    let file = crate::util::file::open_regular(path).map_err(|e| refused(ImageError::Open(e)))?;
+    let length = file.metadata().map_err(|e| refused(ImageError::Open(e)))?.len();
+    check_exr_header(std::io::BufReader::new(file), length).map_err(refused)?;
     let image = read()
         .no_deep_data()
         .largest_resolution_level()

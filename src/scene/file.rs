@@ -234,6 +234,16 @@ impl CameraSpec {
         }
     }
 
+    /// The point a camera at `eye` looking along unit `forward` aims at:
+    /// `distance` ahead, or further when the eye is far from the origin, so
+    /// that `look_at - eye` keeps the direction in `f32` (an eye at 9e15 m
+    /// plus 1 m rounds to the eye itself: 1/256 of its distance keeps the
+    /// direction within 2e-5 radians).
+    #[must_use]
+    pub fn aim(eye: glam::DVec3, forward: glam::DVec3, distance: f64) -> [f32; 3] {
+        (eye + forward * distance.max(eye.length() / 256.0)).as_vec3().to_array()
+    }
+
     /// Whether the shutter stays open for a while: then motion blurs.
     #[must_use]
     pub fn shutter_open(&self) -> bool {

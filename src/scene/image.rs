@@ -39,9 +39,70 @@ pub enum ImageError {
     /// The image has no pixels.
     #[error("the image is empty")]
     Empty,
-    /// A radiance that no light can have (NaN, infinite or negative).
-    #[error("pixel {index} is not a finite, non-negative radiance")]
-    BadRadiance { index: usize },
+    /// A radiance that no light can have (NaN, infinite, negative, or above
+    /// [`MAX_EMISSION`](super::MAX_EMISSION)).
+    #[error(
+        "pixel ({x}, {y}) holds {value}: a radiance must be finite, >= 0 and at most {:e} W/(m^2 sr)",
+        super::MAX_EMISSION
+    )]
+    BadRadiance { x: usize, y: usize, value: String },
+    /// The header asks for more than an image may be ([`MAX_TEXELS`]), or
+    /// for more pixels than the file's bytes can hold: a corrupt or hostile
+    /// header, refused before anything is allocated for it.
+    #[error("{field}: {message}")]
+    Header { field: String, message: String },
+}
+
+/// The most texels an image a scene reads may have (2^27: a 16,384 x
+/// 8,192 environment map); at 12 bytes a linear texel, 1.5 GiB.
+pub const MAX_TEXELS: u64 = 1 << 27;
+
+/// The most an image's pixels may outweigh its file: deflate (PNG; EXR's
+/// ZIP and PXR24) expands at most 1,032-fold, EXR's RLE 64-fold, B44 under
+/// 11-fold, PIZ's Huffman runs a few hundred-fold, a JPEG block costs at
+/// least a bit a component (under 1,000-fold); twice deflate's bound leaves
+/// a margin.
+pub const MAX_EXPANSION: u64 = 2048;
+
+/// Refuses a header's `width` x `height` image of `bytes_per_texel`
+/// before anything is allocated for it: more than [`MAX_TEXELS`], or more
+/// bytes than a file of `length` bytes can expand to ([`MAX_EXPANSION`]).
+fn check_size(field: &str, width: u64, height: u64, bytes_per_texel: u64, length: u64) -> Result<(), ImageError> {
+    let header = |message: String| ImageError::Header { field: field.to_string(), message };
+    let texels = width.saturating_mul(height);
+    if texels == 0 || texels > MAX_TEXELS {
+        return Err(header(format!("{width} x {height} pixels (at most {MAX_TEXELS} in all, at least 1)")));
+    }
+    if texels.saturating_mul(bytes_per_texel) > length.saturating_mul(MAX_EXPANSION) {
+        return Err(header(format!(
+            "{width} x {height} pixels of {bytes_per_texel} bytes cannot be stored in a file of {length} bytes"
+        )));
+    }
+    Ok(())
+}
+
+/// Reads an OpenEXR's headers (nothing of its pixels) and refuses one whose
+/// layers could not be read within [`MAX_TEXELS`], or whose pixels and chunk
+/// offsets `length` bytes cannot hold ([`MAX_EXPANSION`]). The `exr`
+/// crate trusts the header's data window: one flipped byte of it made the
+/// reader allocate 103 GB, so every EXR path calls this first.
+pub fn check_exr_header(reader: impl std::io::Read, length: u64) -> Result<(), ImageError> {
+    let meta = exr::meta::MetaData::read_from_buffered(reader, false).map_err(ImageError::Exr)?;
+    for (i, layer) in meta.headers.iter().enumerate() {
+        let field = |name: &str| if meta.headers.len() == 1 { name.to_string() } else { format!("part {i}: {name}") };
+        let (width, height) = (layer.layer_size.width() as u64, layer.layer_size.height() as u64);
+        check_size(&field("dataWindow"), width, height, layer.channels.bytes_per_pixel as u64, length)?;
+        if (layer.chunk_count as u64).saturating_mul(8) > length {
+            return Err(ImageError::Header {
+                field: field("dataWindow"),
+                message: format!(
+                    "{width} x {height} pixels need {} chunks, more than a file of {length} bytes can list",
+                    layer.chunk_count
+                ),
+            });
+        }
+    }
+    Ok(())
 }
 
 /// Reads a PNG (8 or 16 bits, grey or colour, palettes expanded) and decodes
@@ -52,8 +113,9 @@ pub fn read_srgb_png(path: &Path) -> Result<RgbImage, ImageError> {
 
 /// Reads a PNG whose colours are encoded as `encoding` says.
 pub fn read_png(path: &Path, encoding: Encoding) -> Result<RgbImage, ImageError> {
-    let file = std::fs::File::open(path).map_err(ImageError::Open)?;
-    decode_png(std::io::BufReader::new(file), encoding)
+    let file = crate::util::file::open_regular(path).map_err(ImageError::Open)?;
+    let length = file.metadata().map_err(ImageError::Open)?.len();
+    decode_png(std::io::BufReader::new(file), length, encoding)
 }
 
 /// How an image's colour values are encoded.
@@ -84,7 +146,7 @@ pub fn decode_srgb(bytes: &[u8]) -> Result<RgbImage, ImageError> {
 /// colours encoded as `encoding` says.
 pub fn decode(bytes: &[u8], encoding: Encoding) -> Result<RgbImage, ImageError> {
     if bytes.starts_with(b"\x89PNG") {
-        decode_png(std::io::Cursor::new(bytes), encoding)
+        decode_png(std::io::Cursor::new(bytes), bytes.len() as u64, encoding)
     } else if bytes.starts_with(&[0xff, 0xd8]) {
         decode_jpeg(bytes, encoding)
     } else {
@@ -94,8 +156,12 @@ pub fn decode(bytes: &[u8], encoding: Encoding) -> Result<RgbImage, ImageError> 
 
 fn decode_jpeg(bytes: &[u8], encoding: Encoding) -> Result<RgbImage, ImageError> {
     let mut decoder = jpeg_decoder::Decoder::new(std::io::Cursor::new(bytes));
-    // Refuse absurd headers before allocating for them (64 MiB of pixels).
-    decoder.set_max_decoding_buffer_size(64 << 20);
+    // The frame header first: the decoder's own buffer limit is not kept
+    // by every allocation it makes (65,535 x 65,535 took 8.6 GB).
+    decoder.read_info().map_err(ImageError::Jpeg)?;
+    let info = decoder.info().ok_or(ImageError::Empty)?;
+    check_size("SOF", info.width.into(), info.height.into(), 4, bytes.len() as u64)?;
+    decoder.set_max_decoding_buffer_size(MAX_TEXELS as usize * 4);
     let pixels = decoder.decode().map_err(ImageError::Jpeg)?;
     let info = decoder.info().ok_or(ImageError::Empty)?;
     let (width, height) = (usize::from(info.width), usize::from(info.height));
@@ -116,11 +182,15 @@ fn decode_jpeg(bytes: &[u8], encoding: Encoding) -> Result<RgbImage, ImageError>
     Ok(RgbImage { width, height, texels, alpha: None })
 }
 
-fn decode_png(reader: impl std::io::Read, encoding: Encoding) -> Result<RgbImage, ImageError> {
+fn decode_png(reader: impl std::io::Read, length: u64, encoding: Encoding) -> Result<RgbImage, ImageError> {
     let mut decoder = png::Decoder::new(reader);
     // Expand palettes and low bit depths to 8 bits; keep 16-bit as is.
     decoder.set_transformations(png::Transformations::EXPAND);
     let mut reader = decoder.read_info().map_err(ImageError::Png)?;
+    let (width, height) = reader.info().size();
+    let (color, depth) = reader.output_color_type();
+    let bytes_per_texel = color.samples() as u64 * if depth == png::BitDepth::Sixteen { 2 } else { 1 };
+    check_size("IHDR", width.into(), height.into(), bytes_per_texel, length)?;
     let mut buf = vec![0; reader.output_buffer_size()];
     let info = reader.next_frame(&mut buf).map_err(ImageError::Png)?;
     let (width, height) = (info.width as usize, info.height as usize);
@@ -154,12 +224,17 @@ fn decode_png(reader: impl std::io::Read, encoding: Encoding) -> Result<RgbImage
 /// Reads the R, G and B channels of an OpenEXR's first RGB layer as radiance,
 /// each finite and non-negative.
 pub fn read_radiance_exr(path: &Path) -> Result<RgbImage, ImageError> {
-    let file = std::fs::File::open(path).map_err(ImageError::Open)?;
+    let mut file = crate::util::file::open_regular(path).map_err(ImageError::Open)?;
+    let length = file.metadata().map_err(ImageError::Open)?.len();
+    check_exr_header(std::io::BufReader::new(&mut file), length)?;
+    use std::io::Seek;
+    file.rewind().map_err(ImageError::Open)?;
     radiance_exr(std::io::BufReader::new(file))
 }
 
 /// [`read_radiance_exr`] of an EXR in memory (a texture inside a `.usdz`).
 pub fn decode_radiance_exr(bytes: &[u8]) -> Result<RgbImage, ImageError> {
+    check_exr_header(bytes, bytes.len() as u64)?;
     radiance_exr(std::io::Cursor::new(bytes))
 }
 
@@ -184,8 +259,11 @@ fn radiance_exr(reader: impl std::io::Read + std::io::Seek) -> Result<RgbImage, 
         .from_buffered(reader)
         .map_err(ImageError::Exr)?;
     let image = image.layer_data.channel_data.pixels;
-    if let Some(index) = image.texels.iter().position(|t| !t.is_finite() || t.min_element() < 0.0) {
-        return Err(ImageError::BadRadiance { index });
+    let bad = |t: &Vec3| !t.is_finite() || t.min_element() < 0.0 || t.max_element() > super::MAX_EMISSION;
+    if let Some(index) = image.texels.iter().position(bad) {
+        let t = image.texels[index];
+        let value = format!("({:e}, {:e}, {:e})", t.x, t.y, t.z);
+        return Err(ImageError::BadRadiance { x: index % image.width, y: index / image.width, value });
     }
     if image.texels.is_empty() {
         return Err(ImageError::Empty);

@@ -36,23 +36,14 @@ impl Mesh {
     /// Whether some triangle has an area (an emitter of none emits nothing).
     #[must_use]
     pub fn has_area(&self) -> bool {
-        self.triangles.iter().any(|t| {
-            let [a, b, c] = t.map(|i| self.positions[i as usize]);
-            (b - a).cross(c - a).length() > 0.0
-        })
+        self.triangles.iter().any(|t| crate::util::triangle::area(t.map(|i| self.positions[i as usize])) > 0.0)
     }
 
     /// The area of its triangles, square metres (f64: a mesh may span
     /// 1e16 m, whose squares overflow f32).
     #[must_use]
     pub fn surface_area(&self) -> f64 {
-        self.triangles
-            .iter()
-            .map(|t| {
-                let [a, b, c] = t.map(|i| self.positions[i as usize].as_dvec3());
-                0.5 * (b - a).cross(c - a).length()
-            })
-            .sum()
+        self.triangles.iter().map(|t| crate::util::triangle::area(t.map(|i| self.positions[i as usize]))).sum()
     }
 
     /// Texture coordinates (sets 0 and 1) at barycentric coordinates (u,

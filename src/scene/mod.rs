@@ -37,6 +37,15 @@ use texture::Texture;
 /// Largest film accepted: 2^27 pixels (about 11600 x 11600). The renderer
 /// keeps about 70 bytes per pixel, so this caps the image at about 9 GiB.
 pub const MAX_PIXELS: u64 = 1 << 27;
+/// The largest intensity (W/sr), radiance (W/(m^2 sr)) or irradiance
+/// (W/m^2) one light source may have, per channel, an environment map's
+/// texels included (glTF's importer has the same cap on its lights'
+/// photometric values).
+pub const MAX_EMISSION: f32 = 1e30;
+/// The most samples per pixel a scene or the command line may ask for
+/// (2^20): a million samples a pixel is past any converged render, and
+/// keeps a pixel's sample count and its sample indices far inside `u32`.
+pub const MAX_SPP: u32 = 1 << 20;
 /// Largest coordinate magnitude a scene may use, metres. Embree rejects a
 /// ray whose origin or direction has a component beyond 1.844e18
 /// (`FLT_LARGE`; Debian builds it with assertions, which abort), and a

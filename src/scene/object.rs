@@ -131,6 +131,70 @@ pub fn world_bounds(meshes: &[Mesh], objects: &[Object]) -> (Vec3, Vec3) {
     (lo, hi)
 }
 
+/// The largest component a ray may reach in an instance's own space: an
+/// eighteenth of Embree's bound (`embree::MAX_RAY_COMPONENT`, 1.844e18),
+/// which an assertion-enabled Embree (Debian's) enforces by aborting the
+/// process, for the rounding of a matrix inverted in `f32`.
+pub const MAX_INSTANCE_RAY_COMPONENT: f64 = 1e17;
+
+/// Whether Embree may trace the rays of a scene through an instance placed
+/// by `placement`, when every ray starts within `reach` metres of the origin
+/// and has a direction no longer than `2 reach`: Embree carries each ray
+/// into the instance's space by the inverse placement, and the ray it gets
+/// must stay within [`MAX_INSTANCE_RAY_COMPONENT`]. The inverse's Frobenius
+/// norm bounds its gain, so |M^-1 (o - t)| <= ||M^-1|| (reach + |t|) and
+/// |M^-1 d| <= ||M^-1|| 2 reach (docs/design.md §4.1). Computed in `f64`: a
+/// placement that scales by 1e-20 is refused, one that scales by 1e-12 in a
+/// scene of a kilometre is not.
+#[must_use]
+pub fn traceable_instance(placement: Affine3A, reach: f64) -> bool {
+    let m = glam::Mat3::from(placement.matrix3).as_dmat3();
+    let determinant = m.determinant();
+    if !(placement.is_finite() && determinant.is_finite() && determinant > 0.0) {
+        return false;
+    }
+    let inverse = m.inverse();
+    let gain = [inverse.x_axis, inverse.y_axis, inverse.z_axis].iter().map(|c| c.length_squared()).sum::<f64>().sqrt();
+    let reach = reach.max(1.0);
+    let carried = gain * (reach + placement.translation.as_dvec3().length()).max(2.0 * reach);
+    carried.is_finite() && carried <= MAX_INSTANCE_RAY_COMPONENT
+}
+
+/// What [`make_traceable`] changed: the objects it drew still and those it
+/// dropped, by name.
+#[derive(Debug, Default, PartialEq, Eq)]
+pub struct Untraceable {
+    pub drawn_still: Vec<String>,
+    pub dropped: Vec<String>,
+}
+
+/// Makes every object one Embree can trace in a scene whose rays start
+/// within `reach` metres of the origin ([`traceable_instance`]): a moving
+/// object with a step it could not trace is drawn still (as the importers
+/// draw a motion that scales to nothing), and an instance it could not
+/// trace even still is dropped. Such an instance is thinner than about
+/// 1e-16 of the scene's extent in some direction, so it covers no pixel:
+/// dropping it changes no image, where handing it to Embree would abort
+/// the process.
+pub fn make_traceable(objects: &mut Vec<Object>, reach: f64) -> Untraceable {
+    let mut changed = Untraceable::default();
+    objects.retain_mut(|object| {
+        let placed = object.transform.unwrap_or(Affine3A::IDENTITY);
+        if let Some(motion) = &object.motion {
+            if !motion.steps.iter().all(|step| traceable_instance(*step * placed, reach)) {
+                changed.drawn_still.push(object.name.clone());
+                object.motion = None;
+            }
+        }
+        let keep = object.transform.is_none_or(|t| traceable_instance(t, reach));
+        if !keep {
+            changed.dropped.push(object.name.clone());
+        }
+        keep
+    });
+    changed
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -192,5 +256,31 @@ mod tests {
         assert_eq!(world_bounds(&meshes, &[object]), (Vec3::ZERO, Vec3::new(6.0, 1.0, 0.0)));
         // A full turn is capped at Embree's 129 steps.
         assert_eq!(Motion::rigid(centre, Vec3::ZERO, Vec3::Y, 360.0).steps.len(), 129);
+    }
+
+    /// Embree aborted on a glTF node scaled by [1e-20, 1, 1] (its inverse
+    /// carried rays to 1e20): such a placement is refused, a merely small
+    /// one kept, and the refused instance is dropped or drawn still.
+    #[test]
+    fn an_instance_embree_cannot_carry_rays_into_is_dropped_and_a_motion_drawn_still() {
+        let squashed = Affine3A::from_scale(Vec3::new(1e-20, 1.0, 1.0));
+        assert!(!traceable_instance(squashed, 10.0));
+        assert!(traceable_instance(Affine3A::from_scale(Vec3::splat(1e-12)), 1000.0));
+        assert!(!traceable_instance(Affine3A::from_scale(Vec3::splat(1e-12)), 1e6), "origins at 1e6 m reach 1e18");
+        assert!(!traceable_instance(Affine3A::from_scale(Vec3::new(1.0, -1.0, 1.0)), 1.0), "mirroring");
+        // Far from the origin, the translation counts: at 1e16 m a scale of 1e-2 carries rays to 1e18.
+        let far = Affine3A::from_scale_rotation_translation(Vec3::splat(0.01), glam::Quat::IDENTITY, Vec3::splat(1e16));
+        assert!(!traceable_instance(far, 1.0));
+        let slide = Motion { steps: vec![Affine3A::IDENTITY, squashed] };
+        let mut objects = vec![
+            Object { mesh: 0, transform: Some(Affine3A::IDENTITY), name: "kept".into(), motion: None },
+            Object { mesh: 0, transform: Some(squashed), name: "flat".into(), motion: None },
+            Object { mesh: 0, transform: None, name: "moving".into(), motion: Some(slide) },
+        ];
+        let changed = make_traceable(&mut objects, 10.0);
+        assert_eq!(changed, Untraceable { drawn_still: vec!["moving".into()], dropped: vec!["flat".into()] });
+        let names: Vec<&str> = objects.iter().map(|o| o.name.as_str()).collect();
+        assert_eq!(names, ["kept", "moving"]);
+        assert!(objects[1].motion.is_none());
     }
 }

@@ -134,7 +134,7 @@ impl<'s> Geometry<'s> {
         // Barycentric interpolation is more accurate than origin + t * direction.
         let p = w * p0 + u * p1 + v * p2;
         let wo = (-ray.direction).normalize();
-        let mut ng = (p1 - p0).cross(p2 - p0).normalize_or_zero();
+        let mut ng = crate::util::triangle::normal([p0, p1, p2]);
         // Emitters emit from the side their winding faces.
         let front = ng.dot(wo) > 0.0;
         if ng == Vec3::ZERO {

@@ -1,8 +1,10 @@
 //! Helpers used by every layer: colour arithmetic, deterministic random
-//! numbers, a content hash and four-lane maths. Nothing here imports the
-//! rest of the crate.
+//! numbers, a content hash, four-lane maths, triangles' normals and areas
+//! and reading untrusted files. Nothing here imports the rest of the crate.
 
 pub mod color;
+pub mod file;
 pub mod hash;
 pub mod sampling;
 pub mod simd;
+pub mod triangle;

@@ -44,6 +44,75 @@ pub fn lightcuts(args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_lightcuts")).args(args).output().expect("run lightcuts")
 }
 
+/// How a run under limits ended.
+#[derive(Debug)]
+pub struct Limited {
+    /// The exit code; None when a signal ended it (an abort, or the kill at the deadline).
+    pub code: Option<i32>,
+    pub stdout: String,
+    pub stderr: String,
+    /// Whether it was still running at the deadline (then killed).
+    pub timed_out: bool,
+}
+
+/// Runs lightcuts with at most `memory_mib` MiB of address space
+/// (`prlimit --as`, util-linux's, on every Debian: an allocation past it
+/// fails, which aborts a Rust process) and `seconds` of wall-clock time
+/// (then it is killed): what a hostile input must not exceed.
+pub fn lightcuts_limited(args: &[&str], memory_mib: u64, seconds: u64) -> Limited {
+    use std::io::Read;
+    let mut child = Command::new("prlimit")
+        .arg(format!("--as={}", memory_mib << 20))
+        .arg(env!("CARGO_BIN_EXE_lightcuts"))
+        .args(args)
+        .stdin(std::process::Stdio::null())
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("run prlimit (util-linux)");
+    // Both pipes drained while waiting, so that a chatty child cannot block.
+    let mut out = child.stdout.take().unwrap();
+    let mut err = child.stderr.take().unwrap();
+    let out_thread = std::thread::spawn(move || {
+        let mut text = String::new();
+        let _ = out.read_to_string(&mut text);
+        text
+    });
+    let err_thread = std::thread::spawn(move || {
+        let mut text = String::new();
+        let _ = err.read_to_string(&mut text);
+        text
+    });
+    let deadline = std::time::Instant::now() + std::time::Duration::from_secs(seconds);
+    let mut timed_out = false;
+    let status = loop {
+        if let Some(status) = child.try_wait().unwrap() {
+            break status;
+        }
+        if std::time::Instant::now() >= deadline {
+            timed_out = true;
+            let _ = child.kill();
+            break child.wait().unwrap();
+        }
+        std::thread::sleep(std::time::Duration::from_millis(10));
+    };
+    Limited { code: status.code(), stdout: out_thread.join().unwrap(), stderr: err_thread.join().unwrap(), timed_out }
+}
+
+/// [`lightcuts_limited`] within 1 GiB and 30 s, asserted to end by itself
+/// with exit 1 and one error line naming each of `expect`.
+pub fn refused_within_limits(args: &[&str], expect: &[&str]) -> String {
+    let run = lightcuts_limited(args, 1024, 30);
+    assert!(!run.timed_out, "lightcuts {args:?} still ran after 30 s");
+    assert_eq!(run.code, Some(1), "lightcuts {args:?} (exit {:?}): {}", run.code, run.stderr);
+    let errors: Vec<&str> = run.stderr.lines().filter(|l| l.starts_with("error")).collect();
+    assert_eq!(errors.len(), 1, "one error line: {}", run.stderr);
+    for e in expect {
+        assert!(errors[0].contains(e), "'{e}' missing from: {}", errors[0]);
+    }
+    run.stderr
+}
+
 /// Runs lightcuts and asserts success, returning stdout.
 pub fn lightcuts_ok(args: &[&str]) -> String {
     let out = lightcuts(args);

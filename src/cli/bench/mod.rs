@@ -38,8 +38,8 @@ pub struct SwitchArgs {
     /// Light counts (each rounded to a square grid), comma-separated.
     #[arg(long, value_delimiter = ',', default_values_t = [25usize, 49, 100, 144, 196, 256, 324, 400])]
     pub lights: Vec<usize>,
-    /// Worker threads (0: one per CPU).
-    #[arg(long, default_value_t = 0)]
+    /// Worker threads (0: one per CPU; at most 1024).
+    #[arg(long, default_value_t = 0, value_parser = crate::cli::args::parse_threads)]
     pub threads: usize,
     /// Renders per mode and count; the fastest is reported.
     #[arg(long, default_value_t = 3)]
@@ -94,8 +94,8 @@ pub struct TreeArgs {
     /// Lights for the quality comparison against the greedy tree (O(n^2)).
     #[arg(long, default_value_t = 10_000)]
     pub quality_lights: usize,
-    /// Worker threads (0: one per CPU); the tree does not depend on it.
-    #[arg(long, default_value_t = 0)]
+    /// Worker threads (0: one per CPU; at most 1024); the tree does not depend on it.
+    #[arg(long, default_value_t = 0, value_parser = crate::cli::args::parse_threads)]
     pub threads: usize,
     #[arg(long, default_value_t = 1)]
     pub seed: u64,

@@ -128,7 +128,10 @@ impl<'a> Data<'a> {
                         self.error(&location, "refers to the GLB's BIN chunk, which the file does not have")
                     })?
                     .to_vec(),
-                gltf::buffer::Source::Uri(uri) => self.read_uri(uri, &format!("{location}.uri"))?,
+                // No more of a file than the buffer declares it holds.
+                gltf::buffer::Source::Uri(uri) => {
+                    self.read_uri(uri, &format!("{location}.uri"), Some(buffer.length() as u64))?
+                }
             };
             if data.len() < buffer.length() {
                 return Err(self.error(
@@ -141,8 +144,11 @@ impl<'a> Data<'a> {
         Ok(())
     }
 
-    /// The bytes a URI names: a base64 `data:` URI, or a file relative to the glTF file.
-    fn read_uri(&mut self, uri: &str, location: &str) -> Result<Vec<u8>, SceneError> {
+    /// The bytes a URI names: a base64 `data:` URI, or a regular file
+    /// relative to the glTF file (its first `declared` bytes, when a buffer
+    /// declares its length; else the whole file, up to
+    /// [`MAX_FILE_BYTES`](crate::util::file::MAX_FILE_BYTES)).
+    fn read_uri(&mut self, uri: &str, location: &str, declared: Option<u64>) -> Result<Vec<u8>, SceneError> {
         if let Some(rest) = uri.strip_prefix("data:") {
             let Some((_, payload)) = rest.split_once(";base64,") else {
                 return Err(self.error(location, "a data: URI must be base64 (';base64,')"));
@@ -158,7 +164,19 @@ impl<'a> Data<'a> {
         }
         let path = self.base.join(percent_decode(uri));
         self.inputs.push(path.clone());
-        std::fs::read(&path).map_err(|e| self.error(location, format!("cannot read '{}': {e}", path.display())))
+        let read = match declared {
+            Some(length) if length <= crate::util::file::MAX_FILE_BYTES => {
+                crate::util::file::read_regular_prefix(&path, length)
+            }
+            Some(length) => {
+                return Err(self.error(
+                    location.replace(".uri", ".byteLength"),
+                    format!("is {length}, more than {} bytes", crate::util::file::MAX_FILE_BYTES),
+                ))
+            }
+            None => crate::util::file::read_regular(&path, crate::util::file::MAX_FILE_BYTES),
+        };
+        read.map_err(|e| self.error(location, format!("cannot read '{}': {e}", path.display())))
     }
 
     /// Decodes an image (PNG or JPEG, its colours encoded as `encoding`
@@ -175,7 +193,7 @@ impl<'a> Data<'a> {
         let at = format!("images[{}]", image.index());
         let (bytes, named) = match image.source() {
             gltf::image::Source::Uri { uri, .. } => {
-                let bytes = self.read_uri(uri, &format!("{at}.uri"))?;
+                let bytes = self.read_uri(uri, &format!("{at}.uri"), None)?;
                 let named = if uri.starts_with("data:") { None } else { Some(self.base.join(percent_decode(uri))) };
                 (bytes, named)
             }

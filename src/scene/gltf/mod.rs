@@ -148,7 +148,7 @@ pub fn import(
         "emitter_samples",
         format!("must be between 1 and {MAX_EMITTER_SAMPLES}, got {}", spec.emitter_samples),
     )?;
-    let bytes = std::fs::read(&path)
+    let bytes = crate::util::file::read_regular(&path, crate::util::file::MAX_FILE_BYTES)
         .map_err(|e| SceneError::new(scene_file, "gltf.file", format!("cannot read '{}': {e}", path.display())))?;
     let gltf = io::parse(&path, &bytes)?;
     let data = io::Data::load(&path, &gltf.document, gltf.blob.as_deref())?;

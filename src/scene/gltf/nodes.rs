@@ -212,14 +212,15 @@ impl Importer<'_, '_> {
             ));
         }
         let aspect_ratio = p.aspect_ratio().filter(|a| a.is_finite() && *a > 0.0);
-        let mut spec = CameraSpec::pinhole(eye.to_array(), (eye + forward).to_array(), up.to_array(), fov_y);
+        let look_at = CameraSpec::aim(eye.as_dvec3(), forward.as_dvec3(), 1.0);
+        let mut spec = CameraSpec::pinhole(eye.to_array(), look_at, up.to_array(), fov_y);
         // A moving camera travels in a straight line to where it is at the
         // close, looking along its direction there.
         if let Some(end) = end {
             let (eye_end, forward_end) =
                 (end.w_axis.truncate(), end.transform_vector3(Vec3::NEG_Z).normalize_or_zero());
             spec.eye_end = Some(eye_end.to_array());
-            spec.look_at_end = Some((eye_end + forward_end).to_array());
+            spec.look_at_end = Some(CameraSpec::aim(eye_end.as_dvec3(), forward_end.as_dvec3(), 1.0));
         }
         Ok(Some(GltfCamera { spec, aspect_ratio }))
     }

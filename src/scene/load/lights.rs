@@ -9,10 +9,7 @@ use super::{within_limits, Validator, MAX_COORDINATE};
 use crate::scene::file::{self, AreaMeshSpec, AreaSpec, GridSpec, LightSpec, PointSpec, SceneFile, SunSpec};
 use crate::scene::{Albedo, Environment, LightSource, Material, Mesh, SceneError, MAX_GRID_LIGHTS};
 
-/// The largest intensity (W/sr), radiance (W/(m^2 sr)) or irradiance
-/// (W/m^2) one light source may have, per channel (glTF's importer has the
-/// same cap on its lights' photometric values).
-pub const MAX_EMISSION: f32 = 1e30;
+pub use crate::scene::MAX_EMISSION;
 
 /// The most the lights of a scene may emit in all: their intensities'
 /// sum (W/sr; irradiances in W/m^2 for lights at infinity, an area light

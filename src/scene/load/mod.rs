@@ -83,8 +83,8 @@ impl Scene {
             let file = path.file_name().map_or_else(String::new, |f| f.to_string_lossy().into_owned());
             SceneFile { usd: Some(file::UsdSpec::file(file)), ..SceneFile::default() }
         } else {
-            let text =
-                std::fs::read(path).map_err(|e| SceneError::new(path, "file", format!("cannot read scene: {e}")))?;
+            let text = crate::util::file::read_regular(path, crate::util::file::MAX_FILE_BYTES)
+                .map_err(|e| SceneError::new(path, "file", format!("cannot read scene: {e}")))?;
             let text = String::from_utf8(text).map_err(|e| {
                 SceneError::new(
                     path,
@@ -183,7 +183,8 @@ impl Scene {
         if extension("gltf") || extension("glb") {
             return None;
         }
-        let text = String::from_utf8(std::fs::read(path).ok()?).ok()?;
+        let bytes = crate::util::file::read_regular(path, crate::util::file::MAX_FILE_BYTES).ok()?;
+        let text = String::from_utf8(bytes).ok()?;
         let spec = if extension("json") { parse_json(path, &text) } else { parse_toml(path, &text) }.ok()?;
         Some(path.parent().unwrap_or(Path::new(".")).join(spec.usd?.file))
     }
@@ -274,6 +275,7 @@ impl Scene {
                 spec.gltf.as_ref().and_then(|g| g.shutter).or_else(|| spec.usd.as_ref().and_then(|u| u.shutter));
             camera_spec.shutter = given.unwrap_or(camera_spec.shutter);
         }
+        untraceable_instances(path, &mut objects, &meshes, &lights, &camera_spec, &mut warnings);
         let ChosenEnvironment { environment, group: environment_group } =
             environment(&v, base, &spec, usd_environment, &mut inputs, &mut warnings)?;
         let indirect = settings::indirect(&v, &spec)?;
@@ -306,6 +308,51 @@ impl Scene {
             additions: Vec::new(),
             animation,
         })
+    }
+}
+
+/// Draws still, or drops, the objects Embree could not trace
+/// (`object::make_traceable`), with a warning for each kind: every ray
+/// starts within the scene's reach (its geometry, point lights and camera).
+fn untraceable_instances(
+    path: &Path,
+    objects: &mut Vec<super::Object>,
+    meshes: &[super::Mesh],
+    lights: &[LightSource],
+    camera: &file::CameraSpec,
+    warnings: &mut Vec<String>,
+) {
+    let (lo, hi) = object::world_bounds(meshes, objects);
+    let points = lights
+        .iter()
+        .flat_map(LightSource::positions)
+        .chain([camera.eye, camera.look_at].map(Vec3::from))
+        .chain(camera.eye_end.map(Vec3::from))
+        .chain([lo, hi].into_iter().filter(|p| p.is_finite()));
+    let reach = points.map(|p| p.as_dvec3().length()).fold(0.0, f64::max) + f64::from(camera.lens_radius.abs());
+    let changed = object::make_traceable(objects, reach);
+    let list = |names: &[String]| {
+        let shown: Vec<&str> = names.iter().take(3).map(String::as_str).collect();
+        let more = names.len().saturating_sub(shown.len());
+        format!("{}{}", shown.join(", "), if more > 0 { format!(" and {more} more") } else { String::new() })
+    };
+    if !changed.drawn_still.is_empty() {
+        warnings.push(format!(
+            "{}: {} moving object(s) drawn still ({}): a step of the motion scales them to under about 1e-16 of the scene's extent, \
+             which the ray tracer cannot carry rays into",
+            path.display(),
+            changed.drawn_still.len(),
+            list(&changed.drawn_still)
+        ));
+    }
+    if !changed.dropped.is_empty() {
+        warnings.push(format!(
+            "{}: {} instance(s) left out ({}): scaled to under about 1e-16 of the scene's extent in some direction, they cover no \
+             pixel, and the ray tracer cannot carry rays into them",
+            path.display(),
+            changed.dropped.len(),
+            list(&changed.dropped)
+        ));
     }
 }
 

@@ -11,7 +11,7 @@ use crate::scene::file::{self, SceneFile};
 use crate::scene::gltf::GltfCamera;
 use crate::scene::{
     check_resolution, Environment, EnvironmentMap, Film, Indirect, PathSettings, SceneError, VplSettings,
-    DEFAULT_GLTF_WIDTH, DEFAULT_MAX_DEPTH, MAX_VPL_PATHS, MOST_PATH_DEPTH,
+    DEFAULT_GLTF_WIDTH, DEFAULT_MAX_DEPTH, MAX_SPP, MAX_VPL_PATHS, MOST_PATH_DEPTH,
 };
 
 /// The film and the camera when the TOML gives them; a scene without a
@@ -29,7 +29,9 @@ pub(super) fn check_film_and_camera(v: &Validator<'_>, spec: &SceneFile) -> Resu
     if let Some(f) = &spec.film {
         v.check(f.width >= 1, "film.width", || "must be at least 1".into())?;
         v.check(f.height >= 1, "film.height", || "must be at least 1".into())?;
-        v.check(f.spp >= 1, "film.spp", || "must be at least 1".into())?;
+        v.check((1..=MAX_SPP).contains(&f.spp), "film.spp", || {
+            format!("must be from 1 to {}, got {}", MAX_SPP, f.spp)
+        })?;
         check_resolution(path, "film", f.width, f.height)?;
     }
     if let Some(cam) = &spec.camera {
@@ -105,9 +107,14 @@ pub(super) fn camera_and_film(
         }
         (None, None) => {
             let Some(camera) = framing_camera(bounds) else {
+                let file = match (&spec.gltf, &spec.usd) {
+                    (Some(_), _) => "the glTF file has",
+                    (None, Some(_)) => "the USD stage has",
+                    (None, None) => "the scene has",
+                };
                 return Err(v.error(
                     "camera",
-                    "missing: the glTF file has no camera and no geometry to frame, and no [camera] is given",
+                    &format!("missing: {file} no camera and no geometry to frame, and no [camera] is given"),
                 ));
             };
             warnings.push(format!(
@@ -170,11 +177,13 @@ pub(super) fn environment(
                     let map = EnvironmentMap::load_exr(&exr, env.scale).map_err(|e| {
                         SceneError::new(&exr, field("file"), format!("cannot use as an environment: {e}"))
                     })?;
+                    // Each texel is within the limit (the reader checked): the scale took it past.
                     let brightest = map.brightest();
                     v.check(brightest <= MAX_EMISSION, &field("scale"), || {
                         format!(
-                            "the map's brightest texel times the scale is {brightest:e} W/(m^2 sr): at most \
-                             {MAX_EMISSION:e}"
+                            "{} times {} makes its brightest texel {brightest:e} W/(m^2 sr): at most {MAX_EMISSION:e}",
+                            exr.display(),
+                            env.scale
                         )
                     })?;
                     map

@@ -147,11 +147,17 @@ pub(super) fn mesh(stage: &Stage, prim: &str, time: f64, wanted: &Wanted<'_>) ->
     {
         return Err((
             at("points"),
-            format!("a point must be finite and within +/-{:e}, got {p}", crate::scene::MAX_COORDINATE),
+            format!(
+                "a point must be finite and within +/-{:e} (before the stage's metersPerUnit), got {p}",
+                crate::scene::MAX_COORDINATE
+            ),
         ));
     }
+    if let Some((face, count)) = counts.iter().enumerate().find(|(_, &c)| c < 0) {
+        return Err((at("faceVertexCounts"), format!("face {face}'s count is {count}: a count cannot be negative")));
+    }
     let total: i64 = counts.iter().sum();
-    if counts.iter().any(|&c| c < 0) || total != indices.len() as i64 {
+    if total != indices.len() as i64 {
         return Err((
             at("faceVertexCounts"),
             format!("the counts add up to {total}, but faceVertexIndices holds {} indices", indices.len()),
@@ -347,7 +353,13 @@ pub(super) fn gprim(stage: &Stage, prim: &str, type_name: &str, time: f64) -> Re
         if v >= 0.0 && v <= f64::from(crate::scene::MAX_COORDINATE) {
             Ok(v as f32)
         } else {
-            Err((format!("{prim}.{attribute}"), format!("must be >= 0 and finite, got {v}")))
+            Err((
+                format!("{prim}.{attribute}"),
+                format!(
+                    "must be from 0 to {:e} (before the stage's metersPerUnit), got {v}",
+                    crate::scene::MAX_COORDINATE
+                ),
+            ))
         }
     };
     let axis = |read: &Reader<'_>| -> Result<usize, Located> {
@@ -432,10 +444,7 @@ fn lathe(profile: &[(f32, f32)]) -> Mesh {
         }
     }
     // The triangles that meet at the axis with two corners there have no area.
-    let area = |t: &[u32; 3]| {
-        let [a, b, c] = t.map(|i| positions[i as usize]);
-        (b - a).cross(c - a).length()
-    };
+    let area = |t: &[u32; 3]| crate::util::triangle::area(t.map(|i| positions[i as usize]));
     mesh.triangles = triangles.into_iter().filter(|t| area(t) > 0.0).collect();
     mesh.positions = positions;
     mesh.normals = Some(normals);

@@ -110,7 +110,8 @@ fn import_stage(
     parts: Parts<'_>,
 ) -> Result<Option<GltfCamera>, SceneError> {
     let error = |(location, message): Located| SceneError::new(path, location, message);
-    let size = std::fs::metadata(path)
+    let size = crate::util::file::open_regular(path)
+        .and_then(|file| file.metadata())
         .map_err(|e| SceneError::new(path, "file", format!("cannot read the stage: {e}")))?
         .len();
     if size == 0 {
@@ -856,7 +857,7 @@ impl Walker<'_, '_> {
         let distance = focus_distance.map_or(1.0, f64::from);
         let mut spec = CameraSpec::pinhole(
             eye.as_vec3().to_array(),
-            (eye + forward * distance).as_vec3().to_array(),
+            CameraSpec::aim(eye, forward, distance),
             up.as_vec3().to_array(),
             fov_y.to_degrees() as f32,
         );
@@ -866,7 +867,7 @@ impl Walker<'_, '_> {
             let (eye_end, forward_end, _) = place(&worlds[worlds.len() - 1]);
             if eye_end != eye || forward_end != forward {
                 spec.eye_end = Some(eye_end.as_vec3().to_array());
-                spec.look_at_end = Some((eye_end + forward_end * distance).as_vec3().to_array());
+                spec.look_at_end = Some(CameraSpec::aim(eye_end, forward_end, distance));
             }
         }
         Ok(Some(GltfCamera { spec, aspect_ratio: Some((horizontal / vertical) as f32) }))

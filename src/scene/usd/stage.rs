@@ -76,14 +76,104 @@ fn checked(path: &str) -> Result<&str, Failure> {
     }
 }
 
+/// USD's default resolver, with every file checked before the reader sees
+/// it: only regular files (a FIFO blocks, a device never ends) of at most
+/// [`MAX_FILE_BYTES`](crate::util::file::MAX_FILE_BYTES), and only packages
+/// whose members are stored as the `.usdz` format defines them
+/// (uncompressed, and no larger than the package): the reader inflates a
+/// member whole, so a deflated member of 2.5 GiB in a package of 2.6 MB
+/// took 5.3 GB before its error.
+struct CheckedResolver {
+    inner: ar::DefaultResolver,
+}
+
+impl CheckedResolver {
+    /// Refuses `path` unless it is a regular file within the size limit and,
+    /// when it is a zip archive (a `.usdz` package), every member is stored
+    /// uncompressed within the package's own size.
+    fn check_file(path: &Path) -> std::io::Result<()> {
+        let invalid = |message: String| std::io::Error::new(std::io::ErrorKind::InvalidData, message);
+        let file = crate::util::file::open_regular(path)?;
+        let length = file.metadata()?.len();
+        if length > crate::util::file::MAX_FILE_BYTES {
+            return Err(invalid(format!(
+                "'{}' holds {length} bytes, more than {}",
+                path.display(),
+                crate::util::file::MAX_FILE_BYTES
+            )));
+        }
+        let mut magic = [0u8; 4];
+        let mut reader = std::io::BufReader::new(file);
+        let zip = reader.read_exact(&mut magic).is_ok() && magic == *b"PK\x03\x04";
+        if !zip {
+            return Ok(());
+        }
+        let mut archive = zip::ZipArchive::new(reader.into_inner())
+            .map_err(|e| invalid(format!("'{}' is not a readable package: {e}", path.display())))?;
+        for i in 0..archive.len() {
+            let member =
+                archive.by_index_raw(i).map_err(|e| invalid(format!("'{}': member {i}: {e}", path.display())))?;
+            if member.compression() != zip::CompressionMethod::Stored {
+                return Err(invalid(format!(
+                    "'{}': member '{}' is compressed ({}); a .usdz package stores its members uncompressed",
+                    path.display(),
+                    member.name(),
+                    member.compression()
+                )));
+            }
+            if member.size() > length {
+                return Err(invalid(format!(
+                    "'{}': member '{}' claims {} bytes, more than the package holds",
+                    path.display(),
+                    member.name(),
+                    member.size()
+                )));
+            }
+        }
+        Ok(())
+    }
+}
+
+impl ar::Resolver for CheckedResolver {
+    fn create_identifier(&self, asset_path: &str, anchor: Option<&ar::ResolvedPath>) -> String {
+        self.inner.create_identifier(asset_path, anchor)
+    }
+
+    fn resolve(&self, asset_path: &str) -> Option<ar::ResolvedPath> {
+        self.inner.resolve(asset_path)
+    }
+
+    fn resolve_for_new_asset(&self, asset_path: &str) -> Option<ar::ResolvedPath> {
+        self.inner.resolve_for_new_asset(asset_path)
+    }
+
+    fn open_asset(&self, resolved_path: &ar::ResolvedPath) -> std::io::Result<Box<dyn ar::Asset>> {
+        let text = resolved_path.to_string_lossy();
+        let file = match ar::split_package_relative_path_outer(&text) {
+            Some((package, _)) => PathBuf::from(package),
+            None => resolved_path.to_path_buf(),
+        };
+        Self::check_file(&file)?;
+        self.inner.open_asset(resolved_path)
+    }
+
+    fn identity(&self) -> String {
+        self.inner.identity()
+    }
+}
+
 impl Stage {
     /// Opens the stage whose root layer is `path`, loading every payload.
     pub(super) fn open(path: &Path) -> Result<Self, Failure> {
         let text = path.to_str().ok_or_else(|| "the path is not UTF-8".to_string())?;
-        let stage = usd::Stage::open(text).map_err(|e| failure(&e))?;
+        CheckedResolver::check_file(path).map_err(|e| e.to_string())?;
+        let stage = usd::Stage::builder()
+            .resolver(CheckedResolver { inner: ar::DefaultResolver::new() })
+            .open(text)
+            .map_err(|e| failure(&e))?;
         let errors = stage.composition_errors();
         if let Some(first) = errors.first() {
-            return Err(format!("composition: {first}"));
+            return Err(format!("composition: {}", composition_error(first)));
         }
         Ok(Self { stage, root: path.to_path_buf() })
     }
@@ -91,7 +181,7 @@ impl Stage {
     /// Composition errors found since the stage was opened (a missing
     /// reference or payload surfaces as its prim is first read).
     pub(super) fn composition_errors(&self) -> Vec<String> {
-        self.stage.composition_errors().iter().map(ToString::to_string).collect()
+        self.stage.composition_errors().iter().map(composition_error).collect()
     }
 
     /// The layer metadata field `name` (`upAxis`, `metersPerUnit`...), as text
@@ -323,7 +413,7 @@ impl Stage {
         let relative = asset.trim_start_matches("./");
         if root_is_package && !Path::new(asset).is_absolute() && !ar::is_package_relative_path(asset) {
             let name = format!("{}[{relative}]", self.root.display());
-            let resolver = ar::DefaultResolver::new();
+            let resolver = CheckedResolver { inner: ar::DefaultResolver::new() };
             let resolved = ar::Resolver::resolve(&resolver, &name)
                 .ok_or_else(|| format!("'{asset}' is not in the package {}", self.root.display()))?;
             let mut reader = ar::Resolver::open_asset(&resolver, &resolved).map_err(|e| e.to_string())?;
@@ -335,11 +425,8 @@ impl Stage {
             return Ok((self.root.clone(), bytes));
         }
         let file = base.join(relative);
-        let size = std::fs::metadata(&file).map_err(|e| format!("cannot read '{}': {e}", file.display()))?.len();
-        if size > limit {
-            return Err(format!("'{}' is larger than {limit} bytes", file.display()));
-        }
-        let bytes = std::fs::read(&file).map_err(|e| format!("cannot read '{}': {e}", file.display()))?;
+        let bytes = crate::util::file::read_regular(&file, limit)
+            .map_err(|e| format!("cannot read '{}': {e}", file.display()))?;
         Ok((file, bytes))
     }
 
@@ -376,6 +463,29 @@ impl Stage {
         Ok(values)
     }
 }
+
+/// A composition error as text. The reader reports a chain of arcs nested
+/// past USD's limit (100, C++ `MAX_COMPOSITION_DEPTH`) as a cycle: such a
+/// chain, whose sites never repeat, is called what it is.
+fn composition_error(error: &openusd::pcp::Error) -> String {
+    if let openusd::pcp::Error::ArcCycle(chain) = error {
+        let sites: std::collections::HashSet<(&str, String)> =
+            chain.hops.iter().map(|hop| (hop.layer.as_str(), hop.path.as_str().to_string())).collect();
+        // The root's own site counts as the first level.
+        if sites.len() == chain.hops.len() && chain.hops.len() + 1 >= COMPOSITION_DEPTH {
+            return format!(
+                "{} is composed through a chain of {} nested references or payloads, no cycle, but deeper than \
+                 USD's limit of {COMPOSITION_DEPTH} levels",
+                chain.composing,
+                chain.hops.len()
+            );
+        }
+    }
+    error.to_string()
+}
+
+/// How deep USD nests composition arcs (C++ `MAX_COMPOSITION_DEPTH`).
+const COMPOSITION_DEPTH: usize = 100;
 
 fn number(value: &sdf::Value) -> Option<f64> {
     Some(match *value {
