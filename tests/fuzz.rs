@@ -14,8 +14,20 @@
 //! Embree refuses: an error the command line reports) and how many were
 //! rejected by the loader.
 //!
-//! The suite runs 300 iterations of each. For a long run (10 minutes by
-//! default; LIGHTCUTS_FUZZ_ITERATIONS and LIGHTCUTS_FUZZ_SEED also apply):
+//! A second fuzzer runs the real binary on mutants of every file a render
+//! reads besides the scene, each run under 1 GiB of address space and 30 s
+//! of wall-clock time (`prlimit`; then killed): a `.usdz` package, a glTF
+//! buffer file, PNG and JPEG textures (their headers' sizes mutated with
+//! valid checksums, so that the decoders reach them), an EXR environment
+//! map (its data window mutated) and a farm tile that `assemble` reads.
+//! Every run must end by itself with exit 0, or 1 and one error line; an
+//! abort (an allocation past the limit), a hang or a panic fails the test
+//! and keeps the input.
+//!
+//! The suite runs 300 iterations of the first and 100 of the second. For a
+//! long run of both (10 minutes each by default; LIGHTCUTS_FUZZ_ITERATIONS
+//! and LIGHTCUTS_FUZZ_SEED also apply; `.ci/run` runs it when
+//! LIGHTCUTS_FUZZ_SECONDS is set):
 //!   LIGHTCUTS_FUZZ_SECONDS=600 cargo test --release --test fuzz -- --ignored --nocapture
 
 mod common;
@@ -525,4 +537,264 @@ fn long_fuzz_run() {
         usds.geometry_refused,
         usds.rejected
     );
+}
+
+/// The files the reader fuzzer mutates, each beside a scene that reads it,
+/// and what runs it.
+struct ReaderInputs {
+    dir: common::TempDir,
+    /// `stage.usdz`: the fuzz stage and its texture, stored.
+    package: Vec<u8>,
+    /// `buffers.bin` of `buffers.gltf` (and the glTF's JSON, whose
+    /// byteLengths are mutated too).
+    bin: Vec<u8>,
+    gltf: String,
+    /// `texture.png` of `png.toml`; `texture.jpg` of `jpeg.usda`.
+    png: Vec<u8>,
+    jpeg: Vec<u8>,
+    /// `env.exr`, rendered as `--environment`.
+    exr: Vec<u8>,
+    /// `tile1.exr` of two tiles `assemble` joins (`tile0.exr` stays valid).
+    tile: Vec<u8>,
+}
+
+impl ReaderInputs {
+    fn new() -> Self {
+        let dir = common::TempDir::new("reader-fuzz");
+        let fuzz = common::scenes().join("usd/fuzz");
+        let stage = std::fs::read(fuzz.join("stage.usda")).unwrap();
+        let png = std::fs::read(fuzz.join("texture.png")).unwrap();
+        let jpeg = std::fs::read(fuzz.join("texture.jpg")).unwrap();
+        let package = {
+            use std::io::Write;
+            let mut package = zip::ZipWriter::new(std::io::Cursor::new(Vec::new()));
+            let stored = zip::write::SimpleFileOptions::default().compression_method(zip::CompressionMethod::Stored);
+            package.start_file("stage.usda", stored).unwrap();
+            package.write_all(&stage).unwrap();
+            package.start_file("texture.png", stored).unwrap();
+            package.write_all(&png).unwrap();
+            package.finish().unwrap().into_inner()
+        };
+        let text = String::from_utf8(stage).unwrap().replace("@texture.png@", "@texture.jpg@");
+        std::fs::write(dir.path("jpeg.usda"), text).unwrap();
+        let textured = lightcuts::scene::builder::floor_spheres_grid(2).toml().replacen(
+            "[materials.floor]\nalbedo = [0.7, 0.7, 0.7]\n",
+            "[materials.floor]\ntexture = \"texture.png\"\n",
+            1,
+        );
+        std::fs::write(dir.path("png.toml"), textured).unwrap();
+        std::fs::write(dir.path("scene.toml"), lightcuts::scene::builder::floor_spheres_grid(2).toml()).unwrap();
+        let g = common::gltf::floor_and_point_light();
+        g.write_separate(&dir.path(""), "buffers");
+        let bin = std::fs::read(dir.path("buffers.bin")).unwrap();
+        let gltf = std::fs::read_to_string(dir.path("buffers.gltf")).unwrap();
+        // A small environment map (16 x 8, uncompressed, so that a flipped
+        // byte is often a pixel) and two tiles of a 16 x 12 frame.
+        let env = dir.path("env.exr");
+        {
+            use exr::prelude::*;
+            let channels = SpecificChannels::rgb(|p: Vec2<usize>| (0.5f32, 0.4 + 0.01 * p.x() as f32, 0.3f32));
+            let mut image = Image::from_channels((16, 8), channels);
+            image.layer_data.encoding.compression = Compression::Uncompressed;
+            image.write().to_file(&env).unwrap();
+        }
+        let exr = std::fs::read(&env).unwrap();
+        let scene = dir.path("scene.toml");
+        for i in 0..2 {
+            let tile = dir.path(&format!("tile{i}.exr"));
+            let flags = ["--resolution", "16x12", "--tile", &format!("{i}/2"), "--quiet"];
+            common::lightcuts_ok(&[&["render", common::s(&scene), "-o", common::s(&tile)][..], &flags].concat());
+        }
+        let tile = std::fs::read(dir.path("tile1.exr")).unwrap();
+        Self { dir, package, bin, gltf, png, jpeg, exr, tile }
+    }
+}
+
+/// The PNG `bytes` with its IHDR's width and height set, and the chunk's
+/// CRC recomputed (so that the decoder reads the size rather than refusing
+/// the checksum).
+fn png_with_size(bytes: &[u8], width: u32, height: u32) -> Vec<u8> {
+    let mut bytes = bytes.to_vec();
+    if bytes.len() < 33 {
+        return bytes;
+    }
+    bytes[16..20].copy_from_slice(&width.to_be_bytes());
+    bytes[20..24].copy_from_slice(&height.to_be_bytes());
+    let mut crc = !0u32;
+    for &b in &bytes[12..29] {
+        crc ^= u32::from(b);
+        for _ in 0..8 {
+            crc = if crc & 1 == 1 { (crc >> 1) ^ 0xEDB8_8320 } else { crc >> 1 };
+        }
+    }
+    bytes[29..33].copy_from_slice(&(!crc).to_be_bytes());
+    bytes
+}
+
+/// A size a header may claim: small, at a limit, past one, or random.
+fn claimed_size(rng: &mut Rng) -> u32 {
+    const SIZES: [u32; 9] = [0, 1, 2, 255, 16384, 65535, 100_000, 1 << 30, u32::MAX];
+    if rng.below(4) == 0 {
+        rng.below(1 << 32) as u32
+    } else {
+        SIZES[rng.below(SIZES.len() as u64) as usize]
+    }
+}
+
+/// A mutant of `bytes` whose `key` field (found by its bytes) is set to
+/// random 32-bit values at `offset` past the key, `count` of them; else a
+/// generic mutant.
+fn with_fields(rng: &mut Rng, bytes: &[u8], key: &[u8], offset: usize, count: usize, big_endian: bool) -> Vec<u8> {
+    let Some(at) = bytes.windows(key.len()).position(|w| w == key) else { return mutate(rng, bytes) };
+    let mut bytes = bytes.to_vec();
+    for k in 0..count {
+        let start = at + key.len() + offset + 4 * k;
+        if start + 4 <= bytes.len() && rng.below(2) == 0 {
+            let v = claimed_size(rng);
+            let v = if rng.below(4) == 0 { (v as i32).wrapping_neg() as u32 } else { v };
+            bytes[start..start + 4].copy_from_slice(&if big_endian { v.to_be_bytes() } else { v.to_le_bytes() });
+        }
+    }
+    bytes
+}
+
+/// One run of the binary on a mutant, under the limits; panics (keeping the
+/// mutant's bytes in the message) on a signal, a hang or a panic.
+fn run_limited(iteration: u64, what: &str, args: &[&str], input: &[u8]) -> Outcome {
+    let run = common::lightcuts_limited(args, 1024, 30);
+    let shown = || String::from_utf8_lossy(&input[..input.len().min(4096)]).into_owned();
+    assert!(!run.timed_out, "iteration {iteration}: {what}: still running after 30 s; input:\n{}", shown());
+    assert!(!run.stderr.contains("panicked"), "iteration {iteration}: {what}: {}", run.stderr);
+    match run.code {
+        Some(0) => Outcome::Rendered,
+        Some(1) => {
+            let errors = run.stderr.lines().filter(|l| l.starts_with("error")).count();
+            assert_eq!(errors, 1, "iteration {iteration}: {what}: {}", run.stderr);
+            Outcome::Rejected
+        }
+        other => panic!(
+            "iteration {iteration}: {what}: exit {other:?} (a signal: an abort past 1 GiB?): {}\ninput:\n{}",
+            run.stderr,
+            shown()
+        ),
+    }
+}
+
+/// Runs the reader fuzzer: per iteration, one mutant of each input, each
+/// through the binary; the outcomes by reader.
+fn fuzz_readers(iterations: u64, seed: u64, deadline: Option<std::time::Instant>) -> Vec<(&'static str, Counts)> {
+    let inputs = ReaderInputs::new();
+    let dir = &inputs.dir;
+    let mut rng = Rng::seeded(seed);
+    let mut counts: Vec<(&'static str, Counts)> =
+        ["usdz", "glTF buffer", "PNG", "JPEG", "EXR", "tile"].into_iter().map(|n| (n, Counts::default())).collect();
+    let out = dir.path("out.exr");
+    let o = common::s(&out);
+    let small = ["--resolution", "16x12", "--quiet"];
+    for i in 0..iterations {
+        if deadline.is_some_and(|d| std::time::Instant::now() >= d) {
+            break;
+        }
+        // The package: its zip structure (sizes, methods) and its members.
+        let package = if rng.below(2) == 0 {
+            let key: &[u8] = if rng.below(2) == 0 { b"PK\x01\x02" } else { b"PK\x03\x04" };
+            // Method (offset 6 or 4), then CRC and the two sizes.
+            with_fields(&mut rng, &inputs.package, key, 4, 4, false)
+        } else {
+            mutate(&mut rng, &inputs.package)
+        };
+        let path = dir.path("stage.usdz");
+        std::fs::write(&path, &package).unwrap();
+        counts[0].1.add(run_limited(
+            i,
+            "usdz",
+            &[&["render", common::s(&path), "-o", o][..], &small].concat(),
+            &package,
+        ));
+        // The glTF's buffer file, and its declared lengths.
+        let bin = mutate(&mut rng, &inputs.bin);
+        std::fs::write(dir.path("buffers.bin"), &bin).unwrap();
+        let gltf = if rng.below(3) == 0 {
+            replace_number(&mut rng, inputs.gltf.as_bytes())
+        } else {
+            inputs.gltf.clone().into_bytes()
+        };
+        std::fs::write(dir.path("buffers.gltf"), &gltf).unwrap();
+        let scene = dir.path("buffers.gltf");
+        counts[1].1.add(run_limited(
+            i,
+            "glTF buffer",
+            &[&["render", common::s(&scene), "-o", o][..], &small].concat(),
+            &bin,
+        ));
+        // The textures: sizes in their headers (checksums kept), or anything.
+        let png = if rng.below(2) == 0 {
+            png_with_size(&inputs.png, claimed_size(&mut rng), claimed_size(&mut rng))
+        } else {
+            mutate(&mut rng, &inputs.png)
+        };
+        std::fs::write(dir.path("texture.png"), &png).unwrap();
+        let scene = dir.path("png.toml");
+        counts[2].1.add(run_limited(i, "PNG", &[&["render", common::s(&scene), "-o", o][..], &small].concat(), &png));
+        // SOF0: marker, length (2), precision (1), then height and width
+        // (2 each): two 16-bit fields read as one 32-bit one here.
+        let jpeg = if rng.below(2) == 0 {
+            with_fields(&mut rng, &inputs.jpeg, &[0xff, 0xc0], 3, 1, true)
+        } else {
+            mutate(&mut rng, &inputs.jpeg)
+        };
+        std::fs::write(dir.path("texture.jpg"), &jpeg).unwrap();
+        let scene = dir.path("jpeg.usda");
+        counts[3].1.add(run_limited(i, "JPEG", &[&["render", common::s(&scene), "-o", o][..], &small].concat(), &jpeg));
+        // The environment map's data window, or anything.
+        let exr = if rng.below(2) == 0 {
+            with_fields(&mut rng, &inputs.exr, b"dataWindow\0box2i\0", 4, 4, false)
+        } else {
+            mutate(&mut rng, &inputs.exr)
+        };
+        let env = dir.path("env-mutant.exr");
+        std::fs::write(&env, &exr).unwrap();
+        let scene = dir.path("scene.toml");
+        let args = [&["render", common::s(&scene), "-o", o, "--environment", common::s(&env)][..], &small].concat();
+        counts[4].1.add(run_limited(i, "EXR", &args, &exr));
+        // A farm tile.
+        let tile = if rng.below(2) == 0 {
+            with_fields(&mut rng, &inputs.tile, b"dataWindow\0box2i\0", 4, 4, false)
+        } else {
+            mutate(&mut rng, &inputs.tile)
+        };
+        let tile1 = dir.path("tile1-mutant.exr");
+        std::fs::write(&tile1, &tile).unwrap();
+        let tile0 = dir.path("tile0.exr");
+        counts[5].1.add(run_limited(i, "tile", &["assemble", o, common::s(&tile0), common::s(&tile1)], &tile));
+    }
+    counts
+}
+
+#[test]
+fn every_reader_survives_its_mutants_within_limits() {
+    let counts = fuzz_readers(100, 3, None);
+    println!("{counts:?}");
+    // Each reader both accepted and refused some of its mutants.
+    for (what, c) in counts {
+        assert!(c.rendered > 0 && c.rejected > 0, "{what}: {c:?}");
+    }
+}
+
+/// The reader fuzzer's long run; see the module documentation.
+#[test]
+#[ignore]
+fn long_reader_fuzz_run() {
+    let env = |name: &str, default: u64| std::env::var(name).ok().and_then(|v| v.parse().ok()).unwrap_or(default);
+    let (iterations, seconds, seed) = (
+        env("LIGHTCUTS_FUZZ_ITERATIONS", 1_000_000),
+        env("LIGHTCUTS_FUZZ_SECONDS", 600),
+        env("LIGHTCUTS_FUZZ_SEED", 2),
+    );
+    let start = std::time::Instant::now();
+    let counts = fuzz_readers(iterations, seed, Some(start + std::time::Duration::from_secs(seconds)));
+    println!("reader mutants (seed {seed}) in {:.0} s, each run within 1 GiB and 30 s:", start.elapsed().as_secs_f64());
+    for (what, c) in counts {
+        println!("  {what}: {} rendered, {} refused with one error line", c.rendered, c.rejected);
+    }
 }
