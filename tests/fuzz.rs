@@ -744,8 +744,14 @@ fn fuzz_readers(iterations: u64, seed: u64, deadline: Option<std::time::Instant>
             mutate(&mut rng, &inputs.jpeg)
         };
         std::fs::write(dir.path("texture.jpg"), &jpeg).unwrap();
+        // An unreadable texture of a stage is a warning: --strict refuses it.
         let scene = dir.path("jpeg.usda");
-        counts[3].1.add(run_limited(i, "JPEG", &[&["render", common::s(&scene), "-o", o][..], &small].concat(), &jpeg));
+        counts[3].1.add(run_limited(
+            i,
+            "JPEG",
+            &[&["render", common::s(&scene), "-o", o, "--strict"][..], &small].concat(),
+            &jpeg,
+        ));
         // The environment map's data window, or anything.
         let exr = if rng.below(2) == 0 {
             with_fields(&mut rng, &inputs.exr, b"dataWindow\0box2i\0", 4, 4, false)

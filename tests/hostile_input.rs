@@ -107,6 +107,29 @@ fn rejects(dir: &TempDir, name: &str, text: &[u8], expect: &[&str]) {
     assert!(dir.files().iter().all(|f| !f.contains("out.exr")), "temporary file left: {:?}", dir.files());
 }
 
+/// Renders `text` (named `name`): an incomplete scene, drawn with a warning
+/// that mentions every string of `expect`, and refused under `--strict`.
+fn incomplete(dir: &TempDir, name: &str, text: &[u8], expect: &[&str]) {
+    let scene = dir.path(name);
+    std::fs::write(&scene, text).unwrap();
+    let out = dir.path("incomplete.exr");
+    let run = lightcuts(&["render", s(&scene), "-o", s(&out), "--resolution", "16x12", "--quiet"]);
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert!(run.status.success(), "{stderr}");
+    let warning = (stderr.lines())
+        .find(|l| l.starts_with("warning") && l.contains(expect[0]))
+        .unwrap_or_else(|| panic!("no warning naming {}: {stderr}", expect[0]));
+    for e in expect {
+        assert!(warning.contains(e), "'{e}' missing from: {warning}");
+    }
+    std::fs::remove_file(&out).unwrap();
+    let stderr = lightcuts_fails(&["render", s(&scene), "-o", s(&out), "--quiet", "--strict"]);
+    for e in [name, "--strict"].iter().chain(expect) {
+        assert!(stderr.contains(e), "'{e}' missing from: {stderr}");
+    }
+    assert!(!out.exists(), "output written for {name} under --strict");
+}
+
 #[test]
 fn the_full_scene_itself_renders() {
     let dir = setup("full-ok");
@@ -518,15 +541,14 @@ fn hostile_gltf_files() {
     );
     let bad_base64 = floor_and_point_light().embedded().replace(";base64,", ";base64,!!");
     rejects(&dir, "base64.gltf", bad_base64.as_bytes(), &["base64.gltf", "buffers[0].uri", "base64"]);
-    case(
-        "image.gltf",
-        &|g| {
-            g.json["images"] = json!([{ "uri": "nope.png" }]);
-            g.json["textures"] = json!([{ "source": 0 }]);
-            g.json["materials"][0]["pbrMetallicRoughness"]["baseColorTexture"] = json!({ "index": 0 });
-        },
-        &["nope.png", "images[0].uri"],
-    );
+    // A missing image is drawn around (the factor alone), as glTF viewers
+    // do, with a warning; --strict refuses it.
+    let missing = mutated(&|g| {
+        g.json["images"] = json!([{ "uri": "nope.png" }]);
+        g.json["textures"] = json!([{ "source": 0 }]);
+        g.json["materials"][0]["pbrMetallicRoughness"]["baseColorTexture"] = json!({ "index": 0 });
+    });
+    incomplete(&dir, "image.gltf", &missing, &["nope.png", "images[0].uri"]);
     // gltf 1.4.1 unwraps what the specification requires of an image.
     for (name, image, expect) in [
         ("no_source.gltf", json!({ "mimeType": "image/png" }), "images[0]"),
@@ -543,15 +565,13 @@ fn hostile_gltf_files() {
         );
     }
     std::fs::write(dir.path("junk.png"), b"junk").unwrap();
-    case(
-        "junk_image.gltf",
-        &|g| {
-            g.json["images"] = json!([{ "uri": "junk.png" }]);
-            g.json["textures"] = json!([{ "source": 0 }]);
-            g.json["materials"][0]["pbrMetallicRoughness"]["baseColorTexture"] = json!({ "index": 0 });
-        },
-        &["junk.png", "images[0]", "not a PNG or JPEG"],
-    );
+    // So is an image that cannot be decoded.
+    let junk = mutated(&|g| {
+        g.json["images"] = json!([{ "uri": "junk.png" }]);
+        g.json["textures"] = json!([{ "source": 0 }]);
+        g.json["materials"][0]["pbrMetallicRoughness"]["baseColorTexture"] = json!({ "index": 0 });
+    });
+    incomplete(&dir, "junk_image.gltf", &junk, &["junk.png", "images[0]", "not a PNG or JPEG"]);
     // A missing .bin beside the .gltf.
     let path = floor_and_point_light().write_separate(&dir.path(""), "room");
     std::fs::remove_file(dir.path("room.bin")).unwrap();

@@ -160,8 +160,9 @@ fn texture_headers_are_checked_before_decoding() {
     ] {
         std::fs::write(dir.path(name), bytes).unwrap();
         let scene = dir.write("stage.usda", &stage.replace("@texture.png@", &format!("@{name}@")));
+        // A texture that cannot be read is a warning: --strict refuses it.
         refused_within_limits(
-            &["render", s(&scene), "-o", s(&out), "--resolution", "16x12"],
+            &["render", s(&scene), "-o", s(&out), "--resolution", "16x12", "--strict"],
             &["stage.usda", "Texture.inputs:file", name, field],
         );
     }
@@ -360,7 +361,10 @@ fn messages_name_the_real_file_prim_and_limit() {
         let text = format!("def Xform \"World\" {reference}\n{{\n    {inside}\n}}\n");
         dir.write(&format!("l{i}.usda"), &format!("#usda 1.0\n(\n    defaultPrim = \"World\"\n)\n{text}"));
     }
-    refused_within_limits(&strs(&render(&dir.path("l0.usda"))), &["l0.usda", "99 nested references", "no cycle"]);
+    // The chain left out is a missing piece: --strict refuses it.
+    let mut strict = render(&dir.path("l0.usda"));
+    strict.push("--strict".into());
+    refused_within_limits(&strs(&strict), &["l0.usda", "99 nested references", "no cycle"]);
     // A texel too bright was blamed on environment.scale without naming the EXR.
     let image = read_exr(&scenes().join("environment/courtyard.exr")).unwrap();
     let mut bright = image.channels["R"].clone();

@@ -23,6 +23,15 @@ UsdLux schema and closed forms, not by the renderer:
   crate file, for tests/fuzz.rs to mutate; fuzz/texture.jpg, a 16 x 16
   baseline JPEG of one colour (Pillow, when installed), for the tests of
   texture headers and the fuzzer's JPEG mutants.
+- resolution/: asset paths as USD resolves them. root.usda references
+  layers/asset.usda, whose material names `@../textures/checker.png@`
+  (beside the layer that authors it, not the root), `@./flat.png@`, a
+  search path `@maps/search.png@` found only under search/ (given as a
+  search path), and `@missing.png@`, which is nowhere (its fallback is
+  used). A second material reads the mesh's displayColor through a
+  UsdPrimvarReader_float3. expected.json holds usd-core's own
+  resolvedPath of each (relative to resolution/; null where it finds
+  nothing), with search/ on ArDefaultResolver's search path.
 - broken/huge-count.usdc is not written here: it is fuzz/stage.usdc with
   byte 100 set to 207 (found by mutating each byte), an array count that asks
   the reader for 3.5 TB; tests/usd.rs checks that the command reports it.
@@ -46,7 +55,7 @@ import struct
 import zlib
 
 import numpy as np
-from pxr import Gf, Sdf, Usd, UsdGeom, UsdLux, UsdShade, UsdUtils, Vt
+from pxr import Ar, Gf, Sdf, Usd, UsdGeom, UsdLux, UsdShade, UsdUtils, Vt
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ALBEDO = 0.5
@@ -585,7 +594,70 @@ def write_fuzz():
     stage.GetRootLayer().Export(os.path.join(out, 'stage.usdc'))
 
 
+def write_resolution():
+    """Asset paths resolved against the layer that authors them, a search
+    path, a missing texture, and a primvar reader (see the docstring)."""
+    out = os.path.join(HERE, 'resolution')
+    shutil.rmtree(out, ignore_errors=True)
+    for folder in ['layers', 'textures', 'search/maps']:
+        os.makedirs(os.path.join(out, folder))
+    write_png(os.path.join(out, 'textures', 'checker.png'), [[(230, 40, 40), (40, 40, 230)], [(40, 230, 40), (230, 230, 230)]])
+    write_png(os.path.join(out, 'layers', 'flat.png'), [[(40, 200, 40)]])
+    write_png(os.path.join(out, 'search', 'maps', 'search.png'), [[(40, 40, 200)]])
+    asset = stage_at(os.path.join(out, 'layers', 'asset.usda'))
+    root = UsdGeom.Xform.Define(asset, '/Asset')
+    asset.SetDefaultPrim(root.GetPrim())
+    textures = {}
+    for k, (name, file) in enumerate([('Checker', '../textures/checker.png'), ('Flat', './flat.png'),
+                                      ('Search', 'maps/search.png'), ('Missing', 'missing.png')]):
+        material = UsdShade.Material.Define(asset, f'/Asset/Looks/{name}')
+        shader = UsdShade.Shader.Define(asset, f'/Asset/Looks/{name}/Surface')
+        shader.CreateIdAttr('UsdPreviewSurface')
+        texture = UsdShade.Shader.Define(asset, f'/Asset/Looks/{name}/Texture')
+        texture.CreateIdAttr('UsdUVTexture')
+        texture.CreateInput('file', Sdf.ValueTypeNames.Asset).Set(file)
+        texture.CreateInput('fallback', Sdf.ValueTypeNames.Float4).Set(Gf.Vec4f(0.9, 0.6, 0.1, 1.0))
+        texture.CreateOutput('rgb', Sdf.ValueTypeNames.Float3)
+        shader.CreateInput('diffuseColor', Sdf.ValueTypeNames.Color3f).ConnectToSource(texture.ConnectableAPI(), 'rgb')
+        material.CreateSurfaceOutput().ConnectToSource(shader.ConnectableAPI(), 'surface')
+        tile = quad(asset, f'/Asset/Tile{name}', [-3 + 2 * k, 0, 0], [1.8, 0, 0], [0, 0, -1.8], material)
+        st = UsdGeom.PrimvarsAPI(tile).CreatePrimvar('st', Sdf.ValueTypeNames.TexCoord2fArray, UsdGeom.Tokens.vertex)
+        st.Set(Vt.Vec2fArray([Gf.Vec2f(0, 0), Gf.Vec2f(1, 0), Gf.Vec2f(1, 1), Gf.Vec2f(0, 1)]))
+        textures[name] = f'/World/Asset/Looks/{name}/Texture'
+    # The mesh's own colour, read by the material through a primvar reader.
+    material = UsdShade.Material.Define(asset, '/Asset/Looks/Painted')
+    shader = UsdShade.Shader.Define(asset, '/Asset/Looks/Painted/Surface')
+    shader.CreateIdAttr('UsdPreviewSurface')
+    reader = UsdShade.Shader.Define(asset, '/Asset/Looks/Painted/Colour')
+    reader.CreateIdAttr('UsdPrimvarReader_float3')
+    reader.CreateInput('varname', Sdf.ValueTypeNames.String).Set('displayColor')
+    reader.CreateOutput('result', Sdf.ValueTypeNames.Float3)
+    shader.CreateInput('diffuseColor', Sdf.ValueTypeNames.Color3f).ConnectToSource(reader.ConnectableAPI(), 'result')
+    material.CreateSurfaceOutput().ConnectToSource(shader.ConnectableAPI(), 'surface')
+    painted = quad(asset, '/Asset/Painted', [0, 0, -2.2], [7.8, 0, 0], [0, 0, -1.8], material)
+    painted.CreateDisplayColorAttr([Gf.Vec3f(0.8, 0.1, 0.7)])
+    asset.Save()
+    main = stage_at(os.path.join(out, 'root.usda'))
+    placed = UsdGeom.Xform.Define(main, '/World/Asset')
+    placed.GetPrim().GetReferences().AddReference('./layers/asset.usda')
+    sun = UsdLux.DistantLight.Define(main, '/World/Sun')
+    lux(sun, intensity=3.0, normalize=True)
+    UsdGeom.Xformable(sun).AddRotateXOp().Set(-60.0)
+    camera_looking(main, '/World/Camera', [0, 9, 3], [0, 0, -1.1], Gf.Vec3d(0, 1, 0), 35.0, (36.0, 24.0))
+    main.Save()
+    # usd-core's resolution, with search/ on the default resolver's search path.
+    Ar.DefaultResolver.SetDefaultSearchPath([os.path.join(out, 'search')])
+    stage = Usd.Stage.Open(os.path.join(out, 'root.usda'))
+    expected = {}
+    for name, path in textures.items():
+        resolved = stage.GetPrimAtPath(path).GetAttribute('inputs:file').Get().resolvedPath
+        expected[name] = os.path.relpath(resolved, out) if resolved else None
+    with open(os.path.join(out, 'expected.json'), 'w') as f:
+        json.dump({'search_path': 'search', 'resolved': expected}, f, indent=1, sort_keys=True)
+
+
 if __name__ == '__main__':
     write_lights()
     write_composition()
     write_fuzz()
+    write_resolution()

@@ -379,6 +379,16 @@ pub struct PassArgs {
     /// direct light only; Mitsuba 3's max_depth counts one more).
     #[arg(long, value_name = "N")]
     pub max_depth: Option<u32>,
+    /// A directory where a USD stage's assets are looked for when they are
+    /// not beside the layer that names them (USD's search paths, as
+    /// PXR_AR_DEFAULT_SEARCH_PATH, which is read too); may be repeated.
+    #[arg(long, value_name = "DIR")]
+    pub asset_path: Vec<PathBuf>,
+    /// Make what the scene lacks an error: a missing layer, texture or
+    /// file, a format or prim type this renderer does not read (a warning
+    /// otherwise, and the render goes on without it).
+    #[arg(long)]
+    pub strict: bool,
 }
 
 impl PassArgs {
@@ -391,12 +401,14 @@ impl PassArgs {
             shutter: self.shutter,
             animation: self.animation.as_deref(),
             time: self.time,
+            asset_paths: &self.asset_path,
+            strict: self.strict,
         };
         super::process::read_usd_in_a_child(path, &options.flags())?;
         let mut scene = Scene::load_with(path, &options)?;
         scene.add_lights(self.environment.as_deref(), self.sun)?;
         scene.set_indirect(self.indirect.as_deref(), self.max_depth)?;
-        for warning in &scene.warnings {
+        for warning in scene.warnings.iter().chain(&scene.incomplete) {
             eprintln!("warning: {warning}");
         }
         if !scene.has_light() {

@@ -25,6 +25,12 @@ pub struct InspectArgs {
     /// Open the shutter from OPEN to CLOSE (as `render --shutter`).
     #[arg(long, value_name = "OPEN,CLOSE", value_parser = super::args::parse_shutter, allow_hyphen_values = true)]
     pub shutter: Option<[f32; 2]>,
+    /// Where a USD stage's assets are looked for (as `render --asset-path`).
+    #[arg(long, value_name = "DIR")]
+    pub asset_path: Vec<std::path::PathBuf>,
+    /// What the scene lacks is an error (as `render --strict`).
+    #[arg(long)]
+    pub strict: bool,
     /// Print JSON.
     #[arg(long)]
     pub json: bool,
@@ -35,6 +41,8 @@ pub fn run(args: &InspectArgs) -> Result<(), CliError> {
         camera: args.camera.as_deref(),
         time: args.time,
         shutter: args.shutter,
+        asset_paths: &args.asset_path,
+        strict: args.strict,
         ..LoadOptions::default()
     };
     super::process::read_usd_in_a_child(&args.scene, &options.flags())?;
@@ -77,6 +85,9 @@ fn print(scene: &Scene, report: &serde_json::Value, json: bool) -> std::io::Resu
     writeln!(out, "environment  {}", report["environment"])?;
     for warning in &scene.warnings {
         writeln!(out, "warning: {warning}")?;
+    }
+    for missing in &scene.incomplete {
+        writeln!(out, "not drawn: {missing}")?;
     }
     out.flush()
 }
@@ -146,5 +157,7 @@ fn report(scene: &Scene) -> serde_json::Value {
         "lights": lights,
         "environment": environment,
         "warnings": scene.warnings,
+        "incomplete": scene.incomplete,
+        "inputs": scene.inputs.iter().map(|p| p.display().to_string()).collect::<Vec<_>>(),
     })
 }

@@ -83,16 +83,36 @@ pub struct UsdSpec {
     /// About how many triangle lights each emissive surface and area light becomes.
     #[serde(default = "emitter_samples")]
     pub emitter_samples: u32,
+    /// Directories (relative to the scene file) where an asset path that
+    /// is not beside the layer naming it is looked for: USD's default
+    /// resolver's search paths.
+    #[serde(default)]
+    pub asset_paths: Vec<String>,
     /// The shutter `--shutter` gives, in the stage's time codes.
     #[serde(skip)]
     pub shutter: Option<[f32; 2]>,
+    /// `--asset-path`'s directories, searched after `asset_paths`.
+    #[serde(skip)]
+    pub search_paths: Vec<std::path::PathBuf>,
+    /// `--strict`: a layer composition cannot read fails the import.
+    #[serde(skip)]
+    pub strict: bool,
 }
 
 impl UsdSpec {
     /// Importing `file` with every default.
     #[must_use]
     pub fn file(file: String) -> Self {
-        Self { file, camera: None, time: None, emitter_samples: emitter_samples(), shutter: None }
+        Self {
+            file,
+            camera: None,
+            time: None,
+            emitter_samples: emitter_samples(),
+            asset_paths: Vec::new(),
+            shutter: None,
+            search_paths: Vec::new(),
+            strict: false,
+        }
     }
 }
 

@@ -139,6 +139,12 @@ pub struct Scene {
     /// mask drawn opaque, a skin in its bind pose), one line each with the
     /// file and location: the commands print them.
     pub warnings: Vec<String>,
+    /// What the asset lacks or holds that is not drawn: a layer, texture or
+    /// file that is missing, a format or prim type this renderer does not
+    /// read. One line each with the file and the prim; the render goes on
+    /// without it (as USD's and glTF's own tools do), and `--strict` makes
+    /// the first an error. The commands print them as warnings.
+    pub incomplete: Vec<String>,
     /// What the command line added (`--environment`, `--sun`), as text: part
     /// of the scene's hash, so that a farm's tiles rendered with different
     /// additions are not assembled together.

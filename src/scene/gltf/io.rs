@@ -163,7 +163,6 @@ impl<'a> Data<'a> {
             );
         }
         let path = self.base.join(percent_decode(uri));
-        self.inputs.push(path.clone());
         let read = match declared {
             Some(length) if length <= crate::util::file::MAX_FILE_BYTES => {
                 crate::util::file::read_regular_prefix(&path, length)
@@ -176,7 +175,9 @@ impl<'a> Data<'a> {
             }
             None => crate::util::file::read_regular(&path, crate::util::file::MAX_FILE_BYTES),
         };
-        read.map_err(|e| self.error(location, format!("cannot read '{}': {e}", path.display())))
+        let bytes = read.map_err(|e| self.error(location, format!("cannot read '{}': {e}", path.display())))?;
+        self.inputs.push(path);
+        Ok(bytes)
     }
 
     /// Decodes an image (PNG or JPEG, its colours encoded as `encoding`

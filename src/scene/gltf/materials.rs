@@ -53,18 +53,23 @@ impl Importer<'_, '_> {
             None => Albedo::Constant(base_rgb),
             Some(info) => {
                 let at = format!("{location}.pbrMetallicRoughness.baseColorTexture");
-                let (texture, image) = self.texture(Slot::of(&info), &at, Encoding::Srgb, |t, _| t * base_rgb)?;
-                coverage = image.alpha.as_ref().map(|a| {
-                    (a.iter().map(|x| x * base.w).collect::<Vec<f32>>(), image.width, image.height, texture.transform)
-                });
-                Albedo::Texture(texture)
+                match self.texture(Slot::of(&info), &at, Encoding::Srgb, |t, _| t * base_rgb)? {
+                    Some((texture, image)) => {
+                        coverage = image.alpha.as_ref().map(|a| {
+                            let alpha = a.iter().map(|x| x * base.w).collect::<Vec<f32>>();
+                            (alpha, image.width, image.height, texture.transform)
+                        });
+                        Albedo::Texture(texture)
+                    }
+                    None => Albedo::Constant(base_rgb),
+                }
             }
         };
         let metallic_roughness = match pbr.metallic_roughness_texture() {
             None => None,
             Some(info) => {
                 let at = format!("{location}.pbrMetallicRoughness.metallicRoughnessTexture");
-                Some(self.texture(Slot::of(&info), &at, Encoding::Linear, |t, _| t)?.0)
+                self.texture(Slot::of(&info), &at, Encoding::Linear, |t, _| t)?.map(|(t, _)| t)
             }
         };
         let normal_map = match m.normal_texture() {
@@ -76,8 +81,12 @@ impl Importer<'_, '_> {
                 }
                 let slot =
                     Slot::of_normal(&info).map_err(|e| self.error(format!("{at}.extensions.{e}"), "is malformed"))?;
-                let (t, _) = self.texture(slot, &at, Encoding::Linear, |t, _| t)?;
-                Some(NormalMap { texture: t.texture, transform: t.transform, scale: info.scale(), set: t.set })
+                self.texture(slot, &at, Encoding::Linear, |t, _| t)?.map(|(t, _)| NormalMap {
+                    texture: t.texture,
+                    transform: t.transform,
+                    scale: info.scale(),
+                    set: t.set,
+                })
             }
         };
         let cutoff = match m.alpha_mode() {
@@ -155,17 +164,15 @@ impl Importer<'_, '_> {
         let specular_texture = match m.specular().and_then(|s| s.specular_texture()) {
             None => None,
             // The factor is the texture's alpha channel (linear).
-            Some(info) => Some(
-                self.texture(Slot::of(&info), &format!("{at}.specularTexture"), Encoding::Linear, |_, a| {
-                    Vec3::splat(a)
-                })?
-                .0,
-            ),
+            Some(info) => self
+                .texture(Slot::of(&info), &format!("{at}.specularTexture"), Encoding::Linear, |_, a| Vec3::splat(a))?
+                .map(|(t, _)| t),
         };
         let specular_colour_texture = match m.specular().and_then(|s| s.specular_color_texture()) {
             None => None,
             Some(info) => {
-                Some(self.texture(Slot::of(&info), &format!("{at}.specularColorTexture"), Encoding::Srgb, |t, _| t)?.0)
+                let at = format!("{at}.specularColorTexture");
+                self.texture(Slot::of(&info), &at, Encoding::Srgb, |t, _| t)?.map(|(t, _)| t)
             }
         };
         Ok(Specular {
@@ -194,7 +201,7 @@ impl Importer<'_, '_> {
         let emissive_texture = match m.emissive_texture() {
             Some(info) if emission != Vec3::ZERO => {
                 let at = format!("{location}.emissiveTexture");
-                Some(self.texture(Slot::of(&info), &at, Encoding::Srgb, |t, _| t)?.0)
+                self.texture(Slot::of(&info), &at, Encoding::Srgb, |t, _| t)?.map(|(t, _)| t)
             }
             // A texture times a zero factor emits nothing: not read.
             _ => None,
@@ -213,7 +220,7 @@ impl Importer<'_, '_> {
         at: &str,
         encoding: Encoding,
         map: impl Fn(Vec3, f32) -> Vec3,
-    ) -> Result<(TextureRef, RgbImage), SceneError> {
+    ) -> Result<Option<(TextureRef, RgbImage)>, SceneError> {
         // KHR_texture_transform's texCoord overrides the texture info's.
         let tex_coord = slot.transform.and_then(|t| t.tex_coord).unwrap_or(slot.tex_coord);
         let set = if tex_coord <= 1 {
@@ -227,7 +234,15 @@ impl Importer<'_, '_> {
             return Err(self.error(format!("{at}.extensions.KHR_texture_transform"), "must be finite"));
         }
         let texture = slot.texture;
-        let image = self.data.image(&texture.source(), at, encoding)?;
+        // An image that cannot be read (a missing file) is drawn around, as
+        // glTF viewers do: the factor alone.
+        let image = match self.data.image(&texture.source(), at, encoding) {
+            Ok(image) => image,
+            Err(e) => {
+                self.parts.incomplete.push(format!("{e}: the factor alone is used"));
+                return Ok(None);
+            }
+        };
         let sampler = texture.sampler();
         let wrap = |mode: WrappingMode| match mode {
             WrappingMode::Repeat => Wrap::Repeat,
@@ -245,7 +260,7 @@ impl Importer<'_, '_> {
         let texture = Texture::from_texels(image.width, image.height, texels)
             .with_sampler([wrap(sampler.wrap_s()), wrap(sampler.wrap_t())], filter);
         self.parts.textures.push(texture);
-        Ok((TextureRef { texture: self.parts.textures.len() - 1, transform, set }, image))
+        Ok(Some((TextureRef { texture: self.parts.textures.len() - 1, transform, set }, image)))
     }
 }
 

@@ -93,6 +93,8 @@ pub struct Parts<'a> {
     pub light_names: &'a mut Vec<GltfLightNames>,
     pub inputs: &'a mut Vec<PathBuf>,
     pub warnings: &'a mut Vec<String>,
+    /// What the file lacks (an image that cannot be read): `Scene::incomplete`.
+    pub incomplete: &'a mut Vec<String>,
     /// The animation played, and over which shutter, when one is.
     pub played: &'a mut Option<PlayedAnimation>,
 }

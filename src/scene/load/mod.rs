@@ -35,6 +35,12 @@ pub struct LoadOptions<'a> {
     pub animation: Option<&'a str>,
     /// `--time T`: the USD stage's time code everything is read at.
     pub time: Option<f64>,
+    /// `--asset-path DIR`: where a USD stage's assets are looked for when
+    /// they are not beside the layer naming them (USD's search paths).
+    pub asset_paths: &'a [std::path::PathBuf],
+    /// `--strict`: what the asset lacks (a missing file or layer, a format
+    /// or prim type not read) is an error, not a warning.
+    pub strict: bool,
 }
 
 impl LoadOptions<'_> {
@@ -51,6 +57,9 @@ impl LoadOptions<'_> {
         }
         if let Some([open, close]) = self.shutter {
             flags.extend(["--shutter".to_string(), format!("{open},{close}")]);
+        }
+        for directory in self.asset_paths {
+            flags.extend(["--asset-path".to_string(), directory.display().to_string()]);
         }
         flags
     }
@@ -128,6 +137,15 @@ impl Scene {
             let gltf = imported_gltf(path, &mut spec, "--animation", "plays a glTF animation")?;
             gltf.animation = Some(name.to_string());
         }
+        if !options.asset_paths.is_empty() {
+            let usd = spec.usd.as_mut().ok_or_else(|| {
+                SceneError::new(path, "--asset-path", "gives USD's search paths, but the scene imports no USD stage")
+            })?;
+            usd.search_paths = options.asset_paths.to_vec();
+        }
+        if let Some(usd) = spec.usd.as_mut() {
+            usd.strict = options.strict;
+        }
         if let Some([open, close]) = options.shutter {
             if !(open.is_finite() && close.is_finite() && open <= close) {
                 return Err(SceneError::new(
@@ -168,6 +186,16 @@ impl Scene {
         if let Some(time) = options.time {
             scene.additions.push(format!("--time {time}"));
         }
+        for directory in options.asset_paths {
+            scene.additions.push(format!("--asset-path {}", directory.display()));
+        }
+        if options.strict {
+            if let Some(first) = scene.incomplete.first() {
+                let more = scene.incomplete.len() - 1;
+                let more = if more > 0 { format!(" (and {more} more)") } else { String::new() };
+                return Err(SceneError::new(path, "--strict", format!("the scene is incomplete: {first}{more}")));
+            }
+        }
         Ok(scene)
     }
 
@@ -203,6 +231,7 @@ impl Scene {
         let (mut lights, mut requested_groups) =
             lights::lights(&v, base, &spec, &mut meshes, &mut materials, &mut inputs)?;
         let mut warnings = Vec::new();
+        let mut incomplete = Vec::new();
         let mut instances = Vec::new();
         let mut animation = None;
         let gltf_camera = match &spec.gltf {
@@ -218,6 +247,7 @@ impl Scene {
                     light_names: &mut light_names,
                     inputs: &mut inputs,
                     warnings: &mut warnings,
+                    incomplete: &mut incomplete,
                     played: &mut animation,
                 };
                 // A TOML camera's open shutter, else --shutter's (an
@@ -245,6 +275,7 @@ impl Scene {
                     groups: &mut groups,
                     inputs: &mut inputs,
                     warnings: &mut warnings,
+                    incomplete: &mut incomplete,
                     environment: &mut usd_environment,
                 };
                 let camera = import_usd(path, base, &spec, u, gltf_camera.is_none(), parts)?;
@@ -305,6 +336,7 @@ impl Scene {
             distance_clamp: clamp,
             inputs,
             warnings,
+            incomplete,
             additions: Vec::new(),
             animation,
         })

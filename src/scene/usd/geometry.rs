@@ -131,6 +131,10 @@ fn primvar<T: Copy>(
 pub(super) struct Wanted<'a> {
     /// The texture coordinates' primvar (`st`, or the material's reader's `varname`).
     pub st: &'a str,
+    /// The primvar the material reads as its colour (a primvar reader's
+    /// `varname`), and its value where the mesh lacks it; else
+    /// `displayColor` (drawn where no material is bound).
+    pub colour: Option<(&'a str, DVec3)>,
 }
 
 /// A `Mesh` prim's triangles, split by its materialBind subsets.
@@ -184,7 +188,12 @@ pub(super) fn mesh(stage: &Stage, prim: &str, time: f64, wanted: &Wanted<'_>) ->
     };
     let st_name = format!("primvars:{}", wanted.st);
     let st = primvar(stage, prim, &st_name, time, &sizes, Interpolation::FaceVarying, Stage::vec2s)?;
-    let colors = primvar(stage, prim, "primvars:displayColor", time, &sizes, Interpolation::Constant, Stage::vec3s)?;
+    let colour_name =
+        wanted.colour.map_or_else(|| "primvars:displayColor".to_string(), |(n, _)| format!("primvars:{n}"));
+    let mut colors = primvar(stage, prim, &colour_name, time, &sizes, Interpolation::Constant, Stage::vec3s)?;
+    if let (None, Some((_, fallback))) = (&colors, wanted.colour) {
+        colors = Some(Primvar { values: vec![fallback], indices: None, interpolation: Interpolation::Constant });
+    }
     // A primvar's values reach the film (a texture lookup, a colour): each
     // must be finite.
     let finite3 = |p: &Option<Primvar<DVec3>>| p.as_ref().is_none_or(|p| p.values.iter().all(|v| v.is_finite()));

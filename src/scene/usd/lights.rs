@@ -26,7 +26,7 @@ pub(super) enum Made {
     Light(LightSource, Option<Mesh>),
     /// The environment: constant radiance, or a lat-long texture (its file,
     /// a scale, and the map's rotation into the world).
-    Dome { radiance: Vec3, texture: Option<String>, rotation: DMat4 },
+    Dome { radiance: Vec3, texture: Option<super::stage::Asset>, rotation: DMat4 },
 }
 
 /// How the stage's units relate to the world's.
@@ -292,7 +292,7 @@ fn dome_light(read: &Reader<'_>, emission: &Emission, placed: &Placed<'_>) -> Re
     }
     let texture =
         read.stage.asset(prim, "inputs:texture:file", read.time).map_err(|e| (at("inputs:texture:file"), e))?;
-    let texture = texture.filter(|t| !t.is_empty());
+    let texture = texture.filter(|t| !t.authored.is_empty());
     let world = &placed.world;
     let axis = |v: glam::DVec4| v.truncate().normalize_or_zero().extend(0.0);
     let mut rotation = DMat4::from_cols(axis(world.x_axis), axis(world.y_axis), axis(world.z_axis), glam::DVec4::W);

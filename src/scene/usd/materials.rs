@@ -15,10 +15,11 @@ use glam::{Affine2, DVec4, Vec3};
 
 use super::geometry::Located;
 use super::schema::Reader;
-use super::stage::Stage;
+use super::stage::{Asset, Stage};
 use crate::scene::image::{self, Encoding, RgbImage};
 use crate::scene::material::{Albedo, Cutout, Material, NormalMap, PbrMaterial, TextureRef};
 use crate::scene::texture::{Filter, Texture, Wrap};
+use crate::util::color::srgb_to_linear;
 
 /// Largest texture file read (256 MiB).
 const MAX_TEXTURE_BYTES: u64 = 256 << 20;
@@ -48,7 +49,10 @@ enum Source {
 #[derive(Debug, Clone)]
 struct TextureSource {
     shader: String,
+    /// Where the file is: resolved against the layer that authored it.
     file: String,
+    /// The file as authored, for messages.
+    authored: String,
     channel: Channel,
     wrap: [Wrap; 2],
     scale: DVec4,
@@ -74,6 +78,10 @@ struct Baked {
 pub(super) struct Imported {
     pub material: Material,
     pub varname: String,
+    /// The primvar its diffuseColor reads (a `UsdPrimvarReader_float3`),
+    /// and the reader's fallback where a mesh lacks it: the mesh's vertex
+    /// colours, times a white base colour.
+    pub colour_primvar: Option<(String, Vec3)>,
 }
 
 /// Imports materials and their textures, each once.
@@ -81,12 +89,34 @@ pub(super) struct Materials<'s> {
     stage: &'s Stage,
     time: f64,
     textures: HashMap<Baked, usize>,
-    images: HashMap<String, RgbImage>,
+    /// Each texture file read, by where it is (sRGB-decoded copies keyed
+    /// with a trailing NUL), or why it could not be.
+    images: HashMap<String, Result<RgbImage, String>>,
+    /// The files read since the last import.
+    read: Vec<std::path::PathBuf>,
+    /// What the materials lack (a texture that cannot be read, a shader
+    /// this reader does not evaluate), since the last import.
+    lacking: Vec<String>,
+    /// Bound materials no layer defines.
+    pub(super) undefined: Vec<String>,
 }
 
 impl<'s> Materials<'s> {
     pub(super) fn new(stage: &'s Stage, time: f64) -> Self {
-        Self { stage, time, textures: HashMap::new(), images: HashMap::new() }
+        Self {
+            stage,
+            time,
+            textures: HashMap::new(),
+            images: HashMap::new(),
+            read: Vec::new(),
+            lacking: Vec::new(),
+            undefined: Vec::new(),
+        }
+    }
+
+    /// What the imports so far lack (`Scene::incomplete`), taken.
+    pub(super) fn take_lacking(&mut self) -> Vec<String> {
+        std::mem::take(&mut self.lacking)
     }
 
     /// The material at `path` (a `Material` prim), with its textures added
@@ -99,8 +129,24 @@ impl<'s> Materials<'s> {
         inputs: &mut Vec<std::path::PathBuf>,
         warnings: &mut Vec<String>,
     ) -> Result<Imported, Located> {
-        let grey = || Imported { material: default_material(path), varname: "st".to_string() };
+        let imported = self.import_surface(path, textures, warnings);
+        inputs.extend(self.read.drain(..).filter(|f| !inputs.contains(f)).collect::<Vec<_>>());
+        imported
+    }
+
+    fn import_surface(
+        &mut self,
+        path: &str,
+        textures: &mut Vec<Texture>,
+        warnings: &mut Vec<String>,
+    ) -> Result<Imported, Located> {
+        let grey = || Imported { material: default_material(path), varname: "st".to_string(), colour_primvar: None };
         let info = self.stage.prim(path).map_err(|e| (path.to_string(), e))?;
+        if info.type_name.is_empty() {
+            // Nothing defines it: the layer that would is missing or not read.
+            self.undefined.push(path.to_string());
+            return Ok(grey());
+        }
         if info.type_name != "Material" {
             warnings.push(format!("{path}: is bound as a material but is a '{}': grey", info.type_name));
             return Ok(grey());
@@ -117,7 +163,7 @@ impl<'s> Materials<'s> {
             ));
             return Ok(grey());
         }
-        self.preview_surface(path, &shader, textures, inputs, warnings)
+        self.preview_surface(path, &shader, textures, warnings)
     }
 
     /// The shader behind the material's universal `outputs:surface` (or,
@@ -166,7 +212,24 @@ impl<'s> Materials<'s> {
 
     /// Input `name` of `shader`: its connection (followed through node
     /// graphs' interface inputs), its value, or the schema's fallback.
-    fn input(&self, shader: &str, schema: &str, name: &str) -> Result<Source, Located> {
+    /// Where the connection leads to what is not read (a texture file that
+    /// is missing or unreadable, a UsdUVTexture without a file, a primvar
+    /// reader, a shader this reader does not evaluate), a value instead:
+    /// the texture's or reader's `inputs:fallback` when authored, else the
+    /// input's own value, with a note of what is missing.
+    fn input(&mut self, shader: &str, schema: &str, name: &str) -> Result<Source, Located> {
+        Ok(self.input_reading(shader, schema, name, false)?.0)
+    }
+
+    /// [`Self::input`]; with `primvars`, a `UsdPrimvarReader_float3` it
+    /// leads to is the primvar's name and the reader's fallback instead.
+    fn input_reading(
+        &mut self,
+        shader: &str,
+        schema: &str,
+        name: &str,
+        primvars: bool,
+    ) -> Result<(Source, Option<(String, DVec4)>), Located> {
         let attribute = format!("inputs:{name}");
         let mut prim = shader.to_string();
         let mut property = attribute.clone();
@@ -178,20 +241,84 @@ impl<'s> Materials<'s> {
                 } else {
                     self.value(&prim, "", &property)?
                 };
-                return Ok(Source::Value(value.unwrap_or_else(|| {
-                    // An interface input with no value: the shader's fallback.
-                    self.value(shader, schema, &attribute).ok().flatten().unwrap_or(DVec4::ZERO)
-                })));
+                return Ok((
+                    Source::Value(value.unwrap_or_else(|| {
+                        // An interface input with no value: the shader's fallback.
+                        self.value(shader, schema, &attribute).ok().flatten().unwrap_or(DVec4::ZERO)
+                    })),
+                    None,
+                ));
             };
             let (source_prim, source_property) = split(source);
             let info = self.stage.prim(source_prim).map_err(|e| (source.clone(), e))?;
             if info.type_name == "Shader" {
-                return self.shader_output(source_prim, source_property).map(Source::Texture);
+                let (source_prim, source_property) = (source_prim.to_string(), source_property.to_string());
+                return self.shader_source(shader, schema, name, &source_prim, &source_property, primvars);
             }
             prim = source_prim.to_string();
             property = source_property.to_string();
         }
         Err((format!("{shader}.{attribute}"), "the connections go round in a cycle".into()))
+    }
+
+    /// What shader `source` (its output `property`) gives input `name` of
+    /// `shader` (see [`Self::input_reading`]).
+    fn shader_source(
+        &mut self,
+        shader: &str,
+        schema: &str,
+        name: &str,
+        source: &str,
+        property: &str,
+        primvars: bool,
+    ) -> Result<(Source, Option<(String, DVec4)>), Located> {
+        let id = self
+            .stage
+            .token(source, "info:id", self.time)
+            .map_err(|e| (format!("{source}.info:id"), e))?
+            .unwrap_or_default();
+        let own = |this: &Self| -> Result<DVec4, Located> {
+            Ok(this.value(shader, schema, &format!("inputs:{name}"))?.unwrap_or(DVec4::ZERO))
+        };
+        let fallback = |this: &Self| -> Result<Option<DVec4>, Located> { this.value(source, "", "inputs:fallback") };
+        let instead = |this: &Self, fallback: Option<DVec4>| -> Result<(String, Source), Located> {
+            Ok(match fallback {
+                Some(f) => ("its inputs:fallback".to_string(), Source::Value(f)),
+                None => (format!("{shader}.inputs:{name}'s own value"), Source::Value(own(this)?)),
+            })
+        };
+        if id == "UsdUVTexture" {
+            let texture = self.shader_output(source, property)?;
+            let problem = if texture.file.is_empty() {
+                Some("names no file".to_string())
+            } else {
+                self.load(&texture.file, &texture.authored).err()
+            };
+            let Some(problem) = problem else { return Ok((Source::Texture(texture), None)) };
+            let channel = |v: DVec4| match texture.channel {
+                Channel::Rgb => v,
+                c => DVec4::splat(pick(v, c)),
+            };
+            let (what, value) = instead(self, fallback(self)?.map(channel))?;
+            self.lacking.push(format!("{source}.inputs:file: {problem}: {what} is used"));
+            return Ok((value, None));
+        }
+        if let Some(kind) = id.strip_prefix("UsdPrimvarReader_") {
+            let varname = self.stage.token(source, "inputs:varname", self.time).ok().flatten().unwrap_or_default();
+            let reader_fallback = fallback(self)?;
+            if primvars && kind == "float3" && !varname.is_empty() {
+                return Ok((Source::Value(DVec4::ONE), Some((varname, reader_fallback.unwrap_or(DVec4::ZERO)))));
+            }
+            let (what, value) = instead(self, reader_fallback.or(Some(DVec4::ZERO)))?;
+            self.lacking.push(format!(
+                "{source}: a primvar ('{varname}') read into {shader}.inputs:{name} is not varied over the surface: \
+                 {what} is used"
+            ));
+            return Ok((value, None));
+        }
+        let (what, value) = instead(self, None)?;
+        self.lacking.push(format!("{source}: the shader '{id}' is not evaluated: {what} is used"));
+        Ok((value, None))
     }
 
     /// An attribute's value as four numbers (a scalar in x, a colour in
@@ -234,16 +361,10 @@ impl<'s> Materials<'s> {
         }
     }
 
-    /// A texture shader's output `property` (`outputs:rgb`, `outputs:r`...).
+    /// A UsdUVTexture's output `property` (`outputs:rgb`, `outputs:r`...);
+    /// its file's location empty where it names none.
     fn shader_output(&self, shader: &str, property: &str) -> Result<TextureSource, Located> {
         let at = |a: &str| format!("{shader}.{a}");
-        let id = self.stage.token(shader, "info:id", self.time).map_err(|e| (at("info:id"), e))?.unwrap_or_default();
-        if id != "UsdUVTexture" {
-            return Err((
-                at("info:id"),
-                format!("'{id}' feeds a UsdPreviewSurface input; only UsdUVTexture outputs can"),
-            ));
-        }
         let channel = match property {
             "outputs:rgb" => Channel::Rgb,
             "outputs:r" => Channel::R,
@@ -253,12 +374,11 @@ impl<'s> Materials<'s> {
             other => return Err((at(other), "is not an output of UsdUVTexture (rgb, r, g, b, a)".into())),
         };
         let read = Reader { stage: self.stage, prim: shader, schema: "UsdUVTexture", time: self.time };
-        let file = self
-            .stage
-            .asset(shader, "inputs:file", self.time)
-            .map_err(|e| (at("inputs:file"), e))?
-            .filter(|f| !f.is_empty())
-            .ok_or_else(|| (at("inputs:file"), "names no file".to_string()))?;
+        let asset = self.stage.asset(shader, "inputs:file", self.time).map_err(|e| (at("inputs:file"), e))?;
+        let (file, authored) = match asset {
+            Some(a) if !a.authored.is_empty() => (a.location, a.authored),
+            _ => (String::new(), String::new()),
+        };
         let wrap = |name: &str| -> Result<Wrap, Located> {
             Ok(match read.token(name)?.as_str() {
                 "repeat" => Wrap::Repeat,
@@ -275,6 +395,7 @@ impl<'s> Materials<'s> {
         Ok(TextureSource {
             shader: shader.to_string(),
             file,
+            authored,
             channel,
             wrap: [wrap("inputs:wrapS")?, wrap("inputs:wrapT")?],
             scale: read.vec4("inputs:scale")?,
@@ -339,11 +460,10 @@ impl<'s> Materials<'s> {
         material: &str,
         shader: &str,
         textures: &mut Vec<Texture>,
-        inputs: &mut Vec<std::path::PathBuf>,
         warnings: &mut Vec<String>,
     ) -> Result<Imported, Located> {
         const SCHEMA: &str = "UsdPreviewSurface";
-        let input = |this: &Self, name: &str| this.input(shader, SCHEMA, name);
+        let input = |this: &mut Self, name: &str| this.input(shader, SCHEMA, name);
         let mut varname: Option<String> = None;
         let note_varname = |source: &Source, varname: &mut Option<String>, warnings: &mut Vec<String>| {
             if let Source::Texture(t) = source {
@@ -357,11 +477,13 @@ impl<'s> Materials<'s> {
                 }
             }
         };
-        let diffuse = input(self, "diffuseColor")?;
+        // A primvar reader's colour varies over the surface as the mesh's
+        // vertex colours, times a white base colour.
+        let (diffuse, colour_primvar) = self.input_reading(shader, SCHEMA, "diffuseColor", true)?;
         note_varname(&diffuse, &mut varname, warnings);
         let albedo = match &diffuse {
             Source::Value(v) => Albedo::Constant(v.truncate().as_vec3().clamp(Vec3::ZERO, Vec3::ONE)),
-            Source::Texture(t) => Albedo::Texture(self.texture(&[t], true, false, textures, inputs)?),
+            Source::Texture(t) => Albedo::Texture(self.texture(&[t], true, false, textures)?),
         };
         let specular_workflow = matches!(input(self, "useSpecularWorkflow")?, Source::Value(v) if v.x != 0.0);
         let metallic = input(self, "metallic")?;
@@ -379,24 +501,24 @@ impl<'s> Materials<'s> {
             _ => {
                 pbr.roughness = 1.0;
                 pbr.metallic = if specular_workflow { 0.0 } else { 1.0 };
-                let texture = self.metallic_roughness(&roughness, &metallic, specular_workflow, textures, inputs)?;
+                let texture = self.metallic_roughness(&roughness, &metallic, specular_workflow, textures)?;
                 pbr.metallic_roughness = Some(texture);
             }
         }
-        self.specular(shader, specular_workflow, &mut pbr, textures, inputs)?;
+        self.specular(shader, specular_workflow, &mut pbr, textures)?;
         let mut material = Material { pbr: None, ..Material::diffuse(material, albedo) };
         match input(self, "emissiveColor")? {
             Source::Value(v) => material.emission = v.truncate().as_vec3().max(Vec3::ZERO),
             Source::Texture(t) => {
                 material.emission = Vec3::ONE;
-                material.emissive_texture = Some(self.texture(&[&t], true, false, textures, inputs)?);
+                material.emissive_texture = Some(self.texture(&[&t], true, false, textures)?);
             }
         }
         if let Source::Texture(t) = input(self, "normal")? {
-            let r = self.texture(&[&t], false, true, textures, inputs)?;
+            let r = self.texture(&[&t], false, true, textures)?;
             pbr.normal_map = Some(NormalMap { texture: r.texture, transform: r.transform, scale: 1.0, set: 0 });
         }
-        material.cutout = self.cutout(shader, textures, inputs, warnings)?;
+        material.cutout = self.cutout(shader, textures, warnings)?;
         if matches!(input(self, "clearcoat")?, Source::Texture(_))
             || matches!(input(self, "clearcoat")?, Source::Value(v) if v.x > 0.0)
         {
@@ -406,7 +528,11 @@ impl<'s> Materials<'s> {
             warnings.push(format!("{shader}: displacement is not implemented"));
         }
         material.pbr = Some(pbr);
-        Ok(Imported { material, varname: varname.unwrap_or_else(|| "st".to_string()) })
+        Ok(Imported {
+            material,
+            varname: varname.unwrap_or_else(|| "st".to_string()),
+            colour_primvar: colour_primvar.map(|(name, fallback)| (name, fallback.truncate().as_vec3())),
+        })
     }
 
     /// The specular layer: UsdPreviewSurface's specularColor as F0 in the
@@ -418,9 +544,8 @@ impl<'s> Materials<'s> {
         specular_workflow: bool,
         pbr: &mut PbrMaterial,
         textures: &mut Vec<Texture>,
-        inputs: &mut Vec<std::path::PathBuf>,
     ) -> Result<(), Located> {
-        let input = |this: &Self, name: &str| this.input(shader, "UsdPreviewSurface", name);
+        let input = |this: &mut Self, name: &str| this.input(shader, "UsdPreviewSurface", name);
         if specular_workflow {
             // F0 is specularColor: glTF's dielectric F0 is 0.04 x the
             // specular colour (KHR_materials_specular).
@@ -428,7 +553,7 @@ impl<'s> Materials<'s> {
                 Source::Value(v) => pbr.specular_colour = (v.truncate().as_vec3() / 0.04).max(Vec3::ZERO),
                 Source::Texture(t) => {
                     pbr.specular_colour = Vec3::splat(25.0);
-                    pbr.specular_colour_texture = Some(self.texture(&[&t], true, false, textures, inputs)?);
+                    pbr.specular_colour_texture = Some(self.texture(&[&t], true, false, textures)?);
                 }
             }
         } else if let Source::Value(ior) = input(self, "ior")? {
@@ -457,10 +582,9 @@ impl<'s> Materials<'s> {
         &mut self,
         shader: &str,
         textures: &mut Vec<Texture>,
-        inputs: &mut Vec<std::path::PathBuf>,
         warnings: &mut Vec<String>,
     ) -> Result<Option<Cutout>, Located> {
-        let input = |this: &Self, name: &str| this.input(shader, "UsdPreviewSurface", name);
+        let input = |this: &mut Self, name: &str| this.input(shader, "UsdPreviewSurface", name);
         let mut cutout = None;
         let opacity = input(self, "opacity")?;
         let threshold = match input(self, "opacityThreshold")? {
@@ -472,7 +596,7 @@ impl<'s> Materials<'s> {
         };
         match (&opacity, threshold > 0.0) {
             (Source::Texture(t), true) => {
-                let r = self.texture(&[t], false, false, textures, inputs)?;
+                let r = self.texture(&[t], false, false, textures)?;
                 let texture = &textures[r.texture];
                 let (width, height) = texture.size();
                 let alpha = texture.texels().iter().map(|t| t.x).collect();
@@ -516,7 +640,6 @@ impl<'s> Materials<'s> {
         metallic: &Source,
         specular_workflow: bool,
         textures: &mut Vec<Texture>,
-        inputs: &mut Vec<std::path::PathBuf>,
     ) -> Result<TextureRef, Located> {
         let sources: Vec<&TextureSource> = [roughness, metallic]
             .into_iter()
@@ -531,33 +654,32 @@ impl<'s> Materials<'s> {
             }
         }
         let (r, m) = (channel(roughness), channel(metallic));
-        let image = self.image(first, inputs)?.clone();
+        let image = self.image(first)?.clone();
         let (width, height) = (image.width, image.height);
-        let sample =
-            |this: &mut Self, t: &TextureSource, inputs: &mut Vec<std::path::PathBuf>| -> Result<Vec<f32>, Located> {
-                let img = this.image(t, inputs)?;
-                // Resampled to the first texture's size by the nearest texel.
-                Ok((0..width * height)
-                    .map(|p| {
-                        let (x, y) = (p % width, p / width);
-                        let (sx, sy) = (x * img.width / width, y * img.height / height);
-                        let k = sy * img.width + sx;
-                        let v = channel_value(img, k, t.channel);
-                        (f64::from(v) * pick(t.scale, t.channel) + pick(t.bias, t.channel)) as f32
-                    })
-                    .collect())
-            };
+        let sample = |this: &mut Self, t: &TextureSource| -> Result<Vec<f32>, Located> {
+            let img = this.image(t)?;
+            // Resampled to the first texture's size by the nearest texel.
+            Ok((0..width * height)
+                .map(|p| {
+                    let (x, y) = (p % width, p / width);
+                    let (sx, sy) = (x * img.width / width, y * img.height / height);
+                    let k = sy * img.width + sx;
+                    let v = channel_value(img, k, t.channel);
+                    (f64::from(v) * pick(t.scale, t.channel) + pick(t.bias, t.channel)) as f32
+                })
+                .collect())
+        };
         let constant = |s: &Source| match s {
             Source::Value(v) => v.x as f32,
             Source::Texture(_) => 0.0,
         };
         let rough = match r {
-            Some(t) => sample(self, t, inputs)?,
+            Some(t) => sample(self, t)?,
             None => vec![constant(roughness); width * height],
         };
         let metal = match (m, specular_workflow) {
             (_, true) => vec![0.0; width * height],
-            (Some(t), false) => sample(self, t, inputs)?,
+            (Some(t), false) => sample(self, t)?,
             (None, false) => vec![constant(metallic); width * height],
         };
         let texels =
@@ -568,28 +690,43 @@ impl<'s> Materials<'s> {
 
     /// The decoded image a texture reads (linear or sRGB-decoded as its
     /// colour space says for `srgb_role`), each file read once.
-    fn image(&mut self, t: &TextureSource, inputs: &mut Vec<std::path::PathBuf>) -> Result<&RgbImage, Located> {
-        self.image_as(t, false, inputs)
+    fn image(&mut self, t: &TextureSource) -> Result<&RgbImage, Located> {
+        self.image_as(t, false)
     }
 
-    fn image_as(
-        &mut self,
-        t: &TextureSource,
-        srgb: bool,
-        inputs: &mut Vec<std::path::PathBuf>,
-    ) -> Result<&RgbImage, Located> {
-        let key = format!("{}\u{0}{srgb}", t.file);
-        if !self.images.contains_key(&key) {
-            let at = (format!("{}.inputs:file", t.shader), String::new());
-            let (file, bytes) = self.stage.asset_bytes(&t.file, MAX_TEXTURE_BYTES).map_err(|e| (at.0.clone(), e))?;
-            if !inputs.contains(&file) {
-                inputs.push(file);
-            }
-            let encoding = if srgb { Encoding::Srgb } else { Encoding::Linear };
-            let image = image::decode(&bytes, encoding).map_err(|e| (at.0.clone(), format!("'{}': {e}", t.file)))?;
-            self.images.insert(key.clone(), image);
+    fn image_as(&mut self, t: &TextureSource, srgb: bool) -> Result<&RgbImage, Located> {
+        let at = || format!("{}.inputs:file", t.shader);
+        self.load(&t.file, &t.authored).map_err(|e| (at(), e))?;
+        if !srgb {
+            return self.images[&t.file].as_ref().map_err(|e| (at(), e.clone()));
         }
-        Ok(&self.images[&key])
+        // 8- and 16-bit values were read as value / max: decoding them
+        // from sRGB texel by texel is what decoding the file as sRGB gives.
+        let key = format!("{}\u{0}", t.file);
+        if !self.images.contains_key(&key) {
+            let decoded = self.images[&t.file].as_ref().map(|linear| RgbImage {
+                texels: linear.texels.iter().map(|v| v.to_array().map(srgb_to_linear).into()).collect(),
+                ..linear.clone()
+            });
+            self.images.insert(key.clone(), decoded.map_err(Clone::clone));
+        }
+        self.images[&key].as_ref().map_err(|e| (at(), e.clone()))
+    }
+
+    /// Reads and decodes the texture file at `location` once (its values
+    /// as stored, not yet decoded from sRGB); why it cannot be, else.
+    fn load(&mut self, location: &str, authored: &str) -> Result<(), String> {
+        if !self.images.contains_key(location) {
+            let asset = Asset { authored: authored.to_string(), location: location.to_string() };
+            let decoded = self.stage.asset_bytes(&asset, MAX_TEXTURE_BYTES).and_then(|(file, bytes)| {
+                if !self.read.contains(&file) {
+                    self.read.push(file);
+                }
+                image::decode(&bytes, Encoding::Linear).map_err(|e| format!("'{authored}': {e}"))
+            });
+            self.images.insert(location.to_string(), decoded);
+        }
+        self.images[location].as_ref().map(drop).map_err(Clone::clone)
     }
 
     /// A texture as a TextureRef: one source's channels with its scale and
@@ -603,7 +740,6 @@ impl<'s> Materials<'s> {
         colour: bool,
         normal: bool,
         textures: &mut Vec<Texture>,
-        inputs: &mut Vec<std::path::PathBuf>,
     ) -> Result<TextureRef, Located> {
         let t = sources[0];
         let srgb = match t.colour_space.as_str() {
@@ -621,7 +757,7 @@ impl<'s> Materials<'s> {
         if let Some(&index) = self.textures.get(&key) {
             return Ok(TextureRef { texture: index, transform: t.transform, set: 0 });
         }
-        let image = self.image_as(t, srgb, inputs)?;
+        let image = self.image_as(t, srgb)?;
         let texels = (0..image.width * image.height)
             .map(|k| {
                 let raw = match t.channel {

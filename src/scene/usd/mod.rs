@@ -63,6 +63,8 @@ pub struct Parts<'a> {
     pub groups: &'a mut Vec<(Option<String>, String)>,
     pub inputs: &'a mut Vec<PathBuf>,
     pub warnings: &'a mut Vec<String>,
+    /// What the stage lacks or holds that is not drawn: `Scene::incomplete`.
+    pub incomplete: &'a mut Vec<String>,
     /// The stage's dome light, as the scene's environment (with its group).
     pub environment: &'a mut Option<(Environment, Option<String>)>,
 }
@@ -82,13 +84,16 @@ pub fn import(
     let path = base.join(&spec.file);
     let _ = scene_file;
     parts.inputs.push(path.clone());
+    let search_paths: Vec<PathBuf> =
+        spec.asset_paths.iter().map(|d| base.join(d)).chain(spec.search_paths.iter().cloned()).collect();
     // The reader is a young library: should it panic on a hostile file,
     // the panic is caught here and reported as the file's error, without
     // the panic's own message on stderr.
     let previous = std::panic::take_hook();
     std::panic::set_hook(Box::new(|_| {}));
-    let result =
-        std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| import_stage(&path, spec, want_camera, parts)));
+    let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+        import_stage(&path, &search_paths, spec, want_camera, parts)
+    }));
     std::panic::set_hook(previous);
     match result {
         Ok(result) => result,
@@ -105,6 +110,7 @@ pub fn import(
 
 fn import_stage(
     path: &Path,
+    search_paths: &[PathBuf],
     spec: &UsdSpec,
     want_camera: bool,
     parts: Parts<'_>,
@@ -117,7 +123,7 @@ fn import_stage(
     if size == 0 {
         return Err(SceneError::new(path, "file", "the file is empty"));
     }
-    let stage = Stage::open(path).map_err(|e| SceneError::new(path, "file", e))?;
+    let stage = Stage::open(path, search_paths).map_err(|e| SceneError::new(path, "file", e))?;
     let up = stage.metadata_token("upAxis").map_err(|e| SceneError::new(path, "upAxis", e))?;
     let up_z = match up.as_deref() {
         None | Some("Y") => false,
@@ -167,6 +173,7 @@ fn import_stage(
         emitters: 0,
         still_moving: 0,
         catmull_clark: 0,
+        skipped: std::collections::BTreeMap::new(),
     };
     walker.materials = materials::Materials::new(&stage, walker.time());
     let roots = stage.root_prims().map_err(|e| SceneError::new(path, "/", e))?;
@@ -174,14 +181,38 @@ fn import_stage(
     for prim in &roots {
         walker.walk(prim, &top).map_err(error)?;
     }
-    if let Some(first) = stage.composition_errors().first() {
-        return Err(SceneError::new(path, "composition", first.clone()));
+    // What composition could not find (a layer, a format this reader does
+    // not read) is left out, as usdview does: the rest renders.
+    for error in stage.composition_errors() {
+        // Under --strict a piece left out is the error, before anything its
+        // absence leads to (no camera, nothing to frame).
+        if spec.strict {
+            return Err(SceneError::new(path, "--strict", format!("the scene is incomplete: {error}: left out")));
+        }
+        walker.lacks(format!("{error}: left out"));
+    }
+    // Every layer read is an input (the root was pushed as given).
+    let root = path.canonicalize().unwrap_or_else(|_| path.to_path_buf());
+    for layer in stage.layer_files() {
+        if layer != root && !walker.parts.inputs.contains(&layer) {
+            walker.parts.inputs.push(layer);
+        }
     }
     walker.summarise();
     if !want_camera {
         return Ok(None);
     }
     walker.camera(spec.camera.as_deref(), stage.default_prim().as_deref()).map_err(error)
+}
+
+/// A material as the meshes it is bound to read it: its index in the
+/// scene's materials, the primvar holding its texture coordinates, and the
+/// primvar (and fallback) its base colour reads as vertex colours.
+#[derive(Clone)]
+struct Bound {
+    material: usize,
+    st: String,
+    colour: Option<(String, Vec3)>,
 }
 
 /// An instance being walked. Its prims are walked where they stand for
@@ -236,8 +267,8 @@ struct Walker<'a, 'p> {
     units: lights::Units,
     materials: materials::Materials<'a>,
     /// The scene's material of each (Material path or display colour,
-    /// culls back faces), and the texture coordinates it reads.
-    material_index: HashMap<(String, bool), (usize, String)>,
+    /// culls back faces), and what it reads of a mesh.
+    material_index: HashMap<(String, bool), Bound>,
     /// Each prototype prim's meshes (scene mesh, its matrix in the
     /// prototype's space), kept once for all its instances.
     prototypes: HashMap<String, Vec<(usize, DMat4)>>,
@@ -252,6 +283,41 @@ struct Walker<'a, 'p> {
     emitters: u64,
     still_moving: usize,
     catmull_clark: usize,
+    /// The prim types not drawn: how many of each, and the first one's path.
+    skipped: std::collections::BTreeMap<String, (usize, String)>,
+}
+
+/// Typed prims that draw nothing themselves: groups, shading, subsets,
+/// skeletons (their meshes draw in their bind pose), render settings.
+const NOT_DRAWN_BY_DEFINITION: [&str; 16] = [
+    "Xform",
+    "Scope",
+    "Material",
+    "Shader",
+    "NodeGraph",
+    "GeomSubset",
+    "SkelRoot",
+    "Skeleton",
+    "SkelAnimation",
+    "BlendShape",
+    "RenderSettings",
+    "RenderProduct",
+    "RenderVar",
+    "PhysicsScene",
+    "GeomModelAPI",
+    "Backdrop",
+];
+
+/// Why a prim type is not drawn, for the one line each kind gets.
+fn not_drawn_because(type_name: &str) -> &'static str {
+    match type_name {
+        "BasisCurves" | "NurbsCurves" | "HermiteCurves" => "curves are not drawn yet",
+        "Points" => "points are not drawn yet",
+        "NurbsPatch" => "NURBS patches are not tessellated",
+        "Volume" | "OpenVDBAsset" | "Field3DAsset" => "volumes are not rendered",
+        "TetMesh" => "tetrahedral meshes are not drawn",
+        _ => "a type this renderer does not draw",
+    }
 }
 
 /// The gprim types tessellated.
@@ -278,6 +344,15 @@ impl Walker<'_, '_> {
 
     fn warn(&mut self, message: String) {
         self.parts.warnings.push(format!("{}: {message}", self.file.display()));
+    }
+
+    /// Notes what the stage lacks or holds that is not drawn
+    /// (`Scene::incomplete`).
+    fn lacks(&mut self, message: String) {
+        let line = format!("{}: {message}", self.file.display());
+        if !self.parts.incomplete.contains(&line) {
+            self.parts.incomplete.push(line);
+        }
     }
 
     fn walk(&mut self, prim: &str, above: &Context) -> Result<(), Located> {
@@ -328,9 +403,7 @@ impl Walker<'_, '_> {
             t if LIGHTS.contains(&t) => self.light(prim, t, &info.api_schemas, &here)?,
             "Camera" if here.instance.is_none() => self.cameras.push((prim.to_string(), here.worlds.clone())),
             "PointInstancer" => return self.point_instancer(prim, &here),
-            "BasisCurves" | "NurbsCurves" | "Points" | "NurbsPatch" | "Volume" | "TetMesh" | "HermiteCurves" => {
-                self.warn(format!("{prim}: {type_name} is not rendered (meshes and gprims are)"));
-            }
+            t if !t.is_empty() && !NOT_DRAWN_BY_DEFINITION.contains(&t) => self.skip(prim, t),
             _ => {}
         }
         for child in stage.children(prim).map_err(|e| (prim.to_string(), e))? {
@@ -372,12 +445,7 @@ impl Walker<'_, '_> {
 
     /// The scene material for a binding (or a display colour), culling back
     /// faces or not; and the primvar its textures read.
-    fn material(
-        &mut self,
-        binding: Option<&str>,
-        display: Option<Vec3>,
-        culls: bool,
-    ) -> Result<(usize, String), Located> {
+    fn material(&mut self, binding: Option<&str>, display: Option<Vec3>, culls: bool) -> Result<Bound, Located> {
         let key = match (binding, display) {
             (Some(b), _) => b.to_string(),
             (None, Some(c)) => format!("displayColor {c}"),
@@ -386,20 +454,27 @@ impl Walker<'_, '_> {
         if let Some(found) = self.material_index.get(&(key.clone(), culls)) {
             return Ok(found.clone());
         }
-        let (mut material, varname) = match binding {
+        let (mut material, st, colour) = match binding {
             Some(path) => {
                 let mut warnings = Vec::new();
-                let imported = self.materials.import(path, self.parts.textures, self.parts.inputs, &mut warnings)?;
+                let imported = self.materials.import(path, self.parts.textures, self.parts.inputs, &mut warnings);
                 for w in warnings {
                     self.warn(w);
                 }
-                (imported.material, imported.varname)
+                for lacking in self.materials.take_lacking() {
+                    self.lacks(lacking);
+                }
+                let imported = imported?;
+                (imported.material, imported.varname, imported.colour_primvar)
             }
-            None => (materials::display_material(&key, display.unwrap_or(materials::DEFAULT_GREY)), "st".to_string()),
+            None => {
+                let grey = materials::display_material(&key, display.unwrap_or(materials::DEFAULT_GREY));
+                (grey, "st".to_string(), None)
+            }
         };
         material.culls_back_faces = culls;
         self.parts.materials.push(material);
-        let found = (self.parts.materials.len() - 1, varname);
+        let found = Bound { material: self.parts.materials.len() - 1, st, colour };
         self.material_index.insert((key, culls), found.clone());
         Ok(found)
     }
@@ -411,12 +486,20 @@ impl Walker<'_, '_> {
             self.catmull_clark += 1;
         }
         let double_sided = read.boolean("doubleSided")?;
-        // The bound material decides which primvar holds the coordinates.
-        let varname = match here.binding.as_deref() {
-            Some(b) => self.material(Some(b), None, !double_sided)?.1,
-            None => "st".to_string(),
+        // The bound material decides which primvars hold the coordinates
+        // and the colours.
+        let (st, colour) = match here.binding.as_deref() {
+            Some(b) => {
+                let bound = self.material(Some(b), None, !double_sided)?;
+                (bound.st, bound.colour)
+            }
+            None => ("st".to_string(), None),
         };
-        let pieces = geometry::mesh(self.stage, prim, time, &geometry::Wanted { st: &varname })?;
+        let wanted = geometry::Wanted {
+            st: &st,
+            colour: colour.as_ref().map(|(name, fallback)| (name.as_str(), fallback.as_dvec3())),
+        };
+        let pieces = geometry::mesh(self.stage, prim, time, &wanted)?;
         for piece in pieces {
             let binding = match &piece.subset {
                 Some(subset) => self.binding(subset)?.or_else(|| here.binding.clone()),
@@ -441,6 +524,11 @@ impl Walker<'_, '_> {
             if let Some(c) = display.and_then(|c| c.first().copied()) {
                 mesh.colors = Some(vec![c.as_vec3().max(Vec3::ZERO); mesh.positions.len()]);
             }
+        } else if let Some((name, fallback)) = self.material(here.binding.as_deref(), None, !double_sided)?.colour {
+            // A material reading a primvar as its colour: the gprim's constant one.
+            let value = self.stage.vec3s(prim, &format!("primvars:{name}"), time).ok().flatten();
+            let c = value.and_then(|v| v.first().map(|c| c.as_vec3())).unwrap_or(fallback);
+            mesh.colors = Some(vec![c.max(Vec3::ZERO); mesh.positions.len()]);
         }
         self.surface(prim, mesh, here.binding.clone().as_deref(), double_sided, here)
     }
@@ -458,7 +546,12 @@ impl Walker<'_, '_> {
     ) -> Result<(), Located> {
         mesh.name = prim.to_string();
         // Without a material, a constant display colour is the base colour;
-        // with one, display colours are not read (UsdGeom).
+        // with one, display colours are read only where the material reads
+        // them (a primvar reader).
+        let reads_colours = match binding {
+            Some(b) => self.material(Some(b), None, !double_sided)?.colour.is_some(),
+            None => false,
+        };
         let display = match (&binding, &mesh.colors) {
             (None, Some(colors)) if colors.windows(2).all(|w| w[0] == w[1]) => {
                 let c = colors[0];
@@ -467,12 +560,14 @@ impl Walker<'_, '_> {
             }
             (None, Some(_)) => Some(Vec3::ONE),
             (Some(_), _) => {
-                mesh.colors = None;
+                if !reads_colours {
+                    mesh.colors = None;
+                }
                 None
             }
             (None, None) => None,
         };
-        let (material, _) = self.material(binding, display, !double_sided)?;
+        let material = self.material(binding, display, !double_sided)?.material;
         mesh.material = material;
         if self.parts.materials[material].pbr.as_ref().is_some_and(|p| p.normal_map.is_some()) && mesh.uvs.is_some() {
             geometry::add_tangents(&mut mesh);
@@ -612,7 +707,14 @@ impl Walker<'_, '_> {
                 }
                 let map = match texture {
                     None => EnvironmentMap::Constant(radiance),
-                    Some(file) => self.dome_map(prim, &file, radiance, &rotation)?,
+                    Some(file) => match self.dome_map(prim, &file, radiance, &rotation) {
+                        Ok(map) => map,
+                        // A texture that cannot be read: the dome's own colour.
+                        Err((at, problem)) => {
+                            self.lacks(format!("{at}: {problem}: the dome's constant radiance is used"));
+                            EnvironmentMap::Constant(radiance)
+                        }
+                    },
                 };
                 *self.parts.environment = Some((Environment { map, samples: DOME_SAMPLES }, here.group.clone()));
             }
@@ -627,7 +729,7 @@ impl Walker<'_, '_> {
     fn dome_map(
         &mut self,
         prim: &str,
-        file: &str,
+        file: &stage::Asset,
         radiance: Vec3,
         rotation: &DMat4,
     ) -> Result<EnvironmentMap, Located> {
@@ -641,7 +743,7 @@ impl Walker<'_, '_> {
         } else {
             super::image::decode(&bytes, super::image::Encoding::Srgb)
         }
-        .map_err(|e| (at.clone(), format!("'{file}': {e}")))?;
+        .map_err(|e| (at.clone(), format!("'{}': {e}", file.authored)))?;
         let (width, height) = (image.width, image.height);
         let inverse = rotation.inverse();
         // Each of the renderer's texels averages 4 x 4 nearest lookups of
@@ -873,8 +975,27 @@ impl Walker<'_, '_> {
         Ok(Some(GltfCamera { spec, aspect_ratio: Some((horizontal / vertical) as f32) }))
     }
 
+    /// Notes a prim of a type this renderer does not draw.
+    fn skip(&mut self, prim: &str, type_name: &str) {
+        let entry = self.skipped.entry(type_name.to_string()).or_insert_with(|| (0, prim.to_string()));
+        entry.0 += 1;
+    }
+
     /// One line each for what the stage asks for that is drawn otherwise.
     fn summarise(&mut self) {
+        if let Some(first) = self.materials.undefined.first().cloned() {
+            let more = self.materials.undefined.len() - 1;
+            let others = if more > 0 { format!(" and {more} more") } else { String::new() };
+            self.lacks(format!(
+                "{first}{others}: bound as materials but defined by no layer read (one is missing, or in a format \
+                 this reader does not read): grey"
+            ));
+        }
+        for (type_name, (count, first)) in std::mem::take(&mut self.skipped) {
+            let because = not_drawn_because(&type_name);
+            let others = if count > 1 { format!(" and {} more", count - 1) } else { String::new() };
+            self.lacks(format!("{first}{others}: {type_name} not drawn ({because})"));
+        }
         if self.catmull_clark > 0 {
             let n = self.catmull_clark;
             self.warn(format!("{n} mesh(es) ask for subdivision (subdivisionScheme): drawn as their control polygons"));

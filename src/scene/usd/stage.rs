@@ -17,8 +17,19 @@ use openusd::{ar, sdf, usd};
 /// A composed stage, read at one time code at a time.
 pub(super) struct Stage {
     stage: usd::Stage,
-    /// The root layer's file (for asset paths relative to it).
-    root: PathBuf,
+    /// `--asset-path`'s directories (the resolver's search paths).
+    search_paths: Vec<PathBuf>,
+}
+
+/// An asset path as the stage resolves it (an attribute of type `asset`).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub(super) struct Asset {
+    /// As authored, for messages.
+    pub authored: String,
+    /// Where USD's resolution puts it: the authored path anchored to the
+    /// layer that authored the value (a file, or `package.usdz[member]`),
+    /// or found on a search path. It may not exist.
+    pub location: String,
 }
 
 /// What a prim is, as the import needs it.
@@ -85,6 +96,21 @@ fn checked(path: &str) -> Result<&str, Failure> {
 /// took 5.3 GB before its error.
 struct CheckedResolver {
     inner: ar::DefaultResolver,
+    /// Where a search path (a relative asset path not starting `./` or
+    /// `../`) is looked for when it is not beside the layer that names it,
+    /// in order: `--asset-path`'s directories, then
+    /// `PXR_AR_DEFAULT_SEARCH_PATH`'s (USD's default resolver's own).
+    search_paths: Vec<PathBuf>,
+}
+
+/// Whether `asset` is what USD's default resolver calls a search path: a
+/// relative path that does not start `./` or `../` (`textures/wood.png`).
+fn is_search_path(asset: &str) -> bool {
+    !asset.is_empty()
+        && !Path::new(asset).is_absolute()
+        && !asset.starts_with("./")
+        && !asset.starts_with("../")
+        && !ar::is_package_relative_path(asset)
 }
 
 impl CheckedResolver {
@@ -135,8 +161,19 @@ impl CheckedResolver {
 }
 
 impl ar::Resolver for CheckedResolver {
+    /// As USD's default resolver: anchored to the layer that names it; a
+    /// search path not found there is looked for in the search paths.
     fn create_identifier(&self, asset_path: &str, anchor: Option<&ar::ResolvedPath>) -> String {
-        self.inner.create_identifier(asset_path, anchor)
+        let anchored = self.inner.create_identifier(asset_path, anchor);
+        if !self.search_paths.is_empty() && is_search_path(asset_path) && self.inner.resolve(&anchored).is_none() {
+            for directory in &self.search_paths {
+                let candidate = directory.join(asset_path);
+                if candidate.exists() {
+                    return candidate.canonicalize().unwrap_or(candidate).to_string_lossy().into_owned();
+                }
+            }
+        }
+        anchored
     }
 
     fn resolve(&self, asset_path: &str) -> Option<ar::ResolvedPath> {
@@ -158,30 +195,91 @@ impl ar::Resolver for CheckedResolver {
     }
 
     fn identity(&self) -> String {
-        self.inner.identity()
+        let searched: String = self.search_paths.iter().map(|p| format!("{p:?}")).collect();
+        format!("{}{searched}", self.inner.identity())
+    }
+}
+
+impl CheckedResolver {
+    /// The resolver of a stage opened with `search_paths` (then
+    /// `PXR_AR_DEFAULT_SEARCH_PATH`'s directories, `:`-separated).
+    fn new(search_paths: &[PathBuf]) -> Self {
+        let mut search_paths = search_paths.to_vec();
+        if let Some(paths) = std::env::var_os("PXR_AR_DEFAULT_SEARCH_PATH") {
+            search_paths.extend(std::env::split_paths(&paths).filter(|p| !p.as_os_str().is_empty()));
+        }
+        Self { inner: ar::DefaultResolver::new(), search_paths }
     }
 }
 
 impl Stage {
-    /// Opens the stage whose root layer is `path`, loading every payload.
-    pub(super) fn open(path: &Path) -> Result<Self, Failure> {
+    /// Opens the stage whose root layer is `path`, loading every payload;
+    /// assets not beside the layer naming them are looked for in
+    /// `search_paths`. What composition could not find (a layer, a format
+    /// this reader does not read) is in [`Self::composition_errors`].
+    pub(super) fn open(path: &Path, search_paths: &[PathBuf]) -> Result<Self, Failure> {
         let text = path.to_str().ok_or_else(|| "the path is not UTF-8".to_string())?;
         CheckedResolver::check_file(path).map_err(|e| e.to_string())?;
-        let stage = usd::Stage::builder()
-            .resolver(CheckedResolver { inner: ar::DefaultResolver::new() })
-            .open(text)
-            .map_err(|e| failure(&e))?;
-        let errors = stage.composition_errors();
-        if let Some(first) = errors.first() {
-            return Err(format!("composition: {}", composition_error(first)));
+        let stage =
+            usd::Stage::builder().resolver(CheckedResolver::new(search_paths)).open(text).map_err(|e| failure(&e))?;
+        Ok(Self { stage, search_paths: search_paths.to_vec() })
+    }
+
+    /// The files of the layers read so far (the root, its sublayers, every
+    /// referenced or payloaded layer; a package's member as the package).
+    pub(super) fn layer_files(&self) -> Vec<PathBuf> {
+        let mut files: Vec<PathBuf> = Vec::new();
+        for identifier in self.stage.layer_identifiers() {
+            let file = match ar::split_package_relative_path_outer(&identifier) {
+                Some((package, _)) => PathBuf::from(package),
+                None => PathBuf::from(&identifier),
+            };
+            if file.is_file() && !files.contains(&file) {
+                files.push(file);
+            }
         }
-        Ok(Self { stage, root: path.to_path_buf() })
+        files
     }
 
     /// Composition errors found since the stage was opened (a missing
     /// reference or payload surfaces as its prim is first read).
+    ///
+    /// One line per layer that could not be composed, naming the first
+    /// prim that wanted it and how many more did, then one per other error.
     pub(super) fn composition_errors(&self) -> Vec<String> {
-        self.stage.composition_errors().iter().map(composition_error).collect()
+        use openusd::pcp::Error;
+        let mut by_layer: Vec<(String, String, usize)> = Vec::new();
+        let mut lines = Vec::new();
+        for error in self.stage.composition_errors() {
+            let (layer, line) = match &error {
+                Error::UnresolvedLayer { asset_path, arc, site_path, .. } => (
+                    asset_path.clone(),
+                    format!("the {} layer '{asset_path}' cannot be found ({site_path}", arc_name(*arc)),
+                ),
+                Error::MalformedLayer { asset_path, arc, site_path, reason, .. } => {
+                    let why = if reason.starts_with("no file format registered") {
+                        let extension = Path::new(asset_path).extension().unwrap_or_default().to_string_lossy();
+                        format!("is in a format this reader does not read (.{extension})")
+                    } else {
+                        format!("cannot be read: {reason}")
+                    };
+                    (asset_path.clone(), format!("the {} layer '{asset_path}' {why} ({site_path}", arc_name(*arc)))
+                }
+                _ => {
+                    lines.push(composition_error(&error));
+                    continue;
+                }
+            };
+            match by_layer.iter_mut().find(|(l, _, _)| *l == layer) {
+                Some(entry) => entry.2 += 1,
+                None => by_layer.push((layer, line, 0)),
+            }
+        }
+        let grouped = by_layer.into_iter().map(|(_, line, more)| match more {
+            0 => format!("{line})"),
+            n => format!("{line} and {n} more prims)"),
+        });
+        grouped.chain(lines).collect()
     }
 
     /// The layer metadata field `name` (`upAxis`, `metersPerUnit`...), as text
@@ -280,15 +378,32 @@ impl Stage {
         self.typed(prim, name, time, "a token or string", |v| text(&v))
     }
 
-    /// An asset path, as authored.
-    pub(super) fn asset(&self, prim: &str, name: &str, time: f64) -> Result<Option<String>, Failure> {
-        self.typed(prim, name, time, "an asset path", |v| match v {
-            sdf::Value::AssetPath(a) => {
-                Some(a.evaluated_path().map_or_else(|| a.authored_path.clone(), ToString::to_string))
-            }
-            sdf::Value::String(s) => Some(s),
+    /// An asset path, resolved as USD resolves it: against the layer that
+    /// authored the value (a referenced layer's own folder, or the package
+    /// holding it), not the root layer; where the file is absent, the
+    /// place it was looked for.
+    pub(super) fn asset(&self, prim: &str, name: &str, time: f64) -> Result<Option<Asset>, Failure> {
+        let value = self.typed(prim, name, time, "an asset path", |v| match v {
+            sdf::Value::AssetPath(a) => Some(a),
+            sdf::Value::String(s) => Some(sdf::AssetPath::new(s)),
             _ => None,
-        })
+        })?;
+        let Some(value) = value else { return Ok(None) };
+        let authored = value.asset_path().to_string();
+        if authored.is_empty() {
+            return Ok(Some(Asset { authored, location: String::new() }));
+        }
+        if let Some(resolved) = value.resolved_path() {
+            return Ok(Some(Asset { authored, location: resolved.to_string() }));
+        }
+        // Not found: where it was looked for, anchored to the strongest
+        // layer that authors the attribute.
+        let attribute = self.stage.attribute(attribute_path(prim, name)?);
+        let stack = attribute.property_stack().map_err(|e| failure(&e))?;
+        let anchor = stack.first().map(|(layer, _)| ar::ResolvedPath::new(layer.as_str()));
+        let resolver = CheckedResolver::new(&self.search_paths);
+        let location = ar::Resolver::create_identifier(&resolver, &authored, anchor.as_ref());
+        Ok(Some(Asset { authored, location }))
     }
 
     pub(super) fn vec2(&self, prim: &str, name: &str, time: f64) -> Result<Option<DVec2>, Failure> {
@@ -403,28 +518,26 @@ impl Stage {
         Ok(sources.iter().map(|p| p.as_str().to_string()).collect())
     }
 
-    /// The bytes of the asset `asset` names, resolved as USD resolves it:
-    /// relative to the root layer's directory, or inside the root `.usdz`
-    /// package. Returns the file it read (for messages and the scene's
-    /// inputs) too.
-    pub(super) fn asset_bytes(&self, asset: &str, limit: u64) -> Result<(PathBuf, Vec<u8>), Failure> {
-        let root_is_package = self.root.extension().is_some_and(|e| e.eq_ignore_ascii_case("usdz"));
-        let base = self.root.parent().unwrap_or(Path::new("."));
-        let relative = asset.trim_start_matches("./");
-        if root_is_package && !Path::new(asset).is_absolute() && !ar::is_package_relative_path(asset) {
-            let name = format!("{}[{relative}]", self.root.display());
-            let resolver = CheckedResolver { inner: ar::DefaultResolver::new() };
-            let resolved = ar::Resolver::resolve(&resolver, &name)
-                .ok_or_else(|| format!("'{asset}' is not in the package {}", self.root.display()))?;
+    /// The bytes of `asset` (at most `limit`), and the file they are in
+    /// (the package, for a member of one: for messages and the scene's inputs).
+    pub(super) fn asset_bytes(&self, asset: &Asset, limit: u64) -> Result<(PathBuf, Vec<u8>), Failure> {
+        let location = asset.location.as_str();
+        let not_found = || format!("cannot find '{}' (looked for {location})", asset.authored);
+        if let Some((package, _)) = ar::split_package_relative_path_outer(location) {
+            let resolver = CheckedResolver::new(&self.search_paths);
+            let resolved = ar::Resolver::resolve(&resolver, location).ok_or_else(not_found)?;
             let mut reader = ar::Resolver::open_asset(&resolver, &resolved).map_err(|e| e.to_string())?;
             let mut bytes = Vec::new();
             reader.by_ref().take(limit + 1).read_to_end(&mut bytes).map_err(|e| e.to_string())?;
             if bytes.len() as u64 > limit {
-                return Err(format!("'{asset}' is larger than {limit} bytes"));
+                return Err(format!("'{}' is larger than {limit} bytes", asset.authored));
             }
-            return Ok((self.root.clone(), bytes));
+            return Ok((PathBuf::from(package), bytes));
         }
-        let file = base.join(relative);
+        let file = PathBuf::from(location);
+        if !file.exists() {
+            return Err(not_found());
+        }
         let bytes = crate::util::file::read_regular(&file, limit)
             .map_err(|e| format!("cannot read '{}': {e}", file.display()))?;
         Ok((file, bytes))
@@ -482,6 +595,11 @@ fn composition_error(error: &openusd::pcp::Error) -> String {
         }
     }
     error.to_string()
+}
+
+/// An arc's kind as USD's documents name it.
+fn arc_name(arc: openusd::pcp::ArcType) -> String {
+    format!("{arc:?}").to_lowercase()
 }
 
 /// How deep USD nests composition arcs (C++ `MAX_COMPOSITION_DEPTH`).
