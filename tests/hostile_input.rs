@@ -571,7 +571,7 @@ fn hostile_gltf_files() {
         g.json["textures"] = json!([{ "source": 0 }]);
         g.json["materials"][0]["pbrMetallicRoughness"]["baseColorTexture"] = json!({ "index": 0 });
     });
-    incomplete(&dir, "junk_image.gltf", &junk, &["junk.png", "images[0]", "not a PNG or JPEG"]);
+    incomplete(&dir, "junk_image.gltf", &junk, &["junk.png", "images[0]", "not a PNG, JPEG"]);
     // A missing .bin beside the .gltf.
     let path = floor_and_point_light().write_separate(&dir.path(""), "room");
     std::fs::remove_file(dir.path("room.bin")).unwrap();

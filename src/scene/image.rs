@@ -1,6 +1,8 @@
-//! Reading the images a scene names: PNG textures (sRGB-encoded colours,
-//! decoded to linear reflectance) and OpenEXR environment maps (linear
-//! radiance). Both become linear RGB texels, row 0 at the top of the image.
+//! Reading the images a scene names: textures (PNG, JPEG, TGA, BMP, TIFF,
+//! OpenEXR, Radiance HDR; 8- and 16-bit colours decoded from sRGB where the
+//! scene says they are encoded so, float images scene-linear as stored) and
+//! OpenEXR environment maps (linear radiance). All become linear RGB texels,
+//! row 0 at the top of the image.
 
 use std::path::Path;
 
@@ -14,8 +16,12 @@ pub struct RgbImage {
     pub width: usize,
     pub height: usize,
     pub texels: Vec<Vec3>,
-    /// Coverage (linear, 0 to 1) per texel, for a PNG with an alpha channel.
+    /// Coverage (linear, 0 to 1) per texel, for an image with an alpha
+    /// channel.
     pub alpha: Option<Vec<f32>>,
+    /// The file stores scene-linear floats (OpenEXR, Radiance HDR, float
+    /// TIFF): no sRGB decoding applies to them, whatever the scene says.
+    pub scene_linear: bool,
 }
 
 /// Why an image a scene names cannot be used. Caused by the user's file.
@@ -30,9 +36,15 @@ pub enum ImageError {
     /// The JPEG decoder rejected the file (truncated, corrupt, unsupported).
     #[error("not a readable JPEG: {0}")]
     Jpeg(#[source] jpeg_decoder::Error),
-    /// Neither PNG nor JPEG.
-    #[error("not a PNG or JPEG image")]
+    /// Not a format this reader reads.
+    #[error("not a PNG, JPEG, TGA, BMP, TIFF, OpenEXR or Radiance HDR image")]
     UnknownFormat,
+    /// The decoder of a TGA, BMP, TIFF or HDR file rejected it.
+    #[error("not a readable {format}: {message}")]
+    Other { format: &'static str, message: String },
+    /// A texel that is not a finite number (a float image).
+    #[error("pixel ({x}, {y}) is not finite")]
+    NotFinite { x: usize, y: usize },
     /// The EXR reader rejected the file (not an EXR, truncated, no R, G and B).
     #[error("cannot read EXR: {0}")]
     Exr(#[source] exr::error::Error),
@@ -105,17 +117,15 @@ pub fn check_exr_header(reader: impl std::io::Read, length: u64) -> Result<(), I
     Ok(())
 }
 
-/// Reads a PNG (8 or 16 bits, grey or colour, palettes expanded) and decodes
-/// its sRGB values to linear.
-pub fn read_srgb_png(path: &Path) -> Result<RgbImage, ImageError> {
-    read_png(path, Encoding::Srgb)
-}
+/// The largest texture file read, bytes (a 16k x 8k float RGBA EXR is 2 GiB
+/// uncompressed; the texel limit refuses larger images anyway).
+pub const MAX_TEXTURE_FILE_BYTES: u64 = 1 << 31;
 
-/// Reads a PNG whose colours are encoded as `encoding` says.
-pub fn read_png(path: &Path, encoding: Encoding) -> Result<RgbImage, ImageError> {
-    let file = crate::util::file::open_regular(path).map_err(ImageError::Open)?;
-    let length = file.metadata().map_err(ImageError::Open)?.len();
-    decode_png(std::io::BufReader::new(file), length, encoding)
+/// Reads a texture in any format [`decode_named`] reads, its 8- and 16-bit
+/// colours encoded as `encoding` says.
+pub fn read_texture(path: &Path, encoding: Encoding) -> Result<RgbImage, ImageError> {
+    let bytes = crate::util::file::read_regular(path, MAX_TEXTURE_FILE_BYTES).map_err(ImageError::Open)?;
+    decode_named(&bytes, &path.to_string_lossy(), encoding)
 }
 
 /// How an image's colour values are encoded.
@@ -136,22 +146,123 @@ impl Encoding {
     }
 }
 
-/// Decodes an in-memory PNG or JPEG (told apart by their signatures) from
-/// sRGB to linear.
+/// [`decode`] from sRGB to linear.
 pub fn decode_srgb(bytes: &[u8]) -> Result<RgbImage, ImageError> {
     decode(bytes, Encoding::Srgb)
 }
 
-/// Decodes an in-memory PNG or JPEG (told apart by their signatures),
-/// colours encoded as `encoding` says.
+/// Decodes an in-memory image (its format told by its signature), 8- and
+/// 16-bit colours encoded as `encoding` says.
 pub fn decode(bytes: &[u8], encoding: Encoding) -> Result<RgbImage, ImageError> {
+    decode_named(bytes, "", encoding)
+}
+
+/// [`decode`], with the file's `name` telling a TGA (the one format without
+/// a signature) by its extension.
+pub fn decode_named(bytes: &[u8], name: &str, encoding: Encoding) -> Result<RgbImage, ImageError> {
     if bytes.starts_with(b"\x89PNG") {
         decode_png(std::io::Cursor::new(bytes), bytes.len() as u64, encoding)
     } else if bytes.starts_with(&[0xff, 0xd8]) {
         decode_jpeg(bytes, encoding)
+    } else if bytes.starts_with(&EXR_MAGIC) {
+        check_exr_header(bytes, bytes.len() as u64)?;
+        texture_exr(std::io::Cursor::new(bytes))
     } else {
-        Err(ImageError::UnknownFormat)
+        decode_other(bytes, name, encoding)
     }
+}
+
+/// OpenEXR's magic number, its first four bytes.
+pub const EXR_MAGIC: [u8; 4] = [0x76, 0x2f, 0x31, 0x01];
+
+/// TGA, BMP, TIFF and Radiance HDR, through the `image` crate: the header's
+/// size checked first, as for PNG and JPEG.
+fn decode_other(bytes: &[u8], name: &str, encoding: Encoding) -> Result<RgbImage, ImageError> {
+    use image::ImageFormat;
+    let reader = || -> Result<image::ImageReader<std::io::Cursor<&[u8]>>, ImageError> {
+        let mut reader = image::ImageReader::new(std::io::Cursor::new(bytes))
+            .with_guessed_format()
+            .map_err(|_| ImageError::UnknownFormat)?;
+        if reader.format().is_none() {
+            let tga = Path::new(name).extension().is_some_and(|e| e.eq_ignore_ascii_case("tga"));
+            if !tga {
+                return Err(ImageError::UnknownFormat);
+            }
+            reader.set_format(ImageFormat::Tga);
+        }
+        let mut limits = image::Limits::default();
+        limits.max_alloc = Some(MAX_TEXELS * 16);
+        reader.limits(limits);
+        Ok(reader)
+    };
+    let format = match reader()?.format() {
+        Some(ImageFormat::Tga) => "TGA",
+        Some(ImageFormat::Bmp) => "BMP",
+        Some(ImageFormat::Tiff) => "TIFF",
+        Some(ImageFormat::Hdr) => "Radiance HDR",
+        _ => return Err(ImageError::UnknownFormat),
+    };
+    let failed = |e: image::ImageError| ImageError::Other { format, message: e.to_string() };
+    let (width, height) = reader()?.into_dimensions().map_err(failed)?;
+    // A TGA's or BMP's run-length packets, like deflate, may outweigh the
+    // file by MAX_EXPANSION at most.
+    check_size("header", width.into(), height.into(), 4, bytes.len() as u64)?;
+    let image = reader()?.decode().map_err(failed)?;
+    let alpha = image.color().has_alpha();
+    let scene_linear = matches!(image.color(), image::ColorType::Rgb32F | image::ColorType::Rgba32F);
+    let rgba = image.into_rgba32f();
+    let (width, height) = (rgba.width() as usize, rgba.height() as usize);
+    if width * height == 0 {
+        return Err(ImageError::Empty);
+    }
+    let mut texels = Vec::with_capacity(width * height);
+    for (p, texel) in rgba.pixels().enumerate() {
+        let [r, g, b, _] = texel.0;
+        if !(r.is_finite() && g.is_finite() && b.is_finite()) {
+            return Err(ImageError::NotFinite { x: p % width, y: p / width });
+        }
+        let c = |v: f32| if scene_linear { v } else { encoding.decode(v) };
+        texels.push(Vec3::new(c(r), c(g), c(b)));
+    }
+    let alpha = alpha.then(|| rgba.pixels().map(|t| t.0[3].clamp(0.0, 1.0)).collect());
+    Ok(RgbImage { width, height, texels, alpha, scene_linear })
+}
+
+/// An OpenEXR texture: R, G, B (and A) of its first RGB layer, scene-linear,
+/// each finite.
+fn texture_exr(reader: impl std::io::Read + std::io::Seek) -> Result<RgbImage, ImageError> {
+    use exr::prelude::{ReadChannels, ReadLayers};
+    let image = exr::prelude::read()
+        .no_deep_data()
+        .largest_resolution_level()
+        .rgba_channels(
+            |size, channels: &exr::prelude::RgbaChannels| RgbImage {
+                width: size.width(),
+                height: size.height(),
+                texels: vec![Vec3::ZERO; size.area()],
+                alpha: channels.3.is_some().then(|| vec![1.0; size.area()]),
+                scene_linear: true,
+            },
+            |image: &mut RgbImage, at, (r, g, b, a): (f32, f32, f32, f32)| {
+                let index = at.y() * image.width + at.x();
+                image.texels[index] = Vec3::new(r, g, b);
+                if let Some(alpha) = image.alpha.as_mut() {
+                    alpha[index] = if a.is_finite() { a.clamp(0.0, 1.0) } else { 1.0 };
+                }
+            },
+        )
+        .first_valid_layer()
+        .all_attributes()
+        .from_buffered(reader)
+        .map_err(ImageError::Exr)?;
+    let image = image.layer_data.channel_data.pixels;
+    if let Some(index) = image.texels.iter().position(|t| !t.is_finite()) {
+        return Err(ImageError::NotFinite { x: index % image.width, y: index / image.width });
+    }
+    if image.texels.is_empty() {
+        return Err(ImageError::Empty);
+    }
+    Ok(image)
 }
 
 fn decode_jpeg(bytes: &[u8], encoding: Encoding) -> Result<RgbImage, ImageError> {
@@ -167,19 +278,29 @@ fn decode_jpeg(bytes: &[u8], encoding: Encoding) -> Result<RgbImage, ImageError>
     let (width, height) = (usize::from(info.width), usize::from(info.height));
     let channels = match info.pixel_format {
         jpeg_decoder::PixelFormat::L8 => 1,
+        jpeg_decoder::PixelFormat::L16 => 2,
         jpeg_decoder::PixelFormat::RGB24 => 3,
-        jpeg_decoder::PixelFormat::L16 | jpeg_decoder::PixelFormat::CMYK32 => return Err(ImageError::UnknownFormat),
+        jpeg_decoder::PixelFormat::CMYK32 => 4,
     };
     if width * height == 0 || pixels.len() < width * height * channels {
         return Err(ImageError::Empty);
     }
     let texels = (0..width * height)
         .map(|p| {
-            let c = |k: usize| encoding.decode(f32::from(pixels[p * channels + k.min(channels - 1)]) / 255.0);
-            Vec3::new(c(0), c(1), c(2))
+            let at = |k: usize| f32::from(pixels[p * channels + k]) / 255.0;
+            let rgb = match channels {
+                1 => Vec3::splat(at(0)),
+                // 16-bit grey, big-endian.
+                2 => Vec3::splat(f32::from(u16::from_be_bytes([pixels[2 * p], pixels[2 * p + 1]])) / 65535.0),
+                3 => Vec3::new(at(0), at(1), at(2)),
+                // CMYK: RGB = (1 - CMY)(1 - K), as the `image` crate
+                // converts the same decoder's output.
+                _ => (Vec3::ONE - Vec3::new(at(0), at(1), at(2))) * (1.0 - at(3)),
+            };
+            Vec3::new(encoding.decode(rgb.x), encoding.decode(rgb.y), encoding.decode(rgb.z))
         })
         .collect();
-    Ok(RgbImage { width, height, texels, alpha: None })
+    Ok(RgbImage { width, height, texels, alpha: None, scene_linear: false })
 }
 
 fn decode_png(reader: impl std::io::Read, length: u64, encoding: Encoding) -> Result<RgbImage, ImageError> {
@@ -218,7 +339,7 @@ fn decode_png(reader: impl std::io::Read, length: u64, encoding: Encoding) -> Re
     // Alpha is linear coverage (PNG's grey + alpha and RGBA), not sRGB.
     let alpha =
         matches!(channels, 2 | 4).then(|| (0..width * height).map(|p| sample(p * channels + channels - 1)).collect());
-    Ok(RgbImage { width, height, texels, alpha })
+    Ok(RgbImage { width, height, texels, alpha, scene_linear: false })
 }
 
 /// Reads the R, G and B channels of an OpenEXR's first RGB layer as radiance,
@@ -249,6 +370,7 @@ fn radiance_exr(reader: impl std::io::Read + std::io::Seek) -> Result<RgbImage, 
                 height: size.height(),
                 texels: vec![Vec3::ZERO; size.area()],
                 alpha: None,
+                scene_linear: true,
             },
             |image: &mut RgbImage, at, (r, g, b, _): (f32, f32, f32, f32)| {
                 image.texels[at.y() * image.width + at.x()] = Vec3::new(r, g, b);
@@ -259,6 +381,13 @@ fn radiance_exr(reader: impl std::io::Read + std::io::Seek) -> Result<RgbImage, 
         .from_buffered(reader)
         .map_err(ImageError::Exr)?;
     let image = image.layer_data.channel_data.pixels;
+    check_radiance(&image)?;
+    Ok(image)
+}
+
+/// `image` as radiance: every texel finite, non-negative and at most
+/// [`MAX_EMISSION`](super::MAX_EMISSION), and at least one.
+pub fn check_radiance(image: &RgbImage) -> Result<(), ImageError> {
     let bad = |t: &Vec3| !t.is_finite() || t.min_element() < 0.0 || t.max_element() > super::MAX_EMISSION;
     if let Some(index) = image.texels.iter().position(bad) {
         let t = image.texels[index];
@@ -268,5 +397,117 @@ fn radiance_exr(reader: impl std::io::Read + std::io::Seek) -> Result<RgbImage, 
     if image.texels.is_empty() {
         return Err(ImageError::Empty);
     }
-    Ok(image)
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The quadrants `scenes/textures/make_textures.py` wrote: 8-bit sRGB
+    /// colours with their alpha, and the float files' linear values.
+    const QUADRANTS: [[u8; 4]; 4] = [[200, 30, 30, 255], [30, 200, 30, 128], [30, 30, 200, 64], [255, 255, 255, 0]];
+    const LINEAR: [[f32; 3]; 4] = [[0.5, 0.1, 0.1], [0.1, 0.5, 0.1], [0.1, 0.1, 0.5], [4.0, 2.0, 1.0]];
+
+    fn read(name: &str, encoding: Encoding) -> RgbImage {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/textures").join(name);
+        let image = read_texture(&path, encoding).unwrap_or_else(|e| panic!("{name}: {e}"));
+        assert_eq!((image.width, image.height), (16, 16), "{name}");
+        image
+    }
+
+    /// The texel at the centre of quadrant `k` (0 top-left, 3 bottom-right).
+    fn at(image: &RgbImage, k: usize) -> usize {
+        let (y, x) = (k / 2, k % 2);
+        (8 * y + 4) * image.width + 8 * x + 4
+    }
+
+    /// Every quadrant's texels (all 64) within `tolerance` of `expected(k)`.
+    fn check(name: &str, image: &RgbImage, tolerance: f32, expected: impl Fn(usize) -> Vec3) {
+        for k in 0..4 {
+            let (y0, x0) = (8 * (k / 2), 8 * (k % 2));
+            for y in y0..y0 + 8 {
+                for x in x0..x0 + 8 {
+                    let got = image.texels[y * image.width + x];
+                    let want = expected(k);
+                    assert!(
+                        (got - want).abs().max_element() <= tolerance * want.max_element().max(1.0),
+                        "{name}: texel ({x}, {y}) is {got}, expected {want}"
+                    );
+                }
+            }
+        }
+    }
+
+    fn srgb(k: usize) -> Vec3 {
+        let q = QUADRANTS[k];
+        Vec3::new(q[0].into(), q[1].into(), q[2].into()).map(|v| srgb_to_linear(v / 255.0))
+    }
+
+    #[test]
+    fn eight_bit_formats_decode_their_srgb_to_the_same_linear_texels() {
+        for (name, tolerance, alpha) in [
+            ("rgba8.png", 1e-6, true),
+            ("palette.png", 1e-6, false),
+            ("rgba8.tga", 1e-6, true),
+            ("rgb8.bmp", 1e-6, false),
+            ("rgb8.tif", 1e-6, false),
+            // JPEG is lossy: quality 100, no chroma subsampling.
+            ("baseline.jpg", 0.02, false),
+            ("progressive.jpg", 0.02, false),
+            ("cmyk.jpg", 0.02, false),
+        ] {
+            let image = read(name, Encoding::Srgb);
+            assert!(!image.scene_linear, "{name}");
+            check(name, &image, tolerance, srgb);
+            assert_eq!(image.alpha.is_some(), alpha, "{name}");
+            if let Some(a) = &image.alpha {
+                for k in 0..4 {
+                    assert!((a[at(&image, k)] - f32::from(QUADRANTS[k][3]) / 255.0).abs() < 1e-6, "{name}");
+                }
+            }
+            // Linear data is read as stored.
+            let raw = read(name, Encoding::Linear);
+            let q = QUADRANTS[0];
+            let want = Vec3::new(q[0].into(), q[1].into(), q[2].into()) / 255.0;
+            assert!((raw.texels[at(&raw, 0)] - want).abs().max_element() <= tolerance.max(0.01), "{name}");
+        }
+    }
+
+    #[test]
+    fn sixteen_bit_grey_reads_its_full_precision() {
+        for name in ["grey16.png", "grey16.tif"] {
+            let image = read(name, Encoding::Srgb);
+            check(name, &image, 1e-6, |k| Vec3::splat(srgb(k).x));
+        }
+    }
+
+    #[test]
+    fn float_formats_are_scene_linear_whatever_the_encoding() {
+        for (name, tolerance, grey) in [
+            ("half.exr", 1e-3, false),
+            ("float.exr", 0.0, false),
+            ("float32.tif", 0.0, false),
+            // RGBE keeps 8 bits of mantissa under a shared exponent.
+            ("radiance.hdr", 1.0 / 64.0, false),
+        ] {
+            let image = read(name, Encoding::Srgb);
+            assert!(image.scene_linear, "{name}");
+            let expected = |k: usize| if grey { Vec3::splat(LINEAR[k][0]) } else { Vec3::from_array(LINEAR[k]) };
+            check(name, &image, tolerance, expected);
+        }
+    }
+
+    #[test]
+    fn unknown_and_corrupt_images_are_refused_with_their_format() {
+        assert!(matches!(decode(b"GIF89a......", Encoding::Srgb), Err(ImageError::UnknownFormat)));
+        // A TGA has no signature: told by its name, else unknown.
+        let tga = std::fs::read(Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/textures/rgba8.tga")).unwrap();
+        assert!(matches!(decode(&tga, Encoding::Srgb), Err(ImageError::UnknownFormat)));
+        let cut = decode_named(&tga[..40], "x.tga", Encoding::Srgb).unwrap_err();
+        assert!(cut.to_string().contains("TGA"), "{cut}");
+        let bmp = std::fs::read(Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/textures/rgb8.bmp")).unwrap();
+        let cut = decode_named(&bmp[..100], "x.bmp", Encoding::Srgb).unwrap_err();
+        assert!(cut.to_string().contains("BMP"), "{cut}");
+    }
 }

@@ -37,7 +37,7 @@ pub struct Texture {
 }
 
 impl Texture {
-    /// A texture of a decoded image (see [`super::image::read_srgb_png`]).
+    /// A texture of a decoded image (see [`super::image::read_texture`]).
     #[must_use]
     pub fn from_image(image: RgbImage) -> Self {
         Self::from_texels(image.width, image.height, image.texels)

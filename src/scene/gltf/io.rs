@@ -180,7 +180,8 @@ impl<'a> Data<'a> {
         Ok(bytes)
     }
 
-    /// Decodes an image (PNG or JPEG, its colours encoded as `encoding`
+    /// Decodes an image (glTF's PNG or JPEG, or any format
+    /// [`image::decode_named`] reads; its colours encoded as `encoding`
     /// says) once.
     pub(super) fn image(
         &mut self,
@@ -202,7 +203,8 @@ impl<'a> Data<'a> {
                 (self.view_bytes(&view, &format!("{at}.bufferView"))?.to_vec(), None)
             }
         };
-        let decoded = image::decode(&bytes, encoding).map_err(|e| {
+        let name = named.as_ref().map_or_else(String::new, |p| p.to_string_lossy().into_owned());
+        let decoded = image::decode_named(&bytes, &name, encoding).map_err(|e| {
             let what = named.as_ref().map_or_else(String::new, |p| format!("'{}': ", p.display()));
             self.error(format!("{location} ({at})"), format!("{what}{e}"))
         })?;

@@ -39,7 +39,7 @@ pub(super) fn materials(
                 })?;
                 let texture_path = base.join(t);
                 inputs.push(texture_path.clone());
-                let image = image::read_srgb_png(&texture_path)
+                let image = image::read_texture(&texture_path, Encoding::Srgb)
                     .map_err(|e| SceneError::new(&texture_path, field("texture"), e.to_string()))?;
                 textures.push(Texture::from_image(image));
                 Albedo::Texture(TextureRef {
@@ -102,7 +102,7 @@ fn pbr(
         Some(t) => {
             let path = base.join(t);
             inputs.push(path.clone());
-            let image = image::read_png(&path, Encoding::Linear)
+            let image = image::read_texture(&path, Encoding::Linear)
                 .map_err(|e| SceneError::new(&path, field("metallic_roughness_texture"), e.to_string()))?;
             textures.push(Texture::from_image(image));
             Some(TextureRef {

@@ -697,7 +697,8 @@ impl<'s> Materials<'s> {
     fn image_as(&mut self, t: &TextureSource, srgb: bool) -> Result<&RgbImage, Located> {
         let at = || format!("{}.inputs:file", t.shader);
         self.load(&t.file, &t.authored).map_err(|e| (at(), e))?;
-        if !srgb {
+        // Float images are scene-linear whatever the colour space says.
+        if !srgb || self.images[&t.file].as_ref().is_ok_and(|image| image.scene_linear) {
             return self.images[&t.file].as_ref().map_err(|e| (at(), e.clone()));
         }
         // 8- and 16-bit values were read as value / max: decoding them
@@ -722,7 +723,7 @@ impl<'s> Materials<'s> {
                 if !self.read.contains(&file) {
                     self.read.push(file);
                 }
-                image::decode(&bytes, Encoding::Linear).map_err(|e| format!("'{authored}': {e}"))
+                image::decode_named(&bytes, authored, Encoding::Linear).map_err(|e| format!("'{authored}': {e}"))
             });
             self.images.insert(location.to_string(), decoded);
         }

@@ -741,7 +741,8 @@ impl Walker<'_, '_> {
         let image = if bytes.starts_with(&[0x76, 0x2f, 0x31, 0x01]) {
             super::image::decode_radiance_exr(&bytes)
         } else {
-            super::image::decode(&bytes, super::image::Encoding::Srgb)
+            super::image::decode_named(&bytes, &file.authored, super::image::Encoding::Srgb)
+                .and_then(|image| super::image::check_radiance(&image).map(|()| image))
         }
         .map_err(|e| (at.clone(), format!("'{}': {e}", file.authored)))?;
         let (width, height) = (image.width, image.height);
