@@ -687,4 +687,9 @@ fn incomplete_stages_render_with_a_warning_and_strict_refuses_them() {
     let report: serde_json::Value = serde_json::from_str(&lightcuts_ok(&["inspect", s(&stage), "--json"])).unwrap();
     let incomplete = report["incomplete"].to_string();
     assert!(incomplete.contains("/M/T.inputs:file: names no file") && incomplete.contains("own value"), "{report}");
+    // A stage of curves only has nothing to frame: the error says why.
+    let curves = dir.write("curves.usda", &format!("{header}def BasisCurves \"Hair\"\n{{\n}}\n"));
+    let stderr = lightcuts_fails(&["render", s(&curves), "-o", s(&dir.path("out.exr"))]);
+    assert!(stderr.contains("nothing to frame") || stderr.contains("no geometry to frame"), "{stderr}");
+    assert!(stderr.contains("left out: /Hair: BasisCurves not drawn"), "{stderr}");
 }

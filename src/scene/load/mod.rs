@@ -298,6 +298,7 @@ impl Scene {
             &spec,
             gltf_camera.or(usd_camera),
             object::world_bounds(&meshes, &objects),
+            &incomplete,
             &mut warnings,
         )?;
         // A glTF file's or stage's (or the framing) camera opens the shutter --shutter gives.

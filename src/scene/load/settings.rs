@@ -92,6 +92,7 @@ pub(super) fn camera_and_film(
     spec: &SceneFile,
     gltf_camera: Option<GltfCamera>,
     bounds: (Vec3, Vec3),
+    incomplete: &[String],
     warnings: &mut Vec<String>,
 ) -> Result<(file::CameraSpec, Film), SceneError> {
     let (camera_spec, aspect_ratio) = match (&spec.camera, gltf_camera) {
@@ -112,9 +113,19 @@ pub(super) fn camera_and_film(
                     (None, Some(_)) => "the USD stage has",
                     (None, None) => "the scene has",
                 };
+                // What was left out is why there is nothing to frame (a
+                // stage of curves only): said here, as the warnings that
+                // would say it are not printed for a failed load.
+                // Each line is "file: what"; the error names the file.
+                let left_out: Vec<&str> = incomplete
+                    .iter()
+                    .map(|line| line.split_once(": ").map_or(line.as_str(), |(_, what)| what))
+                    .collect();
+                let left_out =
+                    if left_out.is_empty() { String::new() } else { format!(" (left out: {})", left_out.join("; ")) };
                 return Err(v.error(
                     "camera",
-                    &format!("missing: {file} no camera and no geometry to frame, and no [camera] is given"),
+                    &format!("missing: {file} no camera and no geometry to frame{left_out}, and no [camera] is given"),
                 ));
             };
             warnings.push(format!(
