@@ -293,7 +293,7 @@ impl Scene {
                 object.motion = motion;
             }
         }
-        let (mut camera_spec, film) = settings::camera_and_film(
+        let (camera_spec, film) = settings::camera_and_film(
             &v,
             &spec,
             gltf_camera.or(usd_camera),
@@ -301,12 +301,6 @@ impl Scene {
             &incomplete,
             &mut warnings,
         )?;
-        // A glTF file's or stage's (or the framing) camera opens the shutter --shutter gives.
-        if spec.camera.is_none() {
-            let given =
-                spec.gltf.as_ref().and_then(|g| g.shutter).or_else(|| spec.usd.as_ref().and_then(|u| u.shutter));
-            camera_spec.shutter = given.unwrap_or(camera_spec.shutter);
-        }
         untraceable_instances(path, &mut objects, &meshes, &lights, &camera_spec, &mut warnings);
         let ChosenEnvironment { environment, group: environment_group } =
             environment(&v, base, &spec, usd_environment, &mut inputs, &mut warnings)?;

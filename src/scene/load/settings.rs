@@ -86,7 +86,8 @@ pub const FRAMING_FOV_Y: f32 = 45.0;
 /// The camera (the TOML's, else the glTF file's, else one framing the
 /// objects' `bounds`, with a note in `warnings`) and the film (the TOML's, else 640
 /// pixels wide at the glTF camera's aspect ratio, 640 x 480 for a framing
-/// camera).
+/// camera), the camera opening the shutter `--shutter` gives unless the
+/// TOML has its own.
 pub(super) fn camera_and_film(
     v: &Validator<'_>,
     spec: &SceneFile,
@@ -144,6 +145,13 @@ pub(super) fn camera_and_film(
             Film { width: DEFAULT_GLTF_WIDTH, height: height as u32, spp: 1 }
         }
     };
+    // A glTF file's or stage's (or the framing) camera opens the shutter
+    // --shutter gives.
+    let mut camera_spec = camera_spec;
+    if spec.camera.is_none() {
+        let given = spec.gltf.as_ref().and_then(|g| g.shutter).or_else(|| spec.usd.as_ref().and_then(|u| u.shutter));
+        camera_spec.shutter = given.unwrap_or(camera_spec.shutter);
+    }
     Ok((camera_spec, film))
 }
 
