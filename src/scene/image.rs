@@ -231,31 +231,7 @@ fn decode_other(bytes: &[u8], name: &str, encoding: Encoding) -> Result<RgbImage
 /// An OpenEXR texture: R, G, B (and A) of its first RGB layer, scene-linear,
 /// each finite.
 fn texture_exr(reader: impl std::io::Read + std::io::Seek) -> Result<RgbImage, ImageError> {
-    use exr::prelude::{ReadChannels, ReadLayers};
-    let image = exr::prelude::read()
-        .no_deep_data()
-        .largest_resolution_level()
-        .rgba_channels(
-            |size, channels: &exr::prelude::RgbaChannels| RgbImage {
-                width: size.width(),
-                height: size.height(),
-                texels: vec![Vec3::ZERO; size.area()],
-                alpha: channels.3.is_some().then(|| vec![1.0; size.area()]),
-                scene_linear: true,
-            },
-            |image: &mut RgbImage, at, (r, g, b, a): (f32, f32, f32, f32)| {
-                let index = at.y() * image.width + at.x();
-                image.texels[index] = Vec3::new(r, g, b);
-                if let Some(alpha) = image.alpha.as_mut() {
-                    alpha[index] = if a.is_finite() { a.clamp(0.0, 1.0) } else { 1.0 };
-                }
-            },
-        )
-        .first_valid_layer()
-        .all_attributes()
-        .from_buffered(reader)
-        .map_err(ImageError::Exr)?;
-    let image = image.layer_data.channel_data.pixels;
+    let image = exr_rgba(reader, true)?;
     if let Some(index) = image.texels.iter().position(|t| !t.is_finite()) {
         return Err(ImageError::NotFinite { x: index % image.width, y: index / image.width });
     }
@@ -360,29 +336,39 @@ pub fn decode_radiance_exr(bytes: &[u8]) -> Result<RgbImage, ImageError> {
 }
 
 fn radiance_exr(reader: impl std::io::Read + std::io::Seek) -> Result<RgbImage, ImageError> {
+    let image = exr_rgba(reader, false)?;
+    check_radiance(&image)?;
+    Ok(image)
+}
+
+/// R, G, B of an OpenEXR's first RGB layer, unchecked, scene-linear; its
+/// A too (1 where it is not finite) when `alpha` asks and the file has one.
+fn exr_rgba(reader: impl std::io::Read + std::io::Seek, alpha: bool) -> Result<RgbImage, ImageError> {
     use exr::prelude::{ReadChannels, ReadLayers};
     let image = exr::prelude::read()
         .no_deep_data()
         .largest_resolution_level()
         .rgba_channels(
-            |size, _| RgbImage {
+            |size, channels: &exr::prelude::RgbaChannels| RgbImage {
                 width: size.width(),
                 height: size.height(),
                 texels: vec![Vec3::ZERO; size.area()],
-                alpha: None,
+                alpha: (alpha && channels.3.is_some()).then(|| vec![1.0; size.area()]),
                 scene_linear: true,
             },
-            |image: &mut RgbImage, at, (r, g, b, _): (f32, f32, f32, f32)| {
-                image.texels[at.y() * image.width + at.x()] = Vec3::new(r, g, b);
+            |image: &mut RgbImage, at, (r, g, b, a): (f32, f32, f32, f32)| {
+                let index = at.y() * image.width + at.x();
+                image.texels[index] = Vec3::new(r, g, b);
+                if let Some(alpha) = image.alpha.as_mut() {
+                    alpha[index] = if a.is_finite() { a.clamp(0.0, 1.0) } else { 1.0 };
+                }
             },
         )
         .first_valid_layer()
         .all_attributes()
         .from_buffered(reader)
         .map_err(ImageError::Exr)?;
-    let image = image.layer_data.channel_data.pixels;
-    check_radiance(&image)?;
-    Ok(image)
+    Ok(image.layer_data.channel_data.pixels)
 }
 
 /// `image` as radiance: every texel finite, non-negative and at most
