@@ -693,3 +693,58 @@ fn incomplete_stages_render_with_a_warning_and_strict_refuses_them() {
     assert!(stderr.contains("nothing to frame") || stderr.contains("no geometry to frame"), "{stderr}");
     assert!(stderr.contains("left out: /Hair: BasisCurves not drawn"), "{stderr}");
 }
+
+/// Subdivision surfaces against known answers (docs/design.md §4.2): the
+/// Catmull-Clark limit surface of the cube [-1, 1]^3 reaches 68/81 at its
+/// face centres (Halstead et al.'s limit mask, (16 v + 4 sum e + sum d) / 36,
+/// on the once-refined cube: v = 1, edge points 3/4, corners 5/9); the cage
+/// reaches 1, and so does the cube with every edge infinitely sharp; a Loop
+/// octahedron's vertex goes to 1 - 4 chi (Loop's limit mask, valence 4).
+/// A crease whose counts disagree is an error naming the attribute.
+#[test]
+fn subdivision_meshes_draw_their_limit_surface() {
+    let dir = TempDir::new("usd-subdivision");
+    let mesh = |extra: &str, points: &str, counts: &str, indices: &str| {
+        format!(
+            "#usda 1.0\n(\n    metersPerUnit = 1\n)\ndef Mesh \"Shape\"\n{{\n    point3f[] points = [{points}]\n    \
+             int[] faceVertexCounts = [{counts}]\n    int[] faceVertexIndices = [{indices}]\n{extra}}}\n"
+        )
+    };
+    let cube = |extra: &str| {
+        mesh(
+            extra,
+            "(-1,-1,-1),(1,-1,-1),(-1,1,-1),(1,1,-1),(-1,-1,1),(1,-1,1),(-1,1,1),(1,1,1)",
+            "4,4,4,4,4,4",
+            "0,2,3,1, 4,5,7,6, 0,1,5,4, 2,6,7,3, 0,4,6,2, 1,3,7,5",
+        )
+    };
+    let creases = "    int[] creaseIndices = [0,1, 2,3, 4,5, 6,7, 0,2, 1,3, 4,6, 5,7, 0,4, 1,5, 2,6, 3,7]\n    \
+                   int[] creaseLengths = [2,2,2,2,2,2,2,2,2,2,2,2]\n    float[] creaseSharpnesses = [10]\n";
+    let beta = (0.625 - 0.375f64.powi(2)) / 4.0;
+    let chi = 1.0 / (3.0 / (8.0 * beta) + 4.0);
+    let octahedron = mesh(
+        "    uniform token subdivisionScheme = \"loop\"\n",
+        "(1,0,0),(-1,0,0),(0,1,0),(0,-1,0),(0,0,1),(0,0,-1)",
+        "3,3,3,3,3,3,3,3",
+        "0,2,4, 2,1,4, 1,3,4, 3,0,4, 2,0,5, 1,2,5, 3,1,5, 0,3,5",
+    );
+    let cases = [
+        ("smooth.usda", cube(""), 68.0 / 81.0, 6 * 256 * 2),
+        ("cage.usda", cube("    uniform token subdivisionScheme = \"none\"\n"), 1.0, 12),
+        // One sharpness for every crease (one value per crease, not per edge).
+        ("sharp.usda", cube(&creases.replace("[10]", "[10,10,10,10,10,10,10,10,10,10,10,10]")), 1.0, 3072),
+        ("loop.usda", octahedron, 1.0 - 4.0 * chi, 8 * 256),
+    ];
+    for (name, text, reach, triangles) in cases {
+        let stage = dir.write(name, &text);
+        let report: serde_json::Value = serde_json::from_str(&lightcuts_ok(&["inspect", s(&stage), "--json"])).unwrap();
+        let object = &report["objects"][0];
+        let max = object["max"][0].as_f64().unwrap();
+        assert!((max - reach).abs() < 1e-6, "{name}: reaches {max}, the limit surface {reach}");
+        assert_eq!(object["triangles"].as_u64().unwrap(), triangles, "{name}: {object}");
+    }
+    let stage = dir.write("bad.usda", &cube(&creases.replace("[2,2,2,2,2,2,2,2,2,2,2,2]", "[2,2,3]")));
+    let stderr = lightcuts_fails(&["render", s(&stage), "-o", s(&dir.path("bad.exr"))]);
+    assert!(stderr.contains("bad.usda") && stderr.contains("/Shape.creaseLengths"), "{stderr}");
+    assert!(!dir.path("bad.exr").exists());
+}

@@ -16,6 +16,7 @@ pub(crate) mod load;
 pub mod material;
 pub mod mesh;
 pub mod object;
+pub mod subdivision;
 pub mod texture;
 pub mod usd;
 

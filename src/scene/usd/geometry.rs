@@ -6,13 +6,14 @@
 //! (`Sphere`, `Cube`, `Cylinder`, `Cone`, `Capsule`, `Plane`) tessellated.
 //! Every mesh is in its prim's own space; the import places it.
 
-use std::collections::HashMap;
+use std::collections::HashSet;
 
 use glam::{DVec2, DVec3, Vec2, Vec3};
 
 use super::schema::Reader;
 use super::stage::{Failure, Stage};
 use crate::scene::mesh::Mesh;
+use crate::scene::subdivision::{self, Boundary, Cage, Corner, Crease, Refinement, Scheme};
 
 /// Where an error is: (prim.attribute, message).
 pub(super) type Located = (String, Failure);
@@ -137,8 +138,15 @@ pub(super) struct Wanted<'a> {
     pub colour: Option<(&'a str, DVec3)>,
 }
 
-/// A `Mesh` prim's triangles, split by its materialBind subsets.
-pub(super) fn mesh(stage: &Stage, prim: &str, time: f64, wanted: &Wanted<'_>) -> Result<Vec<Piece>, Located> {
+/// A `Mesh` prim's triangles, split by its materialBind subsets, and why
+/// the mesh keeps its control polygons where it asks for subdivision and
+/// cannot have it.
+pub(super) fn mesh(
+    stage: &Stage,
+    prim: &str,
+    time: f64,
+    wanted: &Wanted<'_>,
+) -> Result<(Vec<Piece>, Option<&'static str>), Located> {
     let at = |attribute: &str| format!("{prim}.{attribute}");
     let read = Reader { stage, prim, schema: "Mesh", time };
     let points = stage.vec3s(prim, "points", time).map_err(|e| (at("points"), e))?.unwrap_or_default();
@@ -175,7 +183,7 @@ pub(super) fn mesh(stage: &Stage, prim: &str, time: f64, wanted: &Wanted<'_>) ->
         "leftHanded" => true,
         other => return Err((at("orientation"), format!("must be rightHanded or leftHanded, got '{other}'"))),
     };
-    let holes: std::collections::HashSet<i64> = stage
+    let mut holes: HashSet<i64> = stage
         .ints(prim, "holeIndices", time)
         .map_err(|e| (at("holeIndices"), e))?
         .unwrap_or_default()
@@ -207,9 +215,38 @@ pub(super) fn mesh(stage: &Stage, prim: &str, time: f64, wanted: &Wanted<'_>) ->
         }
     }
 
-    // Faces by subset: each subset's faces, then the rest.
-    let subsets = material_subsets(stage, prim, time, counts.len())?;
-    let mut owner: Vec<Option<usize>> = vec![None; counts.len()];
+    let cage_faces = counts.len();
+    let mut surface = Surface { points, counts, indices, normals, st, colors, parents: None };
+    let kept_cage = subdivide(&read, &mut surface, &mut holes, left_handed)?;
+    let subsets = material_subsets(stage, prim, time, cage_faces)?;
+    Ok((split_by_subsets(&surface, cage_faces, &subsets, &holes, left_handed), kept_cage))
+}
+
+/// A mesh's polygons and the primvars its shading reads: as authored, or
+/// its limit surface's.
+struct Surface {
+    points: Vec<DVec3>,
+    counts: Vec<i64>,
+    indices: Vec<i64>,
+    normals: Option<Primvar<DVec3>>,
+    st: Option<Primvar<DVec2>>,
+    colors: Option<Primvar<DVec3>>,
+    /// The authored face each face lies in (None: the faces are the authored ones).
+    parents: Option<Vec<u32>>,
+}
+
+/// The surface's triangles, one piece per materialBind subset (an authored
+/// face's subset) and one for the faces in none; holes left out.
+fn split_by_subsets(
+    surface: &Surface,
+    authored_faces: usize,
+    subsets: &[(String, Vec<usize>)],
+    holes: &HashSet<i64>,
+    left_handed: bool,
+) -> Vec<Piece> {
+    let Surface { points, counts, indices, normals, st, colors, parents } = surface;
+    let authored = |f: usize| parents.as_ref().map_or(f, |p| p[f] as usize);
+    let mut owner: Vec<Option<usize>> = vec![None; authored_faces];
     for (k, (_, faces)) in subsets.iter().enumerate() {
         for &f in faces {
             owner[f].get_or_insert(k);
@@ -217,14 +254,15 @@ pub(super) fn mesh(stage: &Stage, prim: &str, time: f64, wanted: &Wanted<'_>) ->
     }
     let mut starts = Vec::with_capacity(counts.len());
     let mut start = 0usize;
-    for &c in &counts {
+    for &c in counts {
         starts.push(start);
         start += c as usize;
     }
     let mut pieces = Vec::new();
     for group in (0..subsets.len()).map(Some).chain(std::iter::once(None)) {
         let mut builder = Builder::default();
-        for face in (0..counts.len()).filter(|&f| owner[f] == group && !holes.contains(&(f as i64))) {
+        for face in (0..counts.len()).filter(|&f| owner[authored(f)] == group && !holes.contains(&(authored(f) as i64)))
+        {
             let n = counts[face] as usize;
             if n < 3 {
                 continue;
@@ -250,10 +288,219 @@ pub(super) fn mesh(stage: &Stage, prim: &str, time: f64, wanted: &Wanted<'_>) ->
         if builder.triangles.is_empty() {
             continue;
         }
-        let mesh = builder.mesh(&points, normals.as_ref(), st.as_ref(), colors.as_ref(), left_handed);
+        let mesh = builder.mesh(points, normals.as_ref(), st.as_ref(), colors.as_ref(), left_handed);
         pieces.push(Piece { mesh, subset: group.map(|k| subsets[k].0.clone()) });
     }
-    Ok(pieces)
+    pieces
+}
+
+/// Replaces a subdivision mesh's polygons by its limit surface (docs/design.md
+/// §4.2): `subdivisionScheme`, `interpolateBoundary`,
+/// `faceVaryingLinearInterpolation`, creases and corners as UsdGeomMesh
+/// defines them. Authored normals are ignored, as USD says they are on a
+/// subdivision surface: the limit surface's own are used. Returns why a
+/// mesh asking for subdivision keeps its polygons, if it does.
+fn subdivide(
+    read: &Reader<'_>,
+    surface: &mut Surface,
+    holes: &mut HashSet<i64>,
+    left_handed: bool,
+) -> Result<Option<&'static str>, Located> {
+    let at = |attribute: &str| format!("{}.{attribute}", read.prim);
+    let scheme = match read.token("subdivisionScheme")?.as_str() {
+        // A bilinear limit surface is the polygons (to within a non-planar
+        // quad's bilinear patch against its two triangles).
+        "none" | "bilinear" => return Ok(None),
+        "catmullClark" => Scheme::CatmullClark,
+        "loop" if surface.counts.iter().all(|&c| c == 3) => Scheme::Loop,
+        "loop" => return Ok(Some("Loop subdivision asked of faces that are not all triangles")),
+        other => {
+            return Err((
+                at("subdivisionScheme"),
+                format!("must be catmullClark, loop, bilinear or none, got '{other}'"),
+            ));
+        }
+    };
+    if surface.counts.is_empty() {
+        return Ok(None);
+    }
+    if surface.counts.iter().any(|&c| c < 3) {
+        return Ok(Some("a face of fewer than three corners"));
+    }
+    let interpolate_boundary = read.token("interpolateBoundary")?;
+    let boundary = match interpolate_boundary.as_str() {
+        "edgeAndCorner" => Boundary::EdgeAndCorner,
+        "edgeOnly" | "none" => Boundary::EdgeOnly,
+        other => {
+            return Err((at("interpolateBoundary"), format!("must be none, edgeOnly or edgeAndCorner, got '{other}'")));
+        }
+    };
+    let (linear, face_varying_boundary) = match read.token("faceVaryingLinearInterpolation")?.as_str() {
+        "all" => (true, Boundary::EdgeAndCorner),
+        "none" => (false, Boundary::EdgeOnly),
+        "boundaries" => (false, Boundary::Linear),
+        "cornersOnly" | "cornersPlus1" | "cornersPlus2" => (false, Boundary::EdgeAndCorner),
+        other => {
+            return Err((
+                at("faceVaryingLinearInterpolation"),
+                format!("must be all, none, boundaries, cornersOnly, cornersPlus1 or cornersPlus2, got '{other}'"),
+            ));
+        }
+    };
+    let (creases, corners) = sharpness(read, surface.points.len())?;
+    let cage = Cage {
+        counts: surface.counts.iter().map(|&c| c as u32).collect(),
+        indices: surface.indices.iter().map(|&i| i as u32).collect(),
+        vertices: surface.points.len(),
+        creases,
+        corners,
+        boundary,
+        scheme,
+    };
+    if interpolate_boundary == "none" {
+        // No boundary rule: the faces at a boundary only support their
+        // neighbours (OpenSubdiv's VTX_BOUNDARY_NONE makes them holes).
+        holes.extend(subdivision::boundary_faces(&cage).into_iter().map(|f| f as i64));
+    }
+    let levels = subdivision::levels_for(cage.counts.len());
+    let refined = subdivision::refine(&cage, levels);
+    let points = refined.limit(&surface.points);
+    // A left-handed mesh winds the other way round its front.
+    let sign = if left_handed { -1.0 } else { 1.0 };
+    let (normals, corner_normals) = refined.corner_normals(&points);
+    let normals = normals.into_iter().map(|n| n * sign).collect();
+    let face_varying = FaceVarying {
+        scheme: match (linear, scheme) {
+            (true, Scheme::Loop) => Scheme::LoopLinear,
+            (true, _) => Scheme::Bilinear,
+            (false, s) => s,
+        },
+        boundary: face_varying_boundary,
+        levels,
+    };
+    surface.normals =
+        Some(Primvar { values: normals, indices: Some(corner_normals), interpolation: Interpolation::FaceVarying });
+    surface.st = surface.st.take().map(|p| refined_primvar(p, &cage, &refined, &face_varying));
+    surface.colors = surface.colors.take().map(|p| refined_primvar(p, &cage, &refined, &face_varying));
+    surface.points = points;
+    surface.counts = refined.counts.iter().map(|&c| i64::from(c)).collect();
+    surface.indices = refined.indices.iter().map(|&i| i64::from(i)).collect();
+    surface.parents = Some(refined.parents);
+    Ok(None)
+}
+
+/// How face-varying data is refined: its scheme and boundary rule from
+/// `faceVaryingLinearInterpolation`, and the mesh's depth.
+struct FaceVarying {
+    scheme: Scheme,
+    boundary: Boundary,
+    levels: u32,
+}
+
+/// A primvar carried onto the limit surface: a constant stays, a uniform
+/// value follows its face, a vertex value is refined as the points are,
+/// and face-varying values are refined on their own cage (the faces with
+/// the value indices as vertices, so a seam is that cage's boundary).
+fn refined_primvar<T: Copy + std::ops::Add<Output = T> + std::ops::Mul<f64, Output = T>>(
+    primvar: Primvar<T>,
+    cage: &Cage,
+    refined: &Refinement,
+    face_varying: &FaceVarying,
+) -> Primvar<T> {
+    let value = |element: usize| primvar.values[primvar.indices.as_ref().map_or(element, |i| i[element] as usize)];
+    match primvar.interpolation {
+        Interpolation::Constant => primvar,
+        Interpolation::Uniform => Primvar {
+            values: refined.parents.iter().map(|&f| value(f as usize)).collect(),
+            indices: None,
+            interpolation: Interpolation::Uniform,
+        },
+        Interpolation::Vertex => {
+            let values: Vec<T> = (0..cage.vertices).map(value).collect();
+            Primvar { values: refined.limit(&values), indices: None, interpolation: Interpolation::Vertex }
+        }
+        Interpolation::FaceVarying => {
+            let corners = cage.indices.len() as u32;
+            let own = Cage {
+                counts: cage.counts.clone(),
+                indices: primvar.indices.clone().unwrap_or_else(|| (0..corners).collect()),
+                vertices: primvar.values.len(),
+                creases: Vec::new(),
+                corners: Vec::new(),
+                boundary: face_varying.boundary,
+                scheme: face_varying.scheme,
+            };
+            let own_refined = subdivision::refine(&own, face_varying.levels);
+            Primvar {
+                values: own_refined.limit(&primvar.values),
+                indices: Some(own_refined.indices),
+                interpolation: Interpolation::FaceVarying,
+            }
+        }
+    }
+}
+
+/// A mesh's creases (each edge of each crease with its sharpness) and
+/// corners, checked: counts that disagree or indices past the points are
+/// errors, as are sharpnesses that are not finite.
+fn sharpness(read: &Reader<'_>, points: usize) -> Result<(Vec<Crease>, Vec<Corner>), Located> {
+    let (stage, prim, time) = (read.stage, read.prim, read.time);
+    let at = |attribute: &str| format!("{prim}.{attribute}");
+    let ints = |name: &str| stage.ints(prim, name, time).map_err(|e| (at(name), e)).map(Option::unwrap_or_default);
+    let numbers =
+        |name: &str| stage.numbers(prim, name, time).map_err(|e| (at(name), e)).map(Option::unwrap_or_default);
+    let (indices, lengths, sharpnesses) =
+        (ints("creaseIndices")?, ints("creaseLengths")?, numbers("creaseSharpnesses")?);
+    let (corner_indices, corner_sharpnesses) = (ints("cornerIndices")?, numbers("cornerSharpnesses")?);
+    for (name, values) in [("creaseIndices", &indices), ("cornerIndices", &corner_indices)] {
+        if let Some(bad) = values.iter().find(|&&i| i < 0 || i as usize >= points) {
+            return Err((at(name), format!("index {bad} is outside the {points} points")));
+        }
+    }
+    for (name, values) in [("creaseSharpnesses", &sharpnesses), ("cornerSharpnesses", &corner_sharpnesses)] {
+        if let Some(bad) = values.iter().find(|s| !s.is_finite()) {
+            return Err((at(name), format!("a sharpness must be finite, got {bad}")));
+        }
+    }
+    if let Some(bad) = lengths.iter().find(|&&l| l < 2) {
+        return Err((at("creaseLengths"), format!("a crease runs through at least two points, got a length of {bad}")));
+    }
+    let total: i64 = lengths.iter().sum();
+    if total != indices.len() as i64 {
+        return Err((
+            at("creaseLengths"),
+            format!("the lengths add up to {total}, but creaseIndices holds {} indices", indices.len()),
+        ));
+    }
+    let edges = (total - lengths.len() as i64) as usize;
+    if sharpnesses.len() != lengths.len() && sharpnesses.len() != edges {
+        return Err((
+            at("creaseSharpnesses"),
+            format!(
+                "holds {} values: one per crease ({}) or one per crease edge ({edges})",
+                sharpnesses.len(),
+                lengths.len()
+            ),
+        ));
+    }
+    let mut creases = Vec::with_capacity(edges);
+    let mut start = 0usize;
+    for (k, &length) in lengths.iter().enumerate() {
+        let run = &indices[start..start + length as usize];
+        for pair in run.windows(2) {
+            let s = if sharpnesses.len() == lengths.len() { sharpnesses[k] } else { sharpnesses[creases.len()] };
+            creases.push(([pair[0] as u32, pair[1] as u32], s));
+        }
+        start += length as usize;
+    }
+    if corner_indices.len() != corner_sharpnesses.len() {
+        return Err((
+            at("cornerSharpnesses"),
+            format!("holds {} values for {} cornerIndices", corner_sharpnesses.len(), corner_indices.len()),
+        ));
+    }
+    let corners = corner_indices.iter().zip(&corner_sharpnesses).map(|(&v, &s)| (v as u32, s)).collect();
+    Ok((creases, corners))
 }
 
 /// The mesh's GeomSubsets of the `materialBind` family (element type
@@ -285,7 +532,7 @@ fn material_subsets(stage: &Stage, prim: &str, time: f64, faces: usize) -> Resul
 struct Builder {
     /// The point and primvar indices of each vertex.
     vertices: Vec<(usize, [Option<u32>; 3])>,
-    known: HashMap<(usize, [Option<u32>; 3]), u32>,
+    known: rustc_hash::FxHashMap<(usize, [Option<u32>; 3]), u32>,
     triangles: Vec<[u32; 3]>,
 }
 

@@ -172,7 +172,7 @@ fn import_stage(
         triangles: 0,
         emitters: 0,
         still_moving: 0,
-        catmull_clark: 0,
+        cages: std::collections::BTreeMap::new(),
         skipped: std::collections::BTreeMap::new(),
     };
     walker.materials = materials::Materials::new(&stage, walker.time());
@@ -282,7 +282,8 @@ struct Walker<'a, 'p> {
     triangles: usize,
     emitters: u64,
     still_moving: usize,
-    catmull_clark: usize,
+    /// Subdivision meshes drawn as their control polygons: why, how many, and the first one's path.
+    cages: std::collections::BTreeMap<&'static str, (usize, String)>,
     /// The prim types not drawn: how many of each, and the first one's path.
     skipped: std::collections::BTreeMap<String, (usize, String)>,
 }
@@ -482,9 +483,6 @@ impl Walker<'_, '_> {
     fn mesh(&mut self, prim: &str, here: &Context) -> Result<(), Located> {
         let time = self.time();
         let read = schema::Reader { stage: self.stage, prim, schema: "Mesh", time };
-        if read.token("subdivisionScheme")? != "none" {
-            self.catmull_clark += 1;
-        }
         let double_sided = read.boolean("doubleSided")?;
         // The bound material decides which primvars hold the coordinates
         // and the colours.
@@ -499,7 +497,10 @@ impl Walker<'_, '_> {
             st: &st,
             colour: colour.as_ref().map(|(name, fallback)| (name.as_str(), fallback.as_dvec3())),
         };
-        let pieces = geometry::mesh(self.stage, prim, time, &wanted)?;
+        let (pieces, kept_cage) = geometry::mesh(self.stage, prim, time, &wanted)?;
+        if let Some(why) = kept_cage {
+            self.cages.entry(why).or_insert((0, prim.to_string())).0 += 1;
+        }
         for piece in pieces {
             let binding = match &piece.subset {
                 Some(subset) => self.binding(subset)?.or_else(|| here.binding.clone()),
@@ -997,9 +998,9 @@ impl Walker<'_, '_> {
             let others = if count > 1 { format!(" and {} more", count - 1) } else { String::new() };
             self.lacks(format!("{first}{others}: {type_name} not drawn ({because})"));
         }
-        if self.catmull_clark > 0 {
-            let n = self.catmull_clark;
-            self.warn(format!("{n} mesh(es) ask for subdivision (subdivisionScheme): drawn as their control polygons"));
+        for (why, (count, first)) in std::mem::take(&mut self.cages) {
+            let others = if count > 1 { format!(" and {} more", count - 1) } else { String::new() };
+            self.warn(format!("{first}{others}: subdivision surface drawn as its control polygons ({why})"));
         }
         if self.still_moving > 0 {
             let n = self.still_moving;

@@ -32,6 +32,8 @@ const FALLBACKS: &[(&str, &str, Fallback)] = {
         ("*", "doubleSided", Bool(false)),
         ("*", "orientation", Token("rightHanded")),
         ("Mesh", "subdivisionScheme", Token("catmullClark")),
+        ("Mesh", "interpolateBoundary", Token("edgeAndCorner")),
+        ("Mesh", "faceVaryingLinearInterpolation", Token("cornersPlus1")),
         // The intrinsic gprims.
         ("Sphere", "radius", Number(1.0)),
         ("Cube", "size", Number(2.0)),

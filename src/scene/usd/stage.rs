@@ -457,6 +457,16 @@ impl Stage {
         })
     }
 
+    /// An array of numbers (float, double or half).
+    pub(super) fn numbers(&self, prim: &str, name: &str, time: f64) -> Result<Option<Vec<f64>>, Failure> {
+        self.array(prim, name, time, "a float array", |v| match v {
+            sdf::Value::FloatVec(v) => Some(v.into_iter().map(f64::from).collect()),
+            sdf::Value::DoubleVec(v) => Some(v),
+            sdf::Value::HalfVec(v) => Some(v.into_iter().map(f64::from).collect()),
+            _ => None,
+        })
+    }
+
     pub(super) fn vec2s(&self, prim: &str, name: &str, time: f64) -> Result<Option<Vec<DVec2>>, Failure> {
         self.array(prim, name, time, "an array of 2-vectors", |v| match v {
             sdf::Value::Vec2fVec(v) => Some(v.iter().map(|v| DVec2::new(v.x.into(), v.y.into())).collect()),
