@@ -210,7 +210,7 @@ fn smooth_normals_point_out_of_a_closed_surface() {
 #[test]
 fn levels_stay_within_the_budget() {
     assert_eq!(levels_for(6), 4);
-    assert_eq!(levels_for(10_000), 2);
-    assert_eq!(levels_for(40_000), 1);
+    assert_eq!(levels_for(1_000), 2);
+    assert_eq!(levels_for(2_500), 1);
     assert_eq!(levels_for(1_000_000), 1);
 }
