@@ -25,12 +25,86 @@ pub enum Filter {
     Nearest,
 }
 
+/// Texels as compactly as they can be kept exactly (docs/design.md §5.3,
+/// "Textures in memory"): what a lookup reads is the same f32 either way.
+#[derive(Debug, Clone)]
+enum Texels {
+    /// 8-bit codes, each channel read through `table` (an encoding's
+    /// decoding of k/255: sRGB's, or linear's): 3 bytes a texel.
+    Codes { codes: Vec<[u8; 3]>, table: &'static [f32; 256] },
+    /// Half floats (an OpenEXR's half channels): 6 bytes a texel.
+    Half(Vec<[half::f16; 3]>),
+    /// Anything else (16-bit and float data, generated texels): 12 bytes.
+    Float(Vec<Vec3>),
+}
+
+/// The decoding of 8-bit code k as an sRGB value and as a linear one,
+/// computed as the image readers compute it (k as f32 / 255, then decoded),
+/// so a code stands for exactly the f32 the reader made.
+fn tables() -> [&'static [f32; 256]; 2] {
+    static TABLES: std::sync::OnceLock<[[f32; 256]; 2]> = std::sync::OnceLock::new();
+    let tables = TABLES.get_or_init(|| {
+        let code = |k: usize| f32::from(k as u8) / 255.0;
+        [std::array::from_fn(|k| crate::util::color::srgb_to_linear(code(k))), std::array::from_fn(code)]
+    });
+    [&tables[0], &tables[1]]
+}
+
+impl Texels {
+    /// The most compact exact form of `texels`.
+    fn compact(texels: Vec<Vec3>) -> Self {
+        for table in tables() {
+            let code = |v: f32| -> Option<u8> {
+                let k = table.partition_point(|&t| t < v);
+                (k < 256 && table[k].to_bits() == v.to_bits()).then_some(k as u8)
+            };
+            let codes: Option<Vec<[u8; 3]>> =
+                texels.iter().map(|t| Some([code(t.x)?, code(t.y)?, code(t.z)?])).collect();
+            if let Some(codes) = codes {
+                return Self::Codes { codes, table };
+            }
+        }
+        let half = |v: f32| -> Option<half::f16> {
+            let h = half::f16::from_f32(v);
+            (h.to_f32().to_bits() == v.to_bits()).then_some(h)
+        };
+        let halves: Option<Vec<[half::f16; 3]>> =
+            texels.iter().map(|t| Some([half(t.x)?, half(t.y)?, half(t.z)?])).collect();
+        match halves {
+            Some(halves) => Self::Half(halves),
+            None => Self::Float(texels),
+        }
+    }
+
+    fn get(&self, index: usize) -> Vec3 {
+        match self {
+            Self::Codes { codes, table } => {
+                let [r, g, b] = codes[index];
+                Vec3::new(table[r as usize], table[g as usize], table[b as usize])
+            }
+            Self::Half(halves) => {
+                let [r, g, b] = halves[index];
+                Vec3::new(r.to_f32(), g.to_f32(), b.to_f32())
+            }
+            Self::Float(texels) => texels[index],
+        }
+    }
+
+    fn bytes_per_texel(&self) -> usize {
+        match self {
+            Self::Codes { .. } => 3,
+            Self::Half(_) => 6,
+            Self::Float(_) => 12,
+        }
+    }
+}
+
 #[derive(Debug, Clone)]
 pub struct Texture {
     width: usize,
     height: usize,
     /// Linear RGB, row 0 at the top of the image.
-    texels: Vec<Vec3>,
+    texels: Texels,
     /// Along u and along v.
     wrap: [Wrap; 2],
     filter: Filter,
@@ -47,7 +121,7 @@ impl Texture {
     #[must_use]
     pub fn from_texels(width: usize, height: usize, texels: Vec<Vec3>) -> Self {
         assert_eq!(width * height, texels.len());
-        Self { width, height, texels, wrap: [Wrap::Repeat; 2], filter: Filter::Linear }
+        Self { width, height, texels: Texels::compact(texels), wrap: [Wrap::Repeat; 2], filter: Filter::Linear }
     }
 
     /// The texture read with a sampler's wrap modes (along u, along v) and
@@ -63,10 +137,17 @@ impl Texture {
         (self.width, self.height)
     }
 
-    /// The linear texels, row 0 at the top.
+    /// The linear texel at `index` (row-major, row 0 at the top).
     #[must_use]
-    pub fn texels(&self) -> &[Vec3] {
-        &self.texels
+    pub fn texel_at(&self, index: usize) -> Vec3 {
+        self.texels.get(index)
+    }
+
+    /// The bytes each texel takes in memory: 3 for 8-bit codes, 6 for
+    /// half floats, 12 otherwise.
+    #[must_use]
+    pub fn bytes_per_texel(&self) -> usize {
+        self.texels.bytes_per_texel()
     }
 
     fn texel(&self, x: i64, y: i64) -> Vec3 {
@@ -90,7 +171,7 @@ impl Texture {
             }) as usize
         };
         let (x, y) = (index(x, self.width, self.wrap[0]), index(y, self.height, self.wrap[1]));
-        self.texels[y * self.width + x]
+        self.texels.get(y * self.width + x)
     }
 
     /// The lookup at uv, v = 0 at the bottom of the image.
@@ -121,6 +202,30 @@ impl Texture {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn texels_are_kept_in_the_most_compact_exact_form() {
+        let srgb = |k: u8| crate::util::color::srgb_to_linear(f32::from(k) / 255.0);
+        let cases: [(Vec<Vec3>, usize); 4] = [
+            // An 8-bit sRGB image as the readers decode it.
+            ((0..=255u8).map(|k| Vec3::new(srgb(k), srgb(255 - k), srgb(k / 2))).collect(), 3),
+            // 8-bit linear data (a metallic-roughness map).
+            ((0..=255u8).map(|k| Vec3::splat(f32::from(k) / 255.0)).collect(), 3),
+            // Half floats (an OpenEXR's), beyond 1.
+            ((0..256).map(|k| Vec3::new(k as f32 * 0.25, 1000.0, 0.5)).collect(), 6),
+            // Anything else.
+            ((0..256).map(|k| Vec3::splat(k as f32 * 0.123_456_7)).collect(), 12),
+        ];
+        for (texels, bytes) in cases {
+            let texture = Texture::from_texels(256, 1, texels.clone()).with_sampler([Wrap::Repeat; 2], Filter::Nearest);
+            assert_eq!(texture.bytes_per_texel(), bytes);
+            for (i, t) in texels.iter().enumerate() {
+                assert_eq!(texture.texel_at(i).to_array().map(f32::to_bits), t.to_array().map(f32::to_bits));
+                let uv = Vec2::new((i as f32 + 0.5) / 256.0, 0.5);
+                assert_eq!(texture.lookup(uv), *t, "texel {i}");
+            }
+        }
+    }
 
     #[test]
     fn lookup_wraps_and_interpolates() {

@@ -94,7 +94,7 @@ pub(super) struct Data<'a> {
     base: PathBuf,
     buffers: Vec<Vec<u8>>,
     /// Decoded images by glTF image index and encoding (linear RGB).
-    images: HashMap<(usize, Encoding), RgbImage>,
+    images: HashMap<(usize, Encoding), std::rc::Rc<RgbImage>>,
     /// The buffer and image files read, in the order they were read.
     pub(super) inputs: Vec<PathBuf>,
 }
@@ -188,9 +188,9 @@ impl<'a> Data<'a> {
         image: &gltf::Image<'_>,
         location: &str,
         encoding: Encoding,
-    ) -> Result<RgbImage, SceneError> {
+    ) -> Result<std::rc::Rc<RgbImage>, SceneError> {
         if let Some(decoded) = self.images.get(&(image.index(), encoding)) {
-            return Ok(decoded.clone());
+            return Ok(std::rc::Rc::clone(decoded));
         }
         let at = format!("images[{}]", image.index());
         let (bytes, named) = match image.source() {
@@ -208,7 +208,9 @@ impl<'a> Data<'a> {
             let what = named.as_ref().map_or_else(String::new, |p| format!("'{}': ", p.display()));
             self.error(format!("{location} ({at})"), format!("{what}{e}"))
         })?;
-        self.images.insert((image.index(), encoding), decoded.clone());
+        // Shared, not copied: a 4096 x 4096 image is 200 MB of f32 texels.
+        let decoded = std::rc::Rc::new(decoded);
+        self.images.insert((image.index(), encoding), std::rc::Rc::clone(&decoded));
         Ok(decoded)
     }
 

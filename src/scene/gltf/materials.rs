@@ -220,7 +220,7 @@ impl Importer<'_, '_> {
         at: &str,
         encoding: Encoding,
         map: impl Fn(Vec3, f32) -> Vec3,
-    ) -> Result<Option<(TextureRef, RgbImage)>, SceneError> {
+    ) -> Result<Option<(TextureRef, std::rc::Rc<RgbImage>)>, SceneError> {
         // KHR_texture_transform's texCoord overrides the texture info's.
         let tex_coord = slot.transform.and_then(|t| t.tex_coord).unwrap_or(slot.tex_coord);
         let set = if tex_coord <= 1 {

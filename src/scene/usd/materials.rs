@@ -599,7 +599,7 @@ impl<'s> Materials<'s> {
                 let r = self.texture(&[t], false, false, textures)?;
                 let texture = &textures[r.texture];
                 let (width, height) = texture.size();
-                let alpha = texture.texels().iter().map(|t| t.x).collect();
+                let alpha = (0..width * height).map(|i| texture.texel_at(i).x).collect();
                 cutout = Some(Cutout {
                     alpha,
                     width: width as u32,
