@@ -288,6 +288,16 @@ struct Walker<'a, 'p> {
     skipped: std::collections::BTreeMap<String, (usize, String)>,
 }
 
+/// "/First" for one prim, "/First and 2 more" for three: how a warning
+/// names the prims of one kind.
+fn first_and_more(first: &str, count: usize) -> String {
+    if count > 1 {
+        format!("{first} and {} more", count - 1)
+    } else {
+        first.to_string()
+    }
+}
+
 /// Typed prims that draw nothing themselves: groups, shading, subsets,
 /// skeletons (their meshes draw in their bind pose), render settings.
 const NOT_DRAWN_BY_DEFINITION: [&str; 16] = [
@@ -985,22 +995,20 @@ impl Walker<'_, '_> {
 
     /// One line each for what the stage asks for that is drawn otherwise.
     fn summarise(&mut self) {
-        if let Some(first) = self.materials.undefined.first().cloned() {
-            let more = self.materials.undefined.len() - 1;
-            let others = if more > 0 { format!(" and {more} more") } else { String::new() };
+        if let Some(first) = self.materials.undefined.first() {
+            let prims = first_and_more(first, self.materials.undefined.len());
             self.lacks(format!(
-                "{first}{others}: bound as materials but defined by no layer read (one is missing, or in a format \
+                "{prims}: bound as materials but defined by no layer read (one is missing, or in a format \
                  this reader does not read): grey"
             ));
         }
         for (type_name, (count, first)) in std::mem::take(&mut self.skipped) {
             let because = not_drawn_because(&type_name);
-            let others = if count > 1 { format!(" and {} more", count - 1) } else { String::new() };
-            self.lacks(format!("{first}{others}: {type_name} not drawn ({because})"));
+            self.lacks(format!("{}: {type_name} not drawn ({because})", first_and_more(&first, count)));
         }
         for (why, (count, first)) in std::mem::take(&mut self.cages) {
-            let others = if count > 1 { format!(" and {} more", count - 1) } else { String::new() };
-            self.warn(format!("{first}{others}: subdivision surface drawn as its control polygons ({why})"));
+            let prims = first_and_more(&first, count);
+            self.warn(format!("{prims}: subdivision surface drawn as its control polygons ({why})"));
         }
         if self.still_moving > 0 {
             let n = self.still_moving;
