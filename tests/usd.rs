@@ -640,10 +640,10 @@ fn incomplete_stages_render_with_a_warning_and_strict_refuses_them() {
         (
             "types.usda",
             format!(
-                "{header}{ball}def BasisCurves \"Hair\"\n{{\n}}\ndef BasisCurves \"Fur\"\n{{\n}}\n\
-                 def Points \"Dust\"\n{{\n}}\ndef Volume \"Smoke\"\n{{\n}}\n"
+                "{header}{ball}def NurbsCurves \"Hair\"\n{{\n}}\ndef NurbsCurves \"Fur\"\n{{\n}}\n\
+                 def NurbsPatch \"Dust\"\n{{\n}}\ndef Volume \"Smoke\"\n{{\n}}\n"
             ),
-            &["/Hair and 1 more: BasisCurves not drawn", "/Dust: Points not drawn", "/Smoke: Volume not drawn"],
+            &["/Hair and 1 more: NurbsCurves not drawn", "/Dust: NurbsPatch not drawn", "/Smoke: Volume not drawn"],
         ),
     ];
     for (name, text, expect) in cases {
@@ -687,11 +687,11 @@ fn incomplete_stages_render_with_a_warning_and_strict_refuses_them() {
     let report: serde_json::Value = serde_json::from_str(&lightcuts_ok(&["inspect", s(&stage), "--json"])).unwrap();
     let incomplete = report["incomplete"].to_string();
     assert!(incomplete.contains("/M/T.inputs:file: names no file") && incomplete.contains("own value"), "{report}");
-    // A stage of curves only has nothing to frame: the error says why.
-    let curves = dir.write("curves.usda", &format!("{header}def BasisCurves \"Hair\"\n{{\n}}\n"));
+    // A stage of NURBS curves only has nothing to frame: the error says why.
+    let curves = dir.write("curves.usda", &format!("{header}def NurbsCurves \"Hair\"\n{{\n}}\n"));
     let stderr = lightcuts_fails(&["render", s(&curves), "-o", s(&dir.path("out.exr"))]);
     assert!(stderr.contains("nothing to frame") || stderr.contains("no geometry to frame"), "{stderr}");
-    assert!(stderr.contains("left out: /Hair: BasisCurves not drawn"), "{stderr}");
+    assert!(stderr.contains("left out: /Hair: NurbsCurves not drawn"), "{stderr}");
 }
 
 /// Subdivision surfaces against known answers (docs/design.md §4.2): the
@@ -746,5 +746,73 @@ fn subdivision_meshes_draw_their_limit_surface() {
     let stage = dir.write("bad.usda", &cube(&creases.replace("[2,2,2,2,2,2,2,2,2,2,2,2]", "[2,2,3]")));
     let stderr = lightcuts_fails(&["render", s(&stage), "-o", s(&dir.path("bad.exr"))]);
     assert!(stderr.contains("bad.usda") && stderr.contains("/Shape.creaseLengths"), "{stderr}");
+    assert!(!dir.path("bad.exr").exists());
+}
+
+/// Curves and points against the closed form of their silhouettes: seen
+/// through a pinhole f pixels from the image plane, a sphere of radius r
+/// whose centre is d away covers a disc of radius f r / sqrt(d^2 - r^2)
+/// pixels, and a tube (or a ray-facing ribbon) of radius r whose axis
+/// passes d from the eye, parallel to the image, a band of that half-width.
+#[test]
+fn curves_and_points_cover_what_their_widths_say() {
+    let dir = TempDir::new("usd-strands");
+    // focal length / aperture x 200 pixels = 500 pixels.
+    let (f, d) = (500.0f64, 10.0f64);
+    let stage = |body: &str| {
+        format!(
+            "#usda 1.0\n(\n    metersPerUnit = 1\n    upAxis = \"Y\"\n)\ndef Camera \"Cam\"\n{{\n    float focalLength = 50\n    \
+             float horizontalAperture = 20\n    float verticalAperture = 20\n    double3 xformOp:translate = (0, 0, {d})\n    \
+             uniform token[] xformOpOrder = [\"xformOp:translate\"]\n}}\n{body}"
+        )
+    };
+    let band = |r: f64| 2.0 * f * r / (d * d - r * r).sqrt() * 200.0;
+    let disc = |r: f64| std::f64::consts::PI * (f * r / (d * d - r * r).sqrt()).powi(2);
+    let line = "(-50,0,0),(-25,0,0),(0,0,0),(25,0,0),(50,0,0)";
+    let cases = [
+        ("points", "def Points \"P\"\n{\n    point3f[] points = [(0,0,0)]\n    float[] widths = [2]\n}\n".to_string(), disc(1.0)),
+        (
+            "linear",
+            format!(
+                "def BasisCurves \"C\"\n{{\n    uniform token type = \"linear\"\n    int[] curveVertexCounts = [5]\n    \
+                 point3f[] points = [{line}]\n    float[] widths = [0.6] (interpolation = \"constant\")\n}}\n"
+            ),
+            band(0.3),
+        ),
+        (
+            "bspline-pinned",
+            format!(
+                "def BasisCurves \"C\"\n{{\n    uniform token basis = \"bspline\"\n    uniform token wrap = \"pinned\"\n    \
+                 int[] curveVertexCounts = [5]\n    point3f[] points = [{line}]\n    \
+                 float[] widths = [0.4, 0.4, 0.4, 0.4, 0.4] (interpolation = \"varying\")\n}}\n"
+            ),
+            band(0.2),
+        ),
+        (
+            "bezier-ribbon",
+            "def BasisCurves \"C\"\n{\n    int[] curveVertexCounts = [4]\n    \
+             point3f[] points = [(-50,0,0),(-20,0,0),(20,0,0),(50,0,0)]\n    normal3f[] normals = [(0,0,1),(0,0,1),(0,0,1),(0,0,1)]\n    \
+             float[] widths = [0.5, 0.5, 0.5, 0.5]\n}\n"
+                .to_string(),
+            band(0.25),
+        ),
+    ];
+    for (name, body, expected) in cases {
+        let path = dir.write(&format!("{name}.usda"), &stage(&body));
+        let flags = ["--resolution", "200x200", "--spp", "16", "--transparent", "--environment", "1,1,1"];
+        let image = render(&path, &dir.path(&format!("{name}.exr")), &flags);
+        let covered: f64 = channel(&image, "A").iter().map(|&a| f64::from(a)).sum();
+        assert!(
+            (covered / expected - 1.0).abs() < 0.01,
+            "{name}: {covered} pixels covered, the closed form {expected}"
+        );
+    }
+    // A count that makes no whole segment is an error naming the attribute.
+    let bad = dir.write(
+        "bad.usda",
+        &stage("def BasisCurves \"C\"\n{\n    int[] curveVertexCounts = [5]\n    point3f[] points = [(0,0,0),(1,0,0),(2,0,0),(3,0,0),(4,0,0)]\n}\n"),
+    );
+    let stderr = lightcuts_fails(&["render", s(&bad), "-o", s(&dir.path("bad.exr"))]);
+    assert!(stderr.contains("bad.usda") && stderr.contains("/C.curveVertexCounts"), "{stderr}");
     assert!(!dir.path("bad.exr").exists());
 }

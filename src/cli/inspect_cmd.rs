@@ -10,6 +10,7 @@ use clap::Args;
 use serde_json::json;
 
 use super::CliError;
+use crate::scene::mesh::StrandKind;
 use crate::scene::{EnvironmentMap, LightSource, LoadOptions, Scene};
 
 #[derive(Debug, Args)]
@@ -76,7 +77,12 @@ fn print(scene: &Scene, report: &serde_json::Value, json: bool) -> std::io::Resu
         scene.stored_triangle_count()
     )?;
     for object in report["objects"].as_array().into_iter().flatten() {
-        writeln!(out, "  {}  {}  {}", object["name"], object["min"], object["max"])?;
+        let strands = match (object["curve_segments"].as_u64(), object["spheres"].as_u64()) {
+            (Some(n), _) if n > 0 => format!("  ({n} curve segments)"),
+            (_, Some(n)) if n > 0 => format!("  ({n} spheres)"),
+            _ => String::new(),
+        };
+        writeln!(out, "  {}  {}  {}{strands}", object["name"], object["min"], object["max"])?;
     }
     writeln!(out, "lights       {}", scene.lights.len())?;
     for light in report["lights"].as_array().into_iter().flatten() {
@@ -100,12 +106,21 @@ fn report(scene: &Scene) -> serde_json::Value {
         .iter()
         .map(|object| {
             let (lo, hi) = crate::scene::object::world_bounds(&scene.meshes, std::slice::from_ref(object));
+            let mesh = &scene.meshes[object.mesh];
+            // Curves and points: how many segments or spheres Embree draws.
+            let (curve_segments, spheres) = match mesh.strands.as_ref().map(|s| &s.kind) {
+                Some(StrandKind::Curves { segments, .. }) => (segments.len(), 0),
+                Some(StrandKind::Spheres) => (0, mesh.positions.len()),
+                None => (0, 0),
+            };
             json!({
                 "name": object.name,
                 "mesh": object.mesh,
                 "instance": object.transform.is_some(),
                 "moves": object.motion.is_some(),
-                "triangles": scene.meshes[object.mesh].triangles.len(),
+                "triangles": mesh.triangles.len(),
+                "curve_segments": curve_segments,
+                "spheres": spheres,
                 "material": scene.materials[scene.meshes[object.mesh].material].name,
                 "min": lo.to_array(),
                 "max": hi.to_array(),

@@ -16,7 +16,7 @@ use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::Arc;
 use std::time::Instant;
 
-use glam::{Affine3A, Vec2, Vec3};
+use glam::{Affine3A, Vec2, Vec3, Vec4};
 
 /// An error reported by Embree (through the device's error callback or
 /// `rtcGetDeviceError`), or by the shim when Embree returned no object.
@@ -300,11 +300,15 @@ pub enum MeshError {
     /// An index refers past the vertex list (caller's data is malformed).
     #[error("triangle {triangle} refers to vertex {index}, but the mesh has {vertex_count} vertices")]
     IndexOutOfRange { triangle: usize, index: u32, vertex_count: usize },
+    /// A curve segment reads control points past the end.
+    #[error("curve segment {segment} reads {order} control points past the {vertex_count} given")]
+    SegmentOutOfRange { segment: usize, order: usize, vertex_count: usize },
     /// A cut-out whose uvs do not match the vertices, or an empty mask.
     #[error("the alpha mask has {uvs} texture coordinates for {vertex_count} vertices, or no texels")]
     BadMask { uvs: usize, vertex_count: usize },
-    /// A vertex coordinate is NaN or infinite.
-    #[error("vertex {vertex} is not finite")]
+    /// A vertex coordinate is NaN or infinite (or a strand's radius
+    /// negative).
+    #[error("vertex {vertex} is not finite (or its radius is negative)")]
     NonFiniteVertex { vertex: usize },
     /// An instance's transform is not finite or not invertible (the
     /// caller's data), it has no time step or more than Embree allows, or
@@ -400,6 +404,70 @@ impl SceneBuilder {
         });
         self.meshes.push(SharedMesh { _vertices: vertex_floats, _indices: index_u32, _mask: mask });
         self.raw.device.check("setting an alpha mask")?;
+        Ok(id)
+    }
+
+    /// Attaches curves (Embree's own curve geometry): `points` are the
+    /// control points (xyz) with their radii (w), `segments` the first
+    /// control point of each segment (a segment reads `basis.order()`
+    /// consecutive points). A hit's `u` is the parameter along its
+    /// segment; its `ng` is the tube's normal on a round curve but the
+    /// curve's tangent on a flat one (Embree's convention).
+    pub fn attach_curves(
+        &mut self,
+        basis: CurveBasis,
+        shape: CurveShape,
+        points: &[Vec4],
+        segments: &[u32],
+    ) -> Result<GeometryId, MeshError> {
+        check_strand_points(points)?;
+        let order = basis.order();
+        if let Some(segment) = segments.iter().position(|&s| s as usize + order > points.len()) {
+            return Err(MeshError::SegmentOutOfRange { segment, order, vertex_count: points.len() });
+        }
+        let vertices: Vec<f32> = points.iter().flat_map(|p| p.to_array()).collect();
+        let mut indices = segments.to_vec();
+        indices.push(0);
+        let raw_basis = match basis {
+            CurveBasis::Linear => sys::LcCurveBasis_LC_CURVE_LINEAR,
+            CurveBasis::Bezier => sys::LcCurveBasis_LC_CURVE_BEZIER,
+            CurveBasis::BSpline => sys::LcCurveBasis_LC_CURVE_BSPLINE,
+            CurveBasis::CatmullRom => sys::LcCurveBasis_LC_CURVE_CATMULL_ROM,
+        };
+        let raw_shape = match shape {
+            CurveShape::Round => sys::LcCurveShape_LC_CURVE_ROUND,
+            CurveShape::Flat => sys::LcCurveShape_LC_CURVE_FLAT,
+        };
+        // SAFETY: the buffers are heap allocations owned by self.meshes until
+        // the scene is dropped (pushed below, never mutated or reallocated);
+        // `vertices` holds 4 floats a point, and every segment's control
+        // points were checked to lie within the points.
+        let id = unsafe {
+            sys::lc_scene_attach_curves(
+                self.raw.ptr.as_ptr(),
+                raw_basis,
+                raw_shape,
+                vertices.as_ptr(),
+                points.len(),
+                indices.as_ptr(),
+                segments.len(),
+            )
+        };
+        self.attached(id, "attaching curves")?;
+        self.meshes.push(SharedMesh { _vertices: vertices, _indices: indices, _mask: None });
+        Ok(id)
+    }
+
+    /// Attaches spheres (Embree's sphere points): centres (xyz) and radii
+    /// (w). A hit's `ng` is the sphere's outward normal.
+    pub fn attach_spheres(&mut self, spheres: &[Vec4]) -> Result<GeometryId, MeshError> {
+        check_strand_points(spheres)?;
+        let vertices: Vec<f32> = spheres.iter().flat_map(|p| p.to_array()).collect();
+        // SAFETY: `vertices` (4 floats a sphere) is owned by self.meshes
+        // until the scene is dropped, pushed below and never mutated.
+        let id = unsafe { sys::lc_scene_attach_spheres(self.raw.ptr.as_ptr(), vertices.as_ptr(), spheres.len()) };
+        self.attached(id, "attaching spheres")?;
+        self.meshes.push(SharedMesh { _vertices: vertices, _indices: Vec::new(), _mask: None });
         Ok(id)
     }
 
@@ -559,6 +627,46 @@ pub struct Hit {
     pub ng: Vec3,
     pub geometry: GeometryId,
     pub primitive: u32,
+}
+
+/// The basis of a curve's control points (USD's `basis`, and `type =
+/// linear`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum CurveBasis {
+    Linear,
+    Bezier,
+    BSpline,
+    CatmullRom,
+}
+
+impl CurveBasis {
+    /// How many consecutive control points one segment reads.
+    #[must_use]
+    pub fn order(self) -> usize {
+        match self {
+            Self::Linear => 2,
+            Self::Bezier | Self::BSpline | Self::CatmullRom => 4,
+        }
+    }
+}
+
+/// How a curve's cross-section is drawn.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum CurveShape {
+    /// A tube whose radius the control points give.
+    Round,
+    /// A ribbon turned to face each ray. (Embree's normal-oriented
+    /// ribbons are not offered: Debian's Embree 3.13 reports no hit on
+    /// them, docs/design.md §4.3.)
+    Flat,
+}
+
+/// Finite centres and finite, non-negative radii.
+fn check_strand_points(points: &[Vec4]) -> Result<(), MeshError> {
+    match points.iter().position(|p| !p.is_finite() || p.w < 0.0) {
+        Some(vertex) => Err(MeshError::NonFiniteVertex { vertex }),
+        None => Ok(()),
+    }
 }
 
 /// A committed, read-only scene. `Sync`: trace from any number of threads.

@@ -142,6 +142,48 @@ uint32_t lc_scene_attach_instance(LcScene* scene, const LcScene* child, const fl
     return (uint32_t)id;
 }
 
+static enum RTCGeometryType curve_type(LcCurveBasis basis, LcCurveShape shape) {
+    static const enum RTCGeometryType types[4][2] = {
+        {RTC_GEOMETRY_TYPE_ROUND_LINEAR_CURVE, RTC_GEOMETRY_TYPE_FLAT_LINEAR_CURVE},
+        {RTC_GEOMETRY_TYPE_ROUND_BEZIER_CURVE, RTC_GEOMETRY_TYPE_FLAT_BEZIER_CURVE},
+        {RTC_GEOMETRY_TYPE_ROUND_BSPLINE_CURVE, RTC_GEOMETRY_TYPE_FLAT_BSPLINE_CURVE},
+        {RTC_GEOMETRY_TYPE_ROUND_CATMULL_ROM_CURVE, RTC_GEOMETRY_TYPE_FLAT_CATMULL_ROM_CURVE},
+    };
+    /* RTC_GEOMETRY_TYPE_USER marks a value outside the enums. */
+    if ((unsigned)basis > 3u || (unsigned)shape > 1u) return RTC_GEOMETRY_TYPE_USER;
+    return types[basis][shape];
+}
+
+uint32_t lc_scene_attach_curves(LcScene* scene, LcCurveBasis basis, LcCurveShape shape,
+                                const float* vertices, size_t vertex_count, const uint32_t* segments,
+                                size_t segment_count) {
+    enum RTCGeometryType type = curve_type(basis, shape);
+    if (type == RTC_GEOMETRY_TYPE_USER) return LC_INVALID_ID;
+    RTCGeometry geometry = rtcNewGeometry(scene->owner->device, type);
+    if (geometry == NULL) return LC_INVALID_ID;
+    rtcSetSharedGeometryBuffer(geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT4, vertices, 0,
+                               4 * sizeof(float), vertex_count);
+    rtcSetSharedGeometryBuffer(geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT, segments, 0,
+                               sizeof(uint32_t), segment_count);
+    rtcSetGeometryMask(geometry, LC_MASK_ALL);
+    rtcCommitGeometry(geometry);
+    unsigned int id = rtcAttachGeometry(scene->scene, geometry);
+    rtcReleaseGeometry(geometry); /* the scene holds its own reference */
+    return (uint32_t)id;
+}
+
+uint32_t lc_scene_attach_spheres(LcScene* scene, const float* spheres, size_t count) {
+    RTCGeometry geometry = rtcNewGeometry(scene->owner->device, RTC_GEOMETRY_TYPE_SPHERE_POINT);
+    if (geometry == NULL) return LC_INVALID_ID;
+    rtcSetSharedGeometryBuffer(geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT4, spheres, 0,
+                               4 * sizeof(float), count);
+    rtcSetGeometryMask(geometry, LC_MASK_ALL);
+    rtcCommitGeometry(geometry);
+    unsigned int id = rtcAttachGeometry(scene->scene, geometry);
+    rtcReleaseGeometry(geometry); /* the scene holds its own reference */
+    return (uint32_t)id;
+}
+
 static float mask_texel(const LcAlphaMask* m, long x, long y) {
     long w = (long)m->width, h = (long)m->height;
     x %= w;

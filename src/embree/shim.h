@@ -80,6 +80,35 @@ uint32_t lc_scene_attach_triangles(LcScene* scene,
  * the scene. Returns the geometry id, or LC_INVALID_ID. */
 uint32_t lc_scene_attach_instance(LcScene* scene, const LcScene* child, const float* transforms,
                                   uint32_t step_count);
+/* The basis of a curve's control points, and how its cross-section is
+ * drawn: Embree's curve geometry types (RTC_GEOMETRY_TYPE_*_CURVE). */
+typedef enum LcCurveBasis {
+    LC_CURVE_LINEAR = 0,      /* 2 control points a segment */
+    LC_CURVE_BEZIER = 1,      /* 4, cubic Bernstein */
+    LC_CURVE_BSPLINE = 2,     /* 4, uniform cubic B-spline */
+    LC_CURVE_CATMULL_ROM = 3  /* 4, Catmull-Rom */
+} LcCurveBasis;
+
+typedef enum LcCurveShape {
+    LC_CURVE_ROUND = 0, /* a tube of the control points' radii */
+    LC_CURVE_FLAT = 1   /* a ribbon facing the ray */
+} LcCurveShape;
+
+/* Attaches curves whose buffers stay owned by the caller and must outlive
+ * the scene. vertices: vertex_count (x, y, z, radius) quadruples;
+ * segments: segment_count indices of each segment's first control point.
+ * A hit's u is the parameter along its segment; its ng is the tube's
+ * normal on a round curve but the curve's tangent on a flat one (Embree's
+ * convention). Returns the geometry id, or LC_INVALID_ID. */
+uint32_t lc_scene_attach_curves(LcScene* scene, LcCurveBasis basis, LcCurveShape shape,
+                                const float* vertices, size_t vertex_count, const uint32_t* segments,
+                                size_t segment_count);
+
+/* Attaches spheres (Embree's sphere points): `count` (x, y, z, radius)
+ * quadruples owned by the caller, outliving the scene. Returns the
+ * geometry id, or LC_INVALID_ID. */
+uint32_t lc_scene_attach_spheres(LcScene* scene, const float* spheres, size_t count);
+
 /* A cut-out (glTF's alphaMode MASK): a hit on the mesh whose alpha, looked up
  * bilinearly (repeating) at the hit's texture coordinate, is below `cutoff`
  * is ignored by every query (closest hit, occlusion, packets), through

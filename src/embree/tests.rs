@@ -328,3 +328,116 @@ fn a_moving_instance_is_where_it_is_at_each_ray_time_on_every_query() {
     let singular = [Affine3A::IDENTITY, Affine3A::from_scale(Vec3::ZERO)];
     assert!(matches!(builder.attach_moving_instance(&child, &singular), Err(MeshError::BadInstance)));
 }
+
+/// The nearest t at which `ray` meets a sphere (f64), the reference answer.
+fn ray_sphere(ray: &Ray, centre: Vec3, radius: f32) -> Option<f64> {
+    let (o, d) = (ray.origin.as_dvec3() - centre.as_dvec3(), ray.direction.as_dvec3());
+    let (a, b, c) = (d.dot(d), 2.0 * o.dot(d), o.dot(o) - f64::from(radius).powi(2));
+    let disc = b * b - 4.0 * a * c;
+    if disc < 0.0 {
+        return None;
+    }
+    [(-b - disc.sqrt()) / (2.0 * a), (-b + disc.sqrt()) / (2.0 * a)]
+        .into_iter()
+        .find(|&t| t >= f64::from(ray.t_near) && t <= f64::from(ray.t_far))
+}
+
+#[test]
+fn spheres_are_hit_where_the_ray_meets_them_with_their_outward_normal() {
+    let device = Device::try_new().unwrap();
+    let mut builder = device.try_new_scene().unwrap();
+    let spheres = [Vec4::new(0.0, 0.0, 0.0, 0.5), Vec4::new(1.2, 0.3, -0.4, 0.25), Vec4::new(-0.9, -0.6, 0.5, 0.4)];
+    let id = builder.attach_spheres(&spheres).unwrap();
+    let scene = builder.commit().unwrap();
+    let mut rng = Rng::seeded(7);
+    let (mut hits, mut checked) = (0, 0);
+    for _ in 0..4000 {
+        let ray = random_ray(&mut rng);
+        let reference = spheres
+            .iter()
+            .enumerate()
+            .filter_map(|(i, s)| ray_sphere(&ray, s.truncate(), s.w).map(|t| (t, i)))
+            .min_by(|a, b| a.0.total_cmp(&b.0));
+        let hit = scene.intersect(&ray);
+        // Rays grazing a sphere or ending at its surface may go either way in f32.
+        let grazing = reference.is_some_and(|(t, _)| (t - f64::from(ray.t_far)).abs() < 1e-3);
+        match (reference, hit) {
+            (Some((t, i)), Some(h)) => {
+                assert_eq!((h.geometry, h.primitive), (id, i as u32));
+                assert!((f64::from(h.t) - t).abs() < 1e-4 * t.max(1.0), "t {} against {t}", h.t);
+                let p = ray.origin + h.t * ray.direction;
+                let outward = (p - spheres[i].truncate()).normalize();
+                assert!(h.ng.normalize().dot(outward) > 0.999, "normal {} against {outward}", h.ng);
+                hits += 1;
+            }
+            (None, None) => {}
+            _ => assert!(grazing, "Embree and the reference disagree on {ray:?}"),
+        }
+        checked += 1;
+    }
+    assert!(hits > 200 && checked == 4000, "{hits} hits");
+}
+
+/// A curve along x from -0.5 to 0.5 in every basis, radius 0.1: control
+/// points placed so that each basis's segment spans exactly that stretch.
+fn straight_curve(basis: CurveBasis) -> Vec<Vec4> {
+    let xs: &[f32] = match basis {
+        CurveBasis::Linear => &[-0.5, 0.5],
+        CurveBasis::Bezier => &[-0.5, -1.0 / 6.0, 1.0 / 6.0, 0.5],
+        // A uniform B-spline segment runs from (P0 + 4 P1 + P2) / 6 to (P1 + 4 P2 + P3) / 6.
+        CurveBasis::BSpline => &[-1.5, -0.5, 0.5, 1.5],
+        // A Catmull-Rom segment runs from P1 to P2.
+        CurveBasis::CatmullRom => &[-1.5, -0.5, 0.5, 1.5],
+    };
+    xs.iter().map(|&x| Vec4::new(x, 0.0, 0.0, 0.1)).collect()
+}
+
+#[test]
+fn curves_of_every_basis_are_tubes_and_ribbons_between_their_ends() {
+    let device = Device::try_new().unwrap();
+    let down =
+        |x: f32| Ray { origin: Vec3::new(x, 0.0, 5.0), direction: -Vec3::Z, t_near: 0.0, t_far: 10.0, time: 0.0 };
+    let grazing = Ray { origin: Vec3::new(0.0, 5.0, 0.0), direction: -Vec3::Y, t_near: 0.0, t_far: 10.0, time: 0.0 };
+    for basis in [CurveBasis::Linear, CurveBasis::Bezier, CurveBasis::BSpline, CurveBasis::CatmullRom] {
+        let points = straight_curve(basis);
+        for shape in [CurveShape::Round, CurveShape::Flat] {
+            let mut builder = device.try_new_scene().unwrap();
+            builder.attach_curves(basis, shape, &points, &[0]).unwrap();
+            let scene = builder.commit().unwrap();
+            let what = format!("{basis:?} {shape:?}");
+            let hit = scene.intersect(&down(0.2)).unwrap_or_else(|| panic!("{what}: the ray at x = 0.2 misses"));
+            // A tube's top is its radius above the axis; a ribbon lies on it.
+            let expected = if shape == CurveShape::Round { 4.9 } else { 5.0 };
+            assert!((hit.t - expected).abs() < 2e-3, "{what}: t {}", hit.t);
+            // A tube's normal faces out of it; a ribbon's `ng` is the curve's tangent.
+            let expected = if shape == CurveShape::Round { Vec3::Z } else { Vec3::X };
+            assert!(hit.ng.normalize().dot(expected) > 0.99, "{what}: ng {}", hit.ng);
+            // The parameter along the segment: x = 0.2 is u = 0.7 on every basis placed so.
+            assert!((hit.u - 0.7).abs() < 0.02, "{what}: u {}", hit.u);
+            assert!(scene.intersect(&down(0.75)).is_none(), "{what}: the curve ends at x = 0.5");
+            // A tube is round and a ribbon turns to face every ray: both are
+            // met from the side too.
+            assert!(scene.occluded(&grazing), "{what}: missed from the side");
+        }
+    }
+}
+
+#[test]
+fn bad_curves_and_spheres_are_rejected_before_embree_sees_them() {
+    let device = Device::try_new().unwrap();
+    let mut builder = device.try_new_scene().unwrap();
+    let points = straight_curve(CurveBasis::BSpline);
+    assert!(matches!(
+        builder.attach_curves(CurveBasis::BSpline, CurveShape::Round, &points, &[1]),
+        Err(MeshError::SegmentOutOfRange { segment: 0, order: 4, vertex_count: 4 })
+    ));
+    let line = straight_curve(CurveBasis::Linear);
+    assert!(matches!(
+        builder.attach_curves(CurveBasis::Linear, CurveShape::Flat, &line, &[0, 1]),
+        Err(MeshError::SegmentOutOfRange { segment: 1, order: 2, vertex_count: 2 })
+    ));
+    let negative = [Vec4::new(0.0, 0.0, 0.0, -1.0)];
+    assert!(matches!(builder.attach_spheres(&negative), Err(MeshError::NonFiniteVertex { vertex: 0 })));
+    let nan = [Vec4::new(f32::NAN, 0.0, 0.0, 1.0)];
+    assert!(matches!(builder.attach_spheres(&nan), Err(MeshError::NonFiniteVertex { vertex: 0 })));
+}

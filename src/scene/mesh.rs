@@ -30,6 +30,82 @@ pub struct Mesh {
     /// The object's name (a shape's `name` or `shapes[i]`, a glTF node's
     /// name): what Cryptomatte's object mattes are keyed by.
     pub name: String,
+    /// Curves or points instead of triangles (then `triangles` is empty
+    /// and `positions` are their control points or centres).
+    pub strands: Option<Strands>,
+}
+
+/// Curves or points, drawn by Embree's own curve and sphere primitives
+/// rather than as triangles (docs/design.md §4.3).
+#[derive(Debug, Clone)]
+pub struct Strands {
+    /// The radius at each position, metres (half USD's `widths`).
+    pub radii: Vec<f32>,
+    pub kind: StrandKind,
+}
+
+/// What a mesh's strands are.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum StrandKind {
+    /// A sphere around each position (USD's `Points`).
+    Spheres,
+    /// Cubic or linear curves (USD's `BasisCurves`); `segments` holds the
+    /// first control point of each segment, which reads `basis.order()`
+    /// consecutive positions.
+    Curves { basis: CurveBasis, ribbon: bool, segments: Vec<u32> },
+}
+
+/// The basis of a curve's control points (USD's `basis`; `type = linear`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum CurveBasis {
+    Linear,
+    Bezier,
+    BSpline,
+    CatmullRom,
+}
+
+impl CurveBasis {
+    /// How many consecutive control points one segment reads.
+    #[must_use]
+    pub fn order(self) -> usize {
+        match self {
+            Self::Linear => 2,
+            Self::Bezier | Self::BSpline | Self::CatmullRom => 4,
+        }
+    }
+
+    /// The two control points (offsets from a segment's first) that a
+    /// quantity given per control point is interpolated between along the
+    /// segment: its ends for linear and Bezier segments, the middle two
+    /// for B-spline and Catmull-Rom ones (which pass near or through them).
+    #[must_use]
+    pub fn ends(self) -> (usize, usize) {
+        match self {
+            Self::Linear => (0, 1),
+            Self::Bezier => (0, 3),
+            Self::BSpline | Self::CatmullRom => (1, 2),
+        }
+    }
+}
+
+impl Strands {
+    /// The value of a per-position quantity at parameter `u` of primitive
+    /// `primitive` (a sphere, or a curve segment).
+    #[must_use]
+    pub fn interpolate<T>(&self, values: &[T], primitive: usize, u: f32) -> T
+    where
+        T: Copy + std::ops::Mul<f32, Output = T> + std::ops::Add<Output = T>,
+    {
+        match &self.kind {
+            StrandKind::Spheres => values[primitive],
+            StrandKind::Curves { basis, segments, .. } => {
+                let first = segments[primitive] as usize;
+                let (a, b) = basis.ends();
+                let u = u.clamp(0.0, 1.0);
+                values[first + a] * (1.0 - u) + values[first + b] * u
+            }
+        }
+    }
 }
 
 impl Mesh {
@@ -124,6 +200,7 @@ impl Mesh {
             triangles: vec![[0, 1, 2], [0, 2, 3]],
             material,
             name: String::new(),
+            strands: None,
         }
     }
 
@@ -275,12 +352,18 @@ impl Mesh {
         Ok(mesh)
     }
 
-    /// Axis-aligned bounds of the positions: (min, max).
+    /// Axis-aligned bounds of the positions, grown by strands' radii:
+    /// (min, max). (A cubic curve lies within its control points' hull,
+    /// but for a Catmull-Rom curve's slight overshoot.)
     #[must_use]
     pub fn bounds(&self) -> (Vec3, Vec3) {
+        let radius = |i: usize| self.strands.as_ref().map_or(0.0, |s| s.radii[i]);
         self.positions
             .iter()
-            .fold((Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)), |(lo, hi), &p| (lo.min(p), hi.max(p)))
+            .enumerate()
+            .fold((Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)), |(lo, hi), (i, &p)| {
+                (lo.min(p - radius(i)), hi.max(p + radius(i)))
+            })
     }
 }
 

@@ -3,13 +3,14 @@
 use std::collections::HashMap;
 use std::sync::Arc;
 
-use glam::{Affine3A, Mat3A, Vec2, Vec3};
+use glam::{Affine3A, Mat3A, Vec2, Vec3, Vec4};
 
 use super::pbr::Pbr;
 use super::surface::SurfacePoint;
 use crate::embree::{self, AlphaMask, Device, EmbreeError, Hit, MeshError, Ray};
 use crate::light::Lights;
-use crate::scene::material::{reflect, NormalMap};
+use crate::scene::material::{reflect, Material, NormalMap, TexCoords};
+use crate::scene::mesh::{CurveBasis, Mesh, StrandKind, Strands};
 use crate::scene::texture::Texture;
 use crate::scene::Scene;
 
@@ -102,12 +103,18 @@ impl<'s> Geometry<'s> {
         let object = self.object_of(hit);
         let mesh = &self.scene.meshes[self.scene.objects[object].mesh];
         let corners = mesh.triangles[hit.primitive as usize].map(|i| mesh.positions[i as usize]);
-        let placement = match &self.placements[object] {
+        let placement = self.placement(object, time);
+        (placement.map_or(corners, |p| corners.map(|c| p.to_world.transform_point3(c))), placement)
+    }
+
+    /// Object `object`'s placement at time `time` of the shutter (`None`
+    /// for a mesh in world space).
+    fn placement(&self, object: usize, time: f32) -> Option<Placement> {
+        match &self.placements[object] {
             Placing::World => None,
             Placing::Still(p) => Some(*p),
             Placing::Moving(motion) => Some(Placement::of(motion.at(time))),
-        };
-        (placement.map_or(corners, |p| corners.map(|c| p.to_world.transform_point3(c))), placement)
+        }
     }
 
     /// Whether a camera (or mirror) ray passes through `hit`: the back of
@@ -116,7 +123,7 @@ impl<'s> Geometry<'s> {
     #[must_use]
     pub fn culls(&self, ray: &Ray, hit: &Hit) -> bool {
         let mesh = &self.scene.meshes[self.mesh_of(hit)];
-        if !self.scene.materials[mesh.material].culls_back_faces {
+        if !self.scene.materials[mesh.material].culls_back_faces || mesh.strands.is_some() {
             return false;
         }
         let ([p0, p1, p2], _) = self.triangle(hit, ray.time);
@@ -127,6 +134,9 @@ impl<'s> Geometry<'s> {
     /// facing the ray's origin.
     pub fn surface(&self, ray: &Ray, hit: &Hit) -> SurfacePoint<'s> {
         let mesh = &self.scene.meshes[self.mesh_of(hit)];
+        if let Some(strands) = &mesh.strands {
+            return self.strand_surface(ray, hit, mesh, strands);
+        }
         let tri = mesh.triangles[hit.primitive as usize];
         let (u, v) = (hit.u, hit.v);
         let w = 1.0 - u - v;
@@ -171,10 +181,49 @@ impl<'s> Geometry<'s> {
         if n == Vec3::ZERO || !n.is_finite() {
             n = ng;
         }
-        let mut base = material.albedo_at(&uvs, &self.scene.textures);
-        if let Some(colors) = &mesh.colors {
+        let colour = mesh.colors.as_ref().map(|colors| {
             let [c0, c1, c2] = tri.map(|i| colors[i as usize]);
-            base *= w * c0 + u * c1 + v * c2;
+            w * c0 + u * c1 + v * c2
+        });
+        let emits = front || material.emits_both_sides;
+        self.shaded(ray, hit, Frame { p, n, ng, wo, uvs, colour, emits }, material)
+    }
+
+    /// The surface point of a hit on curves or spheres (docs/design.md
+    /// §4.3). Embree reports the normal of a tube or a sphere (in the
+    /// instanced object's space) but a flat ribbon's tangent: the ribbon's
+    /// normal is the direction to the viewer made square to it. Colours
+    /// are interpolated along the segment; texture coordinates are the
+    /// hit's (u along the segment, v across it); strands emit nothing
+    /// (they are not light sources, docs/design.md §4.3).
+    fn strand_surface(&self, ray: &Ray, hit: &Hit, mesh: &'s Mesh, strands: &Strands) -> SurfacePoint<'s> {
+        let placement = self.placement(self.object_of(hit), ray.time);
+        let wo = (-ray.direction).normalize();
+        let p = ray.origin + hit.t * ray.direction;
+        let mut ng = if matches!(strands.kind, StrandKind::Curves { ribbon: true, .. }) {
+            let tangent = placement.map_or(hit.ng, |p| p.to_world.matrix3 * hit.ng).normalize_or_zero();
+            (wo - tangent * tangent.dot(wo)).normalize_or_zero()
+        } else {
+            placement.map_or(hit.ng, |p| p.normal * hit.ng).normalize_or_zero()
+        };
+        if ng == Vec3::ZERO || !ng.is_finite() {
+            ng = wo;
+        }
+        if ng.dot(wo) < 0.0 {
+            ng = -ng;
+        }
+        let uv = Vec2::new(hit.u, hit.v);
+        let colour = mesh.colors.as_ref().map(|colors| strands.interpolate(colors, hit.primitive as usize, hit.u));
+        let frame = Frame { p, n: ng, ng, wo, uvs: [uv, uv], colour, emits: false };
+        self.shaded(ray, hit, frame, &self.scene.materials[mesh.material])
+    }
+
+    /// The surface point of `frame`, shaded with `material`.
+    fn shaded(&self, ray: &Ray, hit: &Hit, frame: Frame, material: &'s Material) -> SurfacePoint<'s> {
+        let Frame { p, n, ng, wo, uvs, colour, emits } = frame;
+        let mut base = material.albedo_at(&uvs, &self.scene.textures);
+        if let Some(colour) = colour {
+            base *= colour;
         }
         // An unlit surface shows its base colour and reflects nothing.
         let pbr =
@@ -193,7 +242,7 @@ impl<'s> Geometry<'s> {
             time: ray.time,
             emitted: if material.unlit {
                 base
-            } else if front || material.emits_both_sides {
+            } else if emits {
                 material.emission_at(&uvs, &self.scene.textures)
             } else {
                 Vec3::ZERO
@@ -208,6 +257,21 @@ impl<'s> Geometry<'s> {
             },
         }
     }
+}
+
+/// Where a hit is and how it faces: what shading needs of the geometry.
+struct Frame {
+    p: Vec3,
+    /// The shading normal and the geometric one, both facing `wo`.
+    n: Vec3,
+    ng: Vec3,
+    /// Towards the ray's origin, unit length.
+    wo: Vec3,
+    uvs: TexCoords,
+    /// Interpolated vertex colours, multiplying the base colour.
+    colour: Option<Vec3>,
+    /// Whether the side seen is one that emits.
+    emits: bool,
 }
 
 /// How an object's hits are placed in the world.
@@ -255,6 +319,22 @@ fn attach_mesh(
     mesh: usize,
 ) -> Result<embree::GeometryId, MeshError> {
     let mesh = &scene.meshes[mesh];
+    if let Some(strands) = &mesh.strands {
+        let points: Vec<Vec4> = mesh.positions.iter().zip(&strands.radii).map(|(p, &r)| p.extend(r)).collect();
+        return match &strands.kind {
+            StrandKind::Spheres => builder.attach_spheres(&points),
+            StrandKind::Curves { basis, ribbon, segments } => {
+                let basis = match basis {
+                    CurveBasis::Linear => embree::CurveBasis::Linear,
+                    CurveBasis::Bezier => embree::CurveBasis::Bezier,
+                    CurveBasis::BSpline => embree::CurveBasis::BSpline,
+                    CurveBasis::CatmullRom => embree::CurveBasis::CatmullRom,
+                };
+                let shape = if *ribbon { embree::CurveShape::Flat } else { embree::CurveShape::Round };
+                builder.attach_curves(basis, shape, &points, segments)
+            }
+        };
+    }
     let mask = scene.materials[mesh.material].cutout.as_ref().map(|c| AlphaMask {
         uvs: mesh.uvs.clone().unwrap_or_else(|| vec![Vec2::ZERO; mesh.positions.len()]),
         alpha: c.alpha.clone(),

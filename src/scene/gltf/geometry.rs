@@ -115,6 +115,7 @@ impl Importer<'_, '_> {
             triangles,
             material,
             name: node_name.to_string(),
+            strands: None,
         };
         match tangents {
             None => {}

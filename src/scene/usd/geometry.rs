@@ -584,6 +584,7 @@ impl Builder {
             triangles: self.triangles.clone(),
             material: 0,
             name: String::new(),
+            strands: None,
         }
     }
 }

@@ -386,6 +386,13 @@ pub(super) fn placed_mesh(mut mesh: Mesh, world: &DMat4) -> Mesh {
             *n = (normal_matrix * n.as_dvec3()).normalize_or_zero().as_vec3();
         }
     }
+    if let Some(strands) = &mut mesh.strands {
+        // A radius scales as lengths do on average (exactly, for a similarity).
+        let scale = world.determinant().abs().cbrt() as f32;
+        for r in &mut strands.radii {
+            *r *= scale;
+        }
+    }
     let mirrors = world.determinant() < 0.0;
     if let Some(tangents) = &mut mesh.tangents {
         for t in tangents {

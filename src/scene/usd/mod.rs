@@ -15,6 +15,7 @@ mod lights;
 mod materials;
 mod schema;
 mod stage;
+mod strands;
 mod xform;
 
 use std::collections::HashMap;
@@ -322,8 +323,7 @@ const NOT_DRAWN_BY_DEFINITION: [&str; 16] = [
 /// Why a prim type is not drawn, for the one line each kind gets.
 fn not_drawn_because(type_name: &str) -> &'static str {
     match type_name {
-        "BasisCurves" | "NurbsCurves" | "HermiteCurves" => "curves are not drawn yet",
-        "Points" => "points are not drawn yet",
+        "NurbsCurves" | "HermiteCurves" => "only BasisCurves are drawn",
         "NurbsPatch" => "NURBS patches are not tessellated",
         "Volume" | "OpenVDBAsset" | "Field3DAsset" => "volumes are not rendered",
         "TetMesh" => "tetrahedral meshes are not drawn",
@@ -411,6 +411,7 @@ impl Walker<'_, '_> {
         match type_name {
             "Mesh" => self.mesh(prim, &here)?,
             t if GPRIMS.contains(&t) => self.gprim(prim, t, &here)?,
+            "BasisCurves" | "Points" => self.strands(prim, type_name, &here)?,
             t if LIGHTS.contains(&t) => self.light(prim, t, &info.api_schemas, &here)?,
             "Camera" if here.instance.is_none() => self.cameras.push((prim.to_string(), here.worlds.clone())),
             "PointInstancer" => return self.point_instancer(prim, &here),
@@ -542,6 +543,31 @@ impl Walker<'_, '_> {
             mesh.colors = Some(vec![c.max(Vec3::ZERO); mesh.positions.len()]);
         }
         self.surface(prim, mesh, here.binding.clone().as_deref(), double_sided, here)
+    }
+
+    /// A curves or points prim, drawn as Embree's curves or spheres
+    /// (docs/design.md §4.3); its material's colour primvar, or its
+    /// display colour, read per point.
+    fn strands(&mut self, prim: &str, type_name: &str, here: &Context) -> Result<(), Located> {
+        let time = self.time();
+        let colour = match here.binding.as_deref() {
+            Some(b) => {
+                let bound = self.material(Some(b), None, false)?;
+                if self.parts.materials[bound.material].emission != Vec3::ZERO {
+                    self.warn(format!(
+                        "{prim}: curves and points do not emit light: its material's emission is left out"
+                    ));
+                }
+                bound.colour
+            }
+            None => None,
+        };
+        let colour = colour.as_ref().map(|(name, fallback)| (name.as_str(), fallback.as_dvec3()));
+        let mesh = strands::strands(self.stage, prim, type_name, time, colour)?;
+        if mesh.positions.is_empty() {
+            return Ok(());
+        }
+        self.surface(prim, mesh, here.binding.clone().as_deref(), true, here)
     }
 
     /// A surface (in its prim's space) placed: with its material; as an
