@@ -816,3 +816,87 @@ fn curves_and_points_cover_what_their_widths_say() {
     assert!(stderr.contains("bad.usda") && stderr.contains("/C.curveVertexCounts"), "{stderr}");
     assert!(!dir.path("bad.exr").exists());
 }
+
+/// A `<UDIM>` texture reads tile 1001 + u + 10 v where the texture
+/// coordinates fall in [u, u + 1) x [v, v + 1), and black where the tile
+/// is absent, its tiles found beside the layer that names the pattern.
+#[test]
+fn udim_tiles_are_read_where_their_coordinates_fall() {
+    let dir = TempDir::new("usd-udim");
+    std::fs::create_dir(dir.path("tex")).unwrap();
+    for (tile, rgb) in [(1001, [255u8, 0, 0]), (1002, [0, 255, 0]), (1011, [0, 0, 255])] {
+        let file = std::fs::File::create(dir.path(&format!("tex/c.{tile}.png"))).unwrap();
+        let mut encoder = png::Encoder::new(file, 4, 4);
+        encoder.set_color(png::ColorType::Rgb);
+        let texels: Vec<u8> = (0..16).flat_map(|_| rgb).collect();
+        encoder.write_header().unwrap().write_image_data(&texels).unwrap();
+    }
+    let stage = dir.write(
+        "udim.usda",
+        r#"#usda 1.0
+(
+    metersPerUnit = 1
+    upAxis = "Y"
+)
+def Mesh "Quad"
+{
+    int[] faceVertexCounts = [4]
+    int[] faceVertexIndices = [0, 1, 2, 3]
+    point3f[] points = [(-1, -1, -5), (1, -1, -5), (1, 1, -5), (-1, 1, -5)]
+    texCoord2f[] primvars:st = [(0, 0), (2, 0), (2, 2), (0, 2)] (interpolation = "vertex")
+    uniform token subdivisionScheme = "none"
+    rel material:binding = </Glow>
+}
+def Material "Glow"
+{
+    token outputs:surface.connect = </Glow/Surface.outputs:surface>
+    def Shader "Surface"
+    {
+        uniform token info:id = "UsdPreviewSurface"
+        color3f inputs:diffuseColor = (0, 0, 0)
+        color3f inputs:emissiveColor.connect = </Glow/Texture.outputs:rgb>
+        token outputs:surface
+    }
+    def Shader "Texture"
+    {
+        uniform token info:id = "UsdUVTexture"
+        asset inputs:file = @tex/c.<UDIM>.png@
+        token inputs:sourceColorSpace = "raw"
+        token inputs:wrapS = "clamp"
+        token inputs:wrapT = "clamp"
+        float3 outputs:rgb
+    }
+}
+def Camera "Camera"
+{
+    float focalLength = 50
+    float horizontalAperture = 20
+    float verticalAperture = 20
+}
+"#,
+    );
+    let image = render(&stage, &dir.path("out.exr"), &["--resolution", "16x16", "--exact", "--aovs", "none"]);
+    let [r, g, b] = ["R", "G", "B"].map(|c| channel(&image, c));
+    // Row 0 of the film is the top: v in [1, 2) there.
+    let expected = |x: usize, y: usize| match (x < 8, y >= 8) {
+        (true, true) => [1.0, 0.0, 0.0],
+        (false, true) => [0.0, 1.0, 0.0],
+        (true, false) => [0.0, 0.0, 1.0],
+        (false, false) => [0.0, 0.0, 0.0],
+    };
+    for (y, x) in (0..16).flat_map(|y| (0..16).map(move |x| (y, x))) {
+        // Pixels beside a tile's edge blend two tiles.
+        if [y, x].iter().any(|&v| matches!(v, 7 | 8)) {
+            continue;
+        }
+        let p = y * 16 + x;
+        let got = [r[p], g[p], b[p]];
+        let want = expected(x, y);
+        assert!((0..3).all(|k| (got[k] - want[k]).abs() < 1e-3), "pixel ({x}, {y}): {got:?}, want {want:?}");
+    }
+    // No tile at all: the texture is missing, a warning, and the input's own value.
+    let none = dir.write("none.usda", &std::fs::read_to_string(&stage).unwrap().replace("tex/c.", "tex/d."));
+    let run = lightcuts(&["render", s(&none), "-o", s(&dir.path("none.exr")), "--resolution", "8x8"]);
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert!(run.status.success() && stderr.contains("no UDIM tile of 'tex/d.<UDIM>.png'"), "{stderr}");
+}

@@ -391,7 +391,12 @@ impl<'s> Materials<'s> {
                 }
             })
         };
-        let (varname, transform) = self.coordinates(shader)?;
+        let (varname, mut transform) = self.coordinates(shader)?;
+        if authored.contains(UDIM) {
+            // The tiles are read as one atlas of cols x rows tiles.
+            let (cols, rows) = udim_grid(&udim_tiles(self.stage, &file, &authored));
+            transform = Affine2::from_scale(glam::Vec2::new(1.0 / cols as f32, 1.0 / rows as f32)) * transform;
+        }
         Ok(TextureSource {
             shader: shader.to_string(),
             file,
@@ -717,6 +722,10 @@ impl<'s> Materials<'s> {
     /// Reads and decodes the texture file at `location` once (its values
     /// as stored, not yet decoded from sRGB); why it cannot be, else.
     fn load(&mut self, location: &str, authored: &str) -> Result<(), String> {
+        if !self.images.contains_key(location) && authored.contains(UDIM) {
+            let atlas = self.udim_atlas(location, authored);
+            self.images.insert(location.to_string(), atlas);
+        }
         if !self.images.contains_key(location) {
             let asset = Asset { authored: authored.to_string(), location: location.to_string() };
             let decoded = self.stage.asset_bytes(&asset, MAX_TEXTURE_BYTES).and_then(|(file, bytes)| {
@@ -728,6 +737,47 @@ impl<'s> Materials<'s> {
             self.images.insert(location.to_string(), decoded);
         }
         self.images[location].as_ref().map(drop).map_err(Clone::clone)
+    }
+
+    /// The tiles of a `<UDIM>` texture as one image (docs/design.md §5.3,
+    /// "UDIM tiles"):
+    /// tile 1001 + c + 10 r at column c, row r from the bottom, each tile
+    /// at the first one's size (another size is resampled to it by the
+    /// nearest texel), black where a tile of the grid is absent.
+    fn udim_atlas(&mut self, location: &str, authored: &str) -> Result<RgbImage, String> {
+        let tiles = udim_tiles(self.stage, location, authored);
+        if tiles.is_empty() {
+            let first = location.replace(UDIM, "1001");
+            return Err(format!("no UDIM tile of '{authored}' was found (looked for {first} and the tiles after it)"));
+        }
+        let (cols, rows) = udim_grid(&tiles);
+        let mut atlas: Option<RgbImage> = None;
+        for (c, r, tile) in tiles {
+            self.load(&tile.location, &tile.authored)?;
+            // The tile is kept only in the atlas.
+            let image = self.images.remove(&tile.location).expect("loaded above")?;
+            let atlas = atlas.get_or_insert_with(|| RgbImage {
+                width: cols * image.width,
+                height: rows * image.height,
+                texels: vec![Vec3::ZERO; cols * image.width * rows * image.height],
+                alpha: None,
+                scene_linear: image.scene_linear,
+            });
+            let (w, h) = (atlas.width / cols, atlas.height / rows);
+            if image.alpha.is_some() && atlas.alpha.is_none() {
+                atlas.alpha = Some(vec![1.0; atlas.texels.len()]);
+            }
+            let top = (rows - 1 - r) * h;
+            for (y, x) in (0..h).flat_map(|y| (0..w).map(move |x| (y, x))) {
+                let k = (y * image.height / h) * image.width + x * image.width / w;
+                let at = (top + y) * atlas.width + c * w + x;
+                atlas.texels[at] = image.texels[k];
+                if let Some(alpha) = &mut atlas.alpha {
+                    alpha[at] = image.alpha.as_ref().map_or(1.0, |a| a[k]);
+                }
+            }
+        }
+        Ok(atlas.expect("at least one tile"))
     }
 
     /// A texture as a TextureRef: one source's channels with its scale and
@@ -775,6 +825,27 @@ impl<'s> Materials<'s> {
         self.textures.insert(key, index);
         Ok(TextureRef { texture: index, transform: t.transform, set: 0 })
     }
+}
+
+/// The token a texture's file name holds in place of its tile number.
+const UDIM: &str = "<UDIM>";
+
+/// The tiles of a `<UDIM>` texture that are there: tile 1001 + c + 10 r
+/// (c and r from 0 to 9, the UDIM convention: 10 tiles a row along u) as
+/// (c, r, its asset), resolved beside the same layer as the pattern.
+fn udim_tiles(stage: &Stage, location: &str, authored: &str) -> Vec<(usize, usize, Asset)> {
+    (0..100)
+        .filter_map(|k| {
+            let tile = (1001 + k).to_string();
+            let asset = Asset { authored: authored.replace(UDIM, &tile), location: location.replace(UDIM, &tile) };
+            stage.asset_exists(&asset).then_some((k % 10, k / 10, asset))
+        })
+        .collect()
+}
+
+/// The columns and rows of tiles an atlas of `tiles` spans (1 x 1 for none).
+fn udim_grid(tiles: &[(usize, usize, Asset)]) -> (usize, usize) {
+    tiles.iter().fold((1, 1), |(cols, rows), &(c, r, _)| (cols.max(c + 1), rows.max(r + 1)))
 }
 
 /// A texel's channel (alpha 1 where the image has none).

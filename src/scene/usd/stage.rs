@@ -528,6 +528,16 @@ impl Stage {
         Ok(sources.iter().map(|p| p.as_str().to_string()).collect())
     }
 
+    /// Whether `asset` is there to be read (a file, or a member of a package).
+    pub(super) fn asset_exists(&self, asset: &Asset) -> bool {
+        let location = asset.location.as_str();
+        if ar::split_package_relative_path_outer(location).is_some() {
+            let resolver = CheckedResolver::new(&self.search_paths);
+            return ar::Resolver::resolve(&resolver, location).is_some();
+        }
+        Path::new(location).is_file()
+    }
+
     /// The bytes of `asset` (at most `limit`), and the file they are in
     /// (the package, for a member of one: for messages and the scene's inputs).
     pub(super) fn asset_bytes(&self, asset: &Asset, limit: u64) -> Result<(PathBuf, Vec<u8>), Failure> {
