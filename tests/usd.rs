@@ -754,6 +754,8 @@ fn subdivision_meshes_draw_their_limit_surface() {
 /// whose centre is d away covers a disc of radius f r / sqrt(d^2 - r^2)
 /// pixels, and a tube (or a ray-facing ribbon) of radius r whose axis
 /// passes d from the eye, parallel to the image, a band of that half-width.
+/// (A primvar without interpolation metadata is constant, `widths` per
+/// vertex.)
 #[test]
 fn curves_and_points_cover_what_their_widths_say() {
     let dir = TempDir::new("usd-strands");
@@ -775,7 +777,8 @@ fn curves_and_points_cover_what_their_widths_say() {
             "linear",
             format!(
                 "def BasisCurves \"C\"\n{{\n    uniform token type = \"linear\"\n    int[] curveVertexCounts = [5]\n    \
-                 point3f[] points = [{line}]\n    float[] widths = [0.6] (interpolation = \"constant\")\n}}\n"
+                 point3f[] points = [{line}]\n    float[] widths = [0.6] (interpolation = \"constant\")\n    \
+                 color3f[] primvars:displayColor = [(0.5, 0.4, 0.3)]\n}}\n"
             ),
             band(0.3),
         ),

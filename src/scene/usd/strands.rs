@@ -106,14 +106,17 @@ pub(super) fn strands(
         ));
     }
     let layout = if type_name == "Points" { None } else { Some(curve_layout(stage, prim, time, points.len())?) };
-    let widths = read_primvar(stage, prim, "widths", time, layout.as_ref(), points.len(), Stage::numbers)?;
+    let (layout, count) = (layout.as_ref(), points.len());
+    // Without metadata `widths` is per vertex (UsdGeomCurves), a primvar constant.
+    let widths = read_primvar(stage, prim, "widths", time, (layout, count), Interpolation::Vertex, Stage::numbers)?;
     let widths = widths.unwrap_or_else(|| vec![DEFAULT_WIDTH; points.len()]);
     if let Some(w) = widths.iter().find(|w| !w.is_finite() || **w < 0.0) {
         return Err((at("widths"), format!("a width must be finite and >= 0, got {w}")));
     }
     let colour_name = colour.map_or_else(|| "primvars:displayColor".to_string(), |(n, _)| format!("primvars:{n}"));
-    let colours = read_primvar(stage, prim, &colour_name, time, layout.as_ref(), points.len(), Stage::vec3s)?
-        .or_else(|| colour.map(|(_, fallback)| vec![fallback; points.len()]));
+    let colours =
+        read_primvar(stage, prim, &colour_name, time, (layout, count), Interpolation::Constant, Stage::vec3s)?
+            .or_else(|| colour.map(|(_, fallback)| vec![fallback; points.len()]));
     if colours.as_ref().is_some_and(|c| c.iter().any(|c| !c.is_finite())) {
         return Err((at(&colour_name), "holds a value that is not finite".into()));
     }
@@ -174,16 +177,17 @@ fn curve_layout(stage: &Stage, prim: &str, time: f64, points_count: usize) -> Re
     Ok(layout)
 }
 
-/// Primvar `name` (with its `:indices` and `interpolation`) as one value a
-/// point; `layout` is `None` for a points prim, whose `uniform` is one value
-/// for the prim and `varying` one a point.
+/// Primvar `name` (with its `:indices` and `interpolation`, `fallback`
+/// where none is authored) as one value for each of the `points`; the
+/// layout is `None` for a points prim, whose `uniform` is one value for the
+/// prim and `varying` one a point.
 fn read_primvar<T: Copy>(
     stage: &Stage,
     prim: &str,
     name: &str,
     time: f64,
-    layout: Option<&Layout>,
-    points: usize,
+    (layout, points): (Option<&Layout>, usize),
+    fallback: Interpolation,
     read: impl Fn(&Stage, &str, &str, f64) -> Result<Option<Vec<T>>, Failure>,
 ) -> Result<Option<Vec<T>>, Located> {
     let at = |attribute: &str| format!("{prim}.{attribute}");
@@ -192,7 +196,8 @@ fn read_primvar<T: Copy>(
         return Ok(None);
     }
     let interpolation = match stage.interpolation(prim, name).map_err(|e| (at(name), e))?.as_deref() {
-        None | Some("vertex") => Interpolation::Vertex,
+        None => fallback,
+        Some("vertex") => Interpolation::Vertex,
         Some("constant") => Interpolation::Constant,
         Some("uniform") => Interpolation::Uniform,
         Some("varying") => Interpolation::Varying,
