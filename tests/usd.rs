@@ -903,3 +903,69 @@ def Camera "Camera"
     let stderr = String::from_utf8_lossy(&run.stderr);
     assert!(run.status.success() && stderr.contains("no UDIM tile of 'tex/d.<UDIM>.png'"), "{stderr}");
 }
+
+/// A primvar reader of any type but float2 feeds diffuseColor as vertex
+/// colours: a float or int as grey, a float4's RGB, the reader's fallback
+/// (a float's as grey) where the prim lacks the primvar.
+#[test]
+fn primvar_readers_of_every_type_feed_the_base_colour() {
+    let dir = TempDir::new("usd-readers");
+    let stage = |kind: &str, primvar: &str, fallback: &str| {
+        format!(
+            r#"#usda 1.0
+(
+    metersPerUnit = 1
+    upAxis = "Y"
+)
+def Mesh "Quad"
+{{
+    int[] faceVertexCounts = [4]
+    int[] faceVertexIndices = [0, 1, 2, 3]
+    point3f[] points = [(-1, -1, -5), (1, -1, -5), (1, 1, -5), (-1, 1, -5)]
+    uniform token subdivisionScheme = "none"
+    {primvar}
+    rel material:binding = </M>
+}}
+def Material "M"
+{{
+    token outputs:surface.connect = </M/Surface.outputs:surface>
+    def Shader "Surface"
+    {{
+        uniform token info:id = "UsdPreviewSurface"
+        color3f inputs:diffuseColor.connect = </M/Reader.outputs:result>
+        token outputs:surface
+    }}
+    def Shader "Reader"
+    {{
+        uniform token info:id = "UsdPrimvarReader_{kind}"
+        string inputs:varname = "tint"
+        {fallback}
+    }}
+}}
+def Camera "Camera"
+{{
+    float focalLength = 50
+    float horizontalAperture = 20
+    float verticalAperture = 20
+}}
+"#
+        )
+    };
+    let albedo = |name: &str, text: String| -> [f32; 3] {
+        let path = dir.write(&format!("{name}.usda"), &text);
+        let flags = ["--resolution", "4x4", "--exact", "--environment", "1,1,1", "--aovs", "albedo"];
+        let image = render(&path, &dir.path(&format!("{name}.exr")), &flags);
+        ["albedo.R", "albedo.G", "albedo.B"].map(|c| channel(&image, c)[5])
+    };
+    let float3 = albedo("float3", stage("float3", "color3f[] primvars:tint = [(0.5, 0.5, 0.5)]", ""));
+    assert!(float3[0] > 0.1, "{float3:?}");
+    let float = albedo("float", stage("float", "float[] primvars:tint = [0.5]", ""));
+    assert_eq!(float, float3, "a float reads as grey");
+    let int = albedo("int", stage("int", "int[] primvars:tint = [1]", ""));
+    assert!(int.iter().zip(&float3).all(|(a, b)| (a / b - 2.0).abs() < 1e-4), "an int reads as grey: {int:?}");
+    let float4 = albedo("float4", stage("float4", "float4[] primvars:tint = [(0.2, 0.4, 0.6, 1)]", ""));
+    let ratio = [float4[0] / float4[1], float4[2] / float4[1]];
+    assert!((ratio[0] - 0.5).abs() < 1e-4 && (ratio[2 - 1] - 1.5).abs() < 1e-4, "a float4's RGB: {float4:?}");
+    let lacking = albedo("lacking", stage("float", "", "float inputs:fallback = 0.25\n        float outputs:result"));
+    assert!(lacking.iter().zip(&float3).all(|(a, b)| (a / b - 0.5).abs() < 1e-4), "the fallback as grey: {lacking:?}");
+}

@@ -198,7 +198,7 @@ pub(super) fn mesh(
     let st = primvar(stage, prim, &st_name, time, &sizes, Interpolation::FaceVarying, Stage::vec2s)?;
     let colour_name =
         wanted.colour.map_or_else(|| "primvars:displayColor".to_string(), |(n, _)| format!("primvars:{n}"));
-    let mut colors = primvar(stage, prim, &colour_name, time, &sizes, Interpolation::Constant, Stage::vec3s)?;
+    let mut colors = primvar(stage, prim, &colour_name, time, &sizes, Interpolation::Constant, Stage::colours)?;
     if let (None, Some((_, fallback))) = (&colors, wanted.colour) {
         colors = Some(Primvar { values: vec![fallback], indices: None, interpolation: Interpolation::Constant });
     }

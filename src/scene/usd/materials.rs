@@ -306,7 +306,13 @@ impl<'s> Materials<'s> {
         if let Some(kind) = id.strip_prefix("UsdPrimvarReader_") {
             let varname = self.stage.token(source, "inputs:varname", self.time).ok().flatten().unwrap_or_default();
             let reader_fallback = fallback(self)?;
-            if primvars && kind == "float3" && !varname.is_empty() {
+            // Any reader but float2 can feed a colour: a number as grey, a
+            // float4's RGB (Stage::colours reads them so).
+            if primvars
+                && matches!(kind, "float" | "float3" | "float4" | "int" | "normal3f" | "point3f" | "vector3f")
+                && !varname.is_empty()
+            {
+                // (A number's fallback reads as grey already: Self::value.)
                 return Ok((Source::Value(DVec4::ONE), Some((varname, reader_fallback.unwrap_or(DVec4::ZERO)))));
             }
             let (what, value) = instead(self, reader_fallback.or(Some(DVec4::ZERO)))?;

@@ -538,7 +538,7 @@ impl Walker<'_, '_> {
             }
         } else if let Some((name, fallback)) = self.material(here.binding.as_deref(), None, !double_sided)?.colour {
             // A material reading a primvar as its colour: the gprim's constant one.
-            let value = self.stage.vec3s(prim, &format!("primvars:{name}"), time).ok().flatten();
+            let value = self.stage.colours(prim, &format!("primvars:{name}"), time).ok().flatten();
             let c = value.and_then(|v| v.first().map(|c| c.as_vec3())).unwrap_or(fallback);
             mesh.colors = Some(vec![c.max(Vec3::ZERO); mesh.positions.len()]);
         }

@@ -485,6 +485,25 @@ impl Stage {
         })
     }
 
+    /// An array of colours for a primvar reader feeding a colour: 3-vectors
+    /// as they are, 4-vectors' RGB, and numbers (float, double, half or
+    /// int) as grey.
+    pub(super) fn colours(&self, prim: &str, name: &str, time: f64) -> Result<Option<Vec<DVec3>>, Failure> {
+        let f = |x: f32| f64::from(x);
+        self.array(prim, name, time, "an array of colours or numbers", |v| match v {
+            sdf::Value::Vec3fVec(v) => Some(v.iter().map(|v| DVec3::new(f(v.x), f(v.y), f(v.z))).collect()),
+            sdf::Value::Vec3dVec(v) => Some(v.iter().map(|v| DVec3::new(v.x, v.y, v.z)).collect()),
+            sdf::Value::Vec3hVec(v) => Some(v.iter().map(|v| DVec3::new(v.x.into(), v.y.into(), v.z.into())).collect()),
+            sdf::Value::Vec4fVec(v) => Some(v.iter().map(|v| DVec3::new(f(v.x), f(v.y), f(v.z))).collect()),
+            sdf::Value::Vec4dVec(v) => Some(v.iter().map(|v| DVec3::new(v.x, v.y, v.z)).collect()),
+            sdf::Value::FloatVec(v) => Some(v.into_iter().map(|x| DVec3::splat(f(x))).collect()),
+            sdf::Value::DoubleVec(v) => Some(v.into_iter().map(DVec3::splat).collect()),
+            sdf::Value::HalfVec(v) => Some(v.into_iter().map(|x| DVec3::splat(x.into())).collect()),
+            sdf::Value::IntVec(v) => Some(v.into_iter().map(|x| DVec3::splat(f64::from(x))).collect()),
+            _ => None,
+        })
+    }
+
     pub(super) fn quats(&self, prim: &str, name: &str, time: f64) -> Result<Option<Vec<DQuat>>, Failure> {
         self.array(prim, name, time, "an array of quaternions", |v| match v {
             sdf::Value::QuathVec(v) => {

@@ -115,7 +115,7 @@ pub(super) fn strands(
     }
     let colour_name = colour.map_or_else(|| "primvars:displayColor".to_string(), |(n, _)| format!("primvars:{n}"));
     let colours =
-        read_primvar(stage, prim, &colour_name, time, (layout, count), Interpolation::Constant, Stage::vec3s)?
+        read_primvar(stage, prim, &colour_name, time, (layout, count), Interpolation::Constant, Stage::colours)?
             .or_else(|| colour.map(|(_, fallback)| vec![fallback; points.len()]));
     if colours.as_ref().is_some_and(|c| c.iter().any(|c| !c.is_finite())) {
         return Err((at(&colour_name), "holds a value that is not finite".into()));
@@ -130,7 +130,7 @@ pub(super) fn strands(
     // Flat ribbons where normals are authored (they face the ray: Embree's
     // normal-oriented ribbons are not used, docs/design.md §4.3), tubes otherwise.
     let ribbon = stage.has_value(prim, "normals", time).map_err(|e| (at("normals"), e))?;
-    Ok(lay_out(&layout, &positions, &radii, colors.as_deref(), ribbon))
+    Ok(lay_out(layout, &positions, &radii, colors.as_deref(), ribbon))
 }
 
 /// The `type`, `basis`, `wrap` and `curveVertexCounts` of a curves prim,
