@@ -1,11 +1,11 @@
 #!/usr/bin/env python3
 """Writes DIR/fur.usda with usd-core: a ball of COUNT hairs (cubic
 B-spline curves of 6 control points each, 2 mm wide at the root and
-0.2 mm at the tip, brown through displayColor) and 256 sphere lights
-around it, with a camera. The curves scene docs/measurements.md
+0.2 mm at the tip, brown through displayColor) and LIGHTS sphere lights
+(256 unless given) around it, with a camera. The curves scene docs/measurements.md
 ("Curves and points") measures.
 
-    python3 ci/curves-scene.py DIR [COUNT]
+    python3 ci/curves-scene.py DIR [COUNT [LIGHTS]]
 """
 import math
 import os
@@ -18,6 +18,7 @@ from pxr import Gf, Sdf, Usd, UsdGeom, UsdLux, Vt
 def main():
     out = sys.argv[1]
     count = int(sys.argv[2]) if len(sys.argv) > 2 else 100_000
+    lights = int(sys.argv[3]) if len(sys.argv) > 3 else 256
     os.makedirs(out, exist_ok=True)
     stage = Usd.Stage.CreateNew(os.path.join(out, "fur.usda"))
     UsdGeom.SetStageUpAxis(stage, UsdGeom.Tokens.y)
@@ -46,11 +47,11 @@ def main():
     ball = UsdGeom.Sphere.Define(stage, "/Skin")
     ball.CreateRadiusAttr(1.0)
     ball.CreateDisplayColorAttr([Gf.Vec3f(0.3, 0.2, 0.15)])
-    for i in range(256):
-        a = 2 * math.pi * i / 256
+    for i in range(lights):
+        a = 2 * math.pi * i / lights
         light = UsdLux.SphereLight.Define(stage, f"/Lights/L{i}")
         light.CreateRadiusAttr(0.05)
-        light.CreateIntensityAttr(150.0)
+        light.CreateIntensityAttr(150.0 * 256 / lights)
         light.CreateColorAttr(Gf.Vec3f(1.0, 0.9 + 0.1 * math.sin(a), 0.8))
         UsdGeom.Xformable(light).AddTranslateOp().Set(Gf.Vec3d(4 * math.cos(a), 2 + math.sin(7 * a), 4 * math.sin(a)))
     camera = UsdGeom.Camera.Define(stage, "/Camera")
