@@ -346,6 +346,23 @@ mod tests {
     }
 
     #[test]
+    fn colours_are_interpolated_between_the_points_a_segment_passes_nearest() {
+        let values = [0.0f32, 1.0, 2.0, 3.0, 4.0];
+        let curves = |basis| Strands {
+            radii: vec![0.1; 5],
+            kind: StrandKind::Curves { basis, ribbon: false, segments: vec![0, 1] },
+        };
+        // A B-spline segment from its second point's neighbourhood to its third's.
+        assert_eq!(curves(CurveBasis::BSpline).interpolate(&values, 1, 0.25), 2.25);
+        assert_eq!(curves(CurveBasis::CatmullRom).interpolate(&values, 0, 1.0), 2.0);
+        // Linear and Bezier segments run between their first and last points.
+        assert_eq!(curves(CurveBasis::Linear).interpolate(&values, 1, 0.5), 1.5);
+        assert_eq!(curves(CurveBasis::Bezier).interpolate(&values, 0, 0.5), 1.5);
+        let spheres = Strands { radii: vec![0.1; 5], kind: StrandKind::Spheres };
+        assert_eq!(spheres.interpolate(&values, 3, 0.7), 3.0);
+    }
+
+    #[test]
     fn varying_values_sit_at_segment_ends() {
         // A Bezier curve of 7 points has 2 segments and 3 varying values,
         // at points 0, 3 and 6; the handles take the nearer end's.
