@@ -648,6 +648,19 @@ impl CurveBasis {
             Self::Bezier | Self::BSpline | Self::CatmullRom => 4,
         }
     }
+
+    /// The two control points (offsets from a segment's first) that a
+    /// quantity given per control point is interpolated between along the
+    /// segment: its ends for linear and Bezier segments, the middle two
+    /// for B-spline and Catmull-Rom ones (which pass near or through them).
+    #[must_use]
+    pub fn ends(self) -> (usize, usize) {
+        match self {
+            Self::Linear => (0, 1),
+            Self::Bezier => (0, 3),
+            Self::BSpline | Self::CatmullRom => (1, 2),
+        }
+    }
 }
 
 /// How a curve's cross-section is drawn.

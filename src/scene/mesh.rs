@@ -55,38 +55,9 @@ pub enum StrandKind {
     Curves { basis: CurveBasis, ribbon: bool, segments: Vec<u32> },
 }
 
-/// The basis of a curve's control points (USD's `basis`; `type = linear`).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum CurveBasis {
-    Linear,
-    Bezier,
-    BSpline,
-    CatmullRom,
-}
-
-impl CurveBasis {
-    /// How many consecutive control points one segment reads.
-    #[must_use]
-    pub fn order(self) -> usize {
-        match self {
-            Self::Linear => 2,
-            Self::Bezier | Self::BSpline | Self::CatmullRom => 4,
-        }
-    }
-
-    /// The two control points (offsets from a segment's first) that a
-    /// quantity given per control point is interpolated between along the
-    /// segment: its ends for linear and Bezier segments, the middle two
-    /// for B-spline and Catmull-Rom ones (which pass near or through them).
-    #[must_use]
-    pub fn ends(self) -> (usize, usize) {
-        match self {
-            Self::Linear => (0, 1),
-            Self::Bezier => (0, 3),
-            Self::BSpline | Self::CatmullRom => (1, 2),
-        }
-    }
-}
+/// The basis of a curve's control points (USD's `basis`; `type =
+/// linear`): Embree's curve bases are the schema's.
+pub use crate::embree::CurveBasis;
 
 impl Strands {
     /// The value of a per-position quantity at parameter `u` of primitive

@@ -10,7 +10,7 @@ use super::surface::SurfacePoint;
 use crate::embree::{self, AlphaMask, Device, EmbreeError, Hit, MeshError, Ray};
 use crate::light::Lights;
 use crate::scene::material::{reflect, Material, NormalMap, TexCoords};
-use crate::scene::mesh::{CurveBasis, Mesh, StrandKind, Strands};
+use crate::scene::mesh::{Mesh, StrandKind, Strands};
 use crate::scene::texture::Texture;
 use crate::scene::Scene;
 
@@ -324,14 +324,8 @@ fn attach_mesh(
         return match &strands.kind {
             StrandKind::Spheres => builder.attach_spheres(&points),
             StrandKind::Curves { basis, ribbon, segments } => {
-                let basis = match basis {
-                    CurveBasis::Linear => embree::CurveBasis::Linear,
-                    CurveBasis::Bezier => embree::CurveBasis::Bezier,
-                    CurveBasis::BSpline => embree::CurveBasis::BSpline,
-                    CurveBasis::CatmullRom => embree::CurveBasis::CatmullRom,
-                };
                 let shape = if *ribbon { embree::CurveShape::Flat } else { embree::CurveShape::Round };
-                builder.attach_curves(basis, shape, &points, segments)
+                builder.attach_curves(*basis, shape, &points, segments)
             }
         };
     }

@@ -154,17 +154,7 @@ pub(super) fn mesh(
         stage.ints(prim, "faceVertexCounts", time).map_err(|e| (at("faceVertexCounts"), e))?.unwrap_or_default();
     let indices =
         stage.ints(prim, "faceVertexIndices", time).map_err(|e| (at("faceVertexIndices"), e))?.unwrap_or_default();
-    if let Some(p) =
-        points.iter().find(|p| !p.is_finite() || p.abs().max_element() > f64::from(crate::scene::MAX_COORDINATE))
-    {
-        return Err((
-            at("points"),
-            format!(
-                "a point must be finite and within +/-{:e} (before the stage's metersPerUnit), got {p}",
-                crate::scene::MAX_COORDINATE
-            ),
-        ));
-    }
+    check_points(prim, &points)?;
     if let Some((face, count)) = counts.iter().enumerate().find(|(_, &c)| c < 0) {
         return Err((at("faceVertexCounts"), format!("face {face}'s count is {count}: a count cannot be negative")));
     }
@@ -603,6 +593,20 @@ pub(super) fn add_tangents(mesh: &mut Mesh) {
 
 /// The mesh an intrinsic gprim stands for, in its own space; None for a
 /// type that is not one.
+/// Every point of `prim` finite and within the scene's coordinate limit.
+pub(super) fn check_points(prim: &str, points: &[DVec3]) -> Result<(), Located> {
+    match points.iter().find(|p| !p.is_finite() || p.abs().max_element() > f64::from(crate::scene::MAX_COORDINATE)) {
+        Some(p) => Err((
+            format!("{prim}.points"),
+            format!(
+                "a point must be finite and within +/-{:e} (before the stage's metersPerUnit), got {p}",
+                crate::scene::MAX_COORDINATE
+            ),
+        )),
+        None => Ok(()),
+    }
+}
+
 pub(super) fn gprim(stage: &Stage, prim: &str, type_name: &str, time: f64) -> Result<Option<Mesh>, Located> {
     let read = Reader { stage, prim, schema: type_name, time };
     let positive = |attribute: &str| -> Result<f32, Located> {

@@ -94,17 +94,7 @@ pub(super) fn strands(
 ) -> Result<Mesh, Located> {
     let at = |attribute: &str| format!("{prim}.{attribute}");
     let points = stage.vec3s(prim, "points", time).map_err(|e| (at("points"), e))?.unwrap_or_default();
-    if let Some(p) =
-        points.iter().find(|p| !p.is_finite() || p.abs().max_element() > f64::from(crate::scene::MAX_COORDINATE))
-    {
-        return Err((
-            at("points"),
-            format!(
-                "a point must be finite and within +/-{:e} (before the stage's metersPerUnit), got {p}",
-                crate::scene::MAX_COORDINATE
-            ),
-        ));
-    }
+    super::geometry::check_points(prim, &points)?;
     let layout = if type_name == "Points" { None } else { Some(curve_layout(stage, prim, time, points.len())?) };
     let (layout, count) = (layout.as_ref(), points.len());
     // Without metadata `widths` is per vertex (UsdGeomCurves), a primvar constant.
