@@ -41,7 +41,7 @@ use lightcuts::lightcut::multidimensional::MULTIDIMENSIONAL_DEFAULTS;
 use lightcuts::lightcut::stochastic::STOCHASTIC_DEFAULTS;
 use lightcuts::lightcut::{self, CutSettings};
 use lightcuts::render::integrator::Integrator;
-use lightcuts::render::{self, Aovs, DirectLighting, PassSettings, PixelBounds};
+use lightcuts::render::{self, Aovs, DirectLighting, PassSettings, PixelBounds, TextureFilter};
 use lightcuts::scene::mesh::Mesh;
 use lightcuts::scene::Scene;
 use lightcuts::shading::Geometry;
@@ -292,6 +292,7 @@ fn render_lit(scene: &Scene, lights: &[Lights]) -> Outcome {
         bounds: PixelBounds::full(4, 3),
         aovs: Aovs { cryptomatte: true, ..Aovs::all(true) },
         transparent: false,
+        texture_filter: TextureFilter::Mip,
     };
     let trees = lightcut::build_trees(lights, 1);
     // The multidimensional mode builds every tree as a tree (as its session does).
@@ -316,6 +317,7 @@ fn render_lit(scene: &Scene, lights: &[Lights]) -> Outcome {
             emitters: emitters.as_ref(),
             spp: settings.spp,
             path_depth,
+            footprint: Some(camera.pixel_footprint(settings.spp)),
         };
         let (film, _) = render::render(&integrator, &camera, &settings, &|_| {}).unwrap();
         assert!(film.non_finite().is_empty(), "NaN or Inf reached the film: {:?}", film.non_finite());

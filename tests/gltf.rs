@@ -9,6 +9,7 @@ use common::*;
 use glam::{DVec3, Vec3};
 use lightcuts::embree::{Device, Ray};
 use lightcuts::light::Lights;
+use lightcuts::scene::material::TexCoords;
 use lightcuts::scene::{LightSource, Scene};
 use lightcuts::shading::pbr::Pbr;
 use lightcuts::shading::{BatchBuffers, Geometry, LightBatch};
@@ -348,21 +349,21 @@ fn materials_map_onto_the_metallic_roughness_brdf_with_their_textures() {
     // The offset of half the texture moves the left column to u in [0.5, 1];
     // the white texel stays at the top (small v). The base colour is the
     // texture times the factor, whatever the metallic.
-    let at = |u: f32, v: f32| floor.albedo_at(&[glam::Vec2::new(u, v); 2], &scene.textures);
+    let at = |u: f32, v: f32| floor.albedo_at(&TexCoords::at([glam::Vec2::new(u, v); 2]), &scene.textures);
     let grey = lightcuts::util::color::srgb_to_linear(128.0 / 255.0);
     assert!((at(0.75, 0.25) - Vec3::new(0.5, 1.0, 1.0)).length() < 1e-3, "{}", at(0.75, 0.25));
     for (u, v) in [(0.25, 0.25), (0.75, 0.75), (0.25, 0.75)] {
         assert!((at(u, v).y - grey).abs() < 1e-3, "({u}, {v}): {}", at(u, v));
     }
     let metal = &scene.materials[scene.meshes[1].material];
-    let base = metal.albedo_at(&[glam::Vec2::ZERO; 2], &scene.textures);
+    let base = metal.albedo_at(&TexCoords::default(), &scene.textures);
     assert_eq!(base, Vec3::new(0.9, 0.6, 0.3), "a metal's base colour is its albedo");
     let pbr = metal.pbr.as_ref().unwrap();
     // The texture multiplies the factors, read as linear data (64 / 255 is
     // 0.251, where an sRGB decode would give 0.051). glTF's uv (0.25, y) is
     // the left texel; ours has v up.
-    let left = Pbr::of(pbr, base, &[glam::Vec2::new(0.25, 0.5); 2], &scene.textures);
-    let right = Pbr::of(pbr, base, &[glam::Vec2::new(0.75, 0.5); 2], &scene.textures);
+    let left = Pbr::of(pbr, base, &TexCoords::at([glam::Vec2::new(0.25, 0.5); 2]), &scene.textures);
+    let right = Pbr::of(pbr, base, &TexCoords::at([glam::Vec2::new(0.75, 0.5); 2]), &scene.textures);
     assert_eq!(left.metallic, 0.0);
     assert!((left.alpha - 0.8f32.powi(2)).abs() < 1e-6, "left roughness 0.8: alpha {}", left.alpha);
     assert_eq!(right.metallic, 1.0);
@@ -397,7 +398,7 @@ fn specular_textures_scale_the_dielectric_reflectance_texel_by_texel() {
     assert!(!scene.warnings.iter().any(|w| w.contains("textures ignored")), "{:?}", scene.warnings);
     let floor = &scene.materials[scene.meshes[0].material];
     let pbr = floor.pbr.as_ref().unwrap();
-    let at = |u: f32| Pbr::of(pbr, Vec3::splat(0.5), &[glam::Vec2::new(u, 0.5); 2], &scene.textures);
+    let at = |u: f32| Pbr::of(pbr, Vec3::splat(0.5), &TexCoords::at([glam::Vec2::new(u, 0.5); 2]), &scene.textures);
     let (left, right) = (at(0.25), at(0.75));
     let close = |a: Vec3, b: Vec3| (a - b).abs().max_element() < 1e-6;
     assert!(close(left.f0, Vec3::new(0.04, 0.02, 0.04) * 0.8), "left f0 {}", left.f0);
@@ -428,7 +429,8 @@ fn texture_transform_rotation_and_scale_follow_the_extension() {
         }
     }
     let texel_at = |scene: &Scene, u: f32, v: f32| {
-        let rgb = scene.materials[scene.meshes[0].material].albedo_at(&[glam::Vec2::new(u, v); 2], &scene.textures);
+        let rgb = scene.materials[scene.meshes[0].material]
+            .albedo_at(&TexCoords::at([glam::Vec2::new(u, v); 2]), &scene.textures);
         let level = |x: f32| {
             levels.iter().position(|&l| (lightcuts::util::color::srgb_to_linear(f32::from(l) / 255.0) - x).abs() < 1e-4)
         };

@@ -48,3 +48,34 @@ fn a_stage_reads_float_textures_without_a_warning() {
         assert!(!stderr.contains(name), "{name}: {stderr}");
     }
 }
+
+/// scenes/checker.toml at 1 spp: towards the horizon its checks shrink
+/// below a pixel. Read at each hit they alias into noise; through the MIP
+/// map chosen by the pixel's footprint (docs/design.md §5.3, "MIP maps")
+/// the far floor comes near each pixel's own average of the checks, which
+/// a 64-spp render reading the image at each hit estimates. Filtering
+/// keeps the image the same bits for any thread count and window.
+#[test]
+fn far_checks_through_the_mip_map_come_near_each_pixel_average() {
+    let dir = TempDir::new("texture-mip");
+    let scene = scenes().join("checker.toml");
+    let film = ["--resolution", "160x90", "--bounded"];
+    let render_with = |name: &str, more: &[&str]| {
+        let image = render(&scene, &dir.path(name), &[&film[..], more].concat());
+        common::luminance(&image)
+    };
+    let reference = render_with("reference.exr", &["--spp", "64", "--texture-filter", "off"]);
+    let unfiltered = render_with("off.exr", &["--spp", "1", "--texture-filter", "off"]);
+    let mip = render_with("mip.exr", &["--spp", "1"]);
+    // The horizon is near row 42 of 90: the floor's far rows.
+    let far = 42 * 160..56 * 160;
+    let error = |test: &[f64]| {
+        let squares: f64 = far.clone().map(|i| (test[i] - reference[i]).powi(2)).sum();
+        let mean = far.clone().map(|i| reference[i]).sum::<f64>() / far.len() as f64;
+        (squares / far.len() as f64).sqrt() / mean
+    };
+    let (unfiltered, mip) = (error(&unfiltered), error(&mip));
+    assert!(unfiltered > 0.4, "the unfiltered far floor should alias: relative RMSE {unfiltered}");
+    assert!(mip < 0.5 * unfiltered, "through the MIP map: relative RMSE {mip}, unfiltered {unfiltered}");
+    common::assert_same_bits_for_any_threads_and_window(&dir, &scene, 96, &["--resolution", "96x54", "--bounded"]);
+}

@@ -50,6 +50,11 @@ pub struct RenderArgs {
     /// still lights the scene and shows in mirrors.
     #[arg(long)]
     pub transparent: bool,
+    /// How textures are read: `mip` filters them over each pixel's
+    /// footprint by a MIP map (docs/design.md §5.3); `off` reads the image
+    /// at each hit, which aliases where a texel is smaller than a pixel.
+    #[arg(long, value_name = "FILTER", value_parser = crate::render::TextureFilter::parse, default_value = "mip")]
+    pub texture_filter: crate::render::TextureFilter,
     /// Also write a tone-mapped sRGB PNG preview.
     #[arg(long, value_name = "PREVIEW.png")]
     pub png: Option<PathBuf>,
@@ -112,6 +117,7 @@ impl RenderArgs {
         }
         settings.aovs = aovs;
         settings.transparent = self.transparent;
+        settings.texture_filter = self.texture_filter;
         Ok((settings, mode))
     }
 }
@@ -457,7 +463,16 @@ pub fn pass_settings(
             PixelBounds { x0, x1, y0, y1 }
         }
     };
-    Ok(PassSettings { width, height, spp, seed, bounds, aovs: Aovs::all(false), transparent: false })
+    Ok(PassSettings {
+        width,
+        height,
+        spp,
+        seed,
+        bounds,
+        aovs: Aovs::all(false),
+        transparent: false,
+        texture_filter: crate::render::TextureFilter::Mip,
+    })
 }
 
 /// The cut settings of a lightcuts render, validated.

@@ -325,6 +325,10 @@ pub struct Integrator<'a> {
     /// The path method's `max_depth` (docs/design.md §6.7); None: camera
     /// paths follow mirrors only, to `max_mirror_depth`.
     pub path_depth: Option<u32>,
+    /// The camera's pixel footprint, which filters the textures a camera
+    /// path reads (docs/design.md §5.3, "MIP maps"); None reads them
+    /// unfiltered.
+    pub footprint: Option<crate::scene::PixelFootprint>,
 }
 
 impl<'a> Integrator<'a> {
@@ -462,7 +466,7 @@ impl<'a> Integrator<'a> {
         sample: SampleKey,
         depth: u32,
     ) -> (SurfacePoint<'a>, Option<(&'a EmitterSampling<'a>, Bsdf)>) {
-        let mut sp = self.geometry.surface(ray, hit);
+        let mut sp = self.geometry.surface_seen(ray, hit, self.footprint.as_ref());
         // What the point draws (the stochastic cut's lights, points on
         // triangle lights) is stratified over the pixel's samples
         // (docs/design.md §10.8); keyed by the bounce too.
@@ -826,7 +830,7 @@ impl<'a> Integrator<'a> {
                     camera_rays += 1;
                     let mut ray = ray_at(cx, cy);
                     let anchor = self.first_hit(&mut ray).and_then(|hit| {
-                        let mut sp = self.geometry.surface(&ray, &hit);
+                        let mut sp = self.geometry.surface_seen(&ray, &hit, self.footprint.as_ref());
                         let material = self.geometry.scene.meshes[self.geometry.mesh_of(&hit)].material;
                         if sp.material.unlit {
                             return None;

@@ -45,6 +45,30 @@ pub struct PassSettings {
     /// nothing give RGB 0 and alpha 0 instead of the environment and
     /// alpha 1. The environment still lights the scene and shows in mirrors.
     pub transparent: bool,
+    /// How a camera path's textures are read.
+    pub texture_filter: TextureFilter,
+}
+
+/// How a camera path's textures are read (docs/design.md §5.3, "MIP maps").
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum TextureFilter {
+    /// Through the MIP map, over the camera pixel's footprint.
+    #[default]
+    Mip,
+    /// The image itself at each hit (bilinear, or the nearest texel): what
+    /// aliases where a texel is smaller than a pixel.
+    Off,
+}
+
+impl TextureFilter {
+    /// `mip` or `off` (`render --texture-filter`).
+    pub fn parse(s: &str) -> Result<Self, String> {
+        match s {
+            "mip" => Ok(Self::Mip),
+            "off" => Ok(Self::Off),
+            _ => Err(format!("expected mip or off, got '{s}'")),
+        }
+    }
 }
 
 /// What a pass reports while it runs, through the caller's callback (the

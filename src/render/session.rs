@@ -5,7 +5,7 @@
 use std::time::{Duration, Instant};
 
 use super::integrator::{DirectLighting, Integrator};
-use super::{render, thread_pool, vpl, Film, PassProgress, PassSettings, PassStats};
+use super::{render, thread_pool, vpl, Film, PassProgress, PassSettings, PassStats, TextureFilter};
 use crate::embree::{Device, EmbreeError};
 use crate::light::{LightKind, Lights};
 use crate::lightcut::CutSettings;
@@ -228,6 +228,7 @@ impl<'s> Session<'s> {
         };
         let emission_group = self.scene.emission_groups();
         let emitters = super::emitter_sampling::EmitterSampling::of(self.scene, settings.spp);
+        let camera = self.scene.camera(settings.width, settings.height);
         let integrator = Integrator {
             geometry: &self.geometry,
             lights: &lights,
@@ -241,8 +242,8 @@ impl<'s> Session<'s> {
                 Some(Indirect::Path(path)) => Some(path.max_depth),
                 _ => None,
             },
+            footprint: (settings.texture_filter == TextureFilter::Mip).then(|| camera.pixel_footprint(settings.spp)),
         };
-        let camera = self.scene.camera(settings.width, settings.height);
         let (film, stats) = self.pool.install(|| render(&integrator, &camera, settings, progress))?;
         let seconds = start.elapsed().as_secs_f64();
         let (tree_list, tree_bytes) = match &trees {
@@ -317,6 +318,7 @@ intensity = [1, 1, 1]
             bounds: PixelBounds::full(2, 2),
             aovs: Aovs::all(true),
             transparent: false,
+            texture_filter: TextureFilter::Mip,
         };
         let result = session.render(&settings, mode, &|_| {}).unwrap();
         assert_eq!(result.stats.camera_rays, 4);
@@ -366,6 +368,7 @@ intensity = [1, 1, 1]
             bounds: PixelBounds::full(2, 2),
             aovs: Aovs::all(true),
             transparent: false,
+            texture_filter: TextureFilter::Mip,
         };
         let modes = [Mode::Exact, Mode::Bounded(CutSettings::default())];
         for mode in modes {
@@ -400,6 +403,7 @@ intensity = [1, 1, 1]
             bounds: PixelBounds::full(64, 48),
             aovs: Aovs::all(true),
             transparent: false,
+            texture_filter: TextureFilter::Mip,
         };
         let tiles = std::sync::atomic::AtomicUsize::new(0);
         // Embree reports an error after the third tile, as a failure inside

@@ -184,6 +184,20 @@ impl Camera {
         self.forward + sx * self.right + sy * self.up
     }
 
+    /// How far apart the points neighbouring pixels see are, at `spp`
+    /// samples a pixel (docs/design.md §5.3, "MIP maps").
+    #[must_use]
+    pub fn pixel_footprint(&self, spp: u32) -> PixelFootprint {
+        PixelFootprint {
+            eye: self.eye,
+            eye_end: self.end.map(|(eye_end, _)| eye_end),
+            right: self.right,
+            // A pixel's step on the film, whose distance from the eye is 1.
+            spread: 2.0 * self.tan_half_fov_y / self.height as f32,
+            scale: (1.0 / (spp.max(1) as f32).sqrt()).max(0.125),
+        }
+    }
+
     /// The camera ray through film position (x, y) and the lens point
     /// `lens` of the unit disc (ignored by a pinhole). A thin lens
     /// (pbrt-v4's `PerspectiveCamera`, docs/design.md §13.1): the ray
@@ -200,6 +214,60 @@ impl Camera {
         let focus = self.eye + self.focus_distance * self.pinhole_direction(x, y);
         let origin = self.eye + self.lens_radius * (lens.x * self.right + lens.y * self.up);
         Ray { origin, direction: (focus - origin).normalize(), t_near: 0.0, t_far: f32::INFINITY, time: self.time }
+    }
+}
+
+/// pbrt-v4's `CameraBase::Approximate_dp_dxy`: the rays through the
+/// next pixel along the film's x and y, approximated as the ray from the
+/// eye to a point turned by one pixel's angle (the one at the film's
+/// centre), meet the plane tangent to a surface at some distance from the
+/// point the pixel's ray meets. That distance, scaled by
+/// max(1/8, 1/sqrt(spp)) (a pixel's samples share its area), is the
+/// footprint texture filtering needs, at the camera's hits and, as pbrt-v4
+/// approximates it, at a path's later ones. A lens's spread is not counted.
+#[derive(Debug, Clone, Copy)]
+pub struct PixelFootprint {
+    eye: Vec3,
+    /// Where the eye is at the shutter's close, when the camera moves.
+    eye_end: Option<Vec3>,
+    /// The film's x axis (unit).
+    right: Vec3,
+    /// tan of the angle between neighbouring pixels' rays at the film's centre.
+    spread: f32,
+    /// max(1/8, 1/sqrt(spp)).
+    scale: f32,
+}
+
+/// A footprint's stand-in where the neighbouring ray misses the tangent
+/// plane (a surface seen edge-on): far wider than any texture.
+const EDGE_ON: f32 = 1e8;
+
+impl PixelFootprint {
+    /// The change of the point seen, scene units, from one pixel to the
+    /// next along the film's x and y, at point `p` of a surface of normal
+    /// `n` (either side) seen at `time` of the shutter.
+    #[must_use]
+    pub fn dp_dxy(&self, p: Vec3, n: Vec3, time: f32) -> [Vec3; 2] {
+        let eye = self.eye_end.map_or(self.eye, |end| self.eye.lerp(end, time));
+        let to_p = p - eye;
+        let distance = to_p.length();
+        if !(distance > 0.0 && distance.is_finite()) {
+            return [Vec3::ZERO; 2];
+        }
+        let d = to_p / distance;
+        // The film's axes made square to the direction to p.
+        let x = (self.right - d * d.dot(self.right)).try_normalize().unwrap_or_else(|| d.any_orthonormal_vector());
+        let y = d.cross(x);
+        [x, y].map(|axis| {
+            let direction = d + self.spread * axis;
+            let t = n.dot(to_p) / n.dot(direction);
+            let step = eye + t * direction - p;
+            if t > 0.0 && step.is_finite() {
+                self.scale * step
+            } else {
+                axis * EDGE_ON
+            }
+        })
     }
 }
 
@@ -231,6 +299,34 @@ mod tests {
     }
 
     use super::*;
+
+    #[test]
+    fn a_pixel_footprint_is_its_angle_times_the_distance_over_the_cosine() {
+        let camera = Camera::new(Vec3::ZERO, Vec3::NEG_Z, Vec3::Y, 60.0, 200, 100);
+        let angle = 2.0 * (30f32.to_radians()).tan() / 100.0;
+        // A wall facing the camera 10 away: a pixel's angle times 10,
+        // along the film's x and y; at 16 spp, a quarter of it.
+        let [dx, dy] = camera.pixel_footprint(1).dp_dxy(Vec3::new(0.0, 0.0, -10.0), Vec3::Z, 0.0);
+        assert!((dx - Vec3::X * 10.0 * angle).length() < 1e-6, "{dx}");
+        assert!((dy.length() - 10.0 * angle).abs() < 1e-6 && dy.dot(dx).abs() < 1e-9, "{dy}");
+        let [quarter, _] = camera.pixel_footprint(16).dp_dxy(Vec3::new(0.0, 0.0, -10.0), Vec3::Z, 0.0);
+        assert!((quarter - dx / 4.0).length() < 1e-7);
+        // A floor 1 below the eye, seen 10 away: across the view a pixel's
+        // angle times the distance; along it, where the ray turned down by
+        // atan(angle) meets the floor (nearly d² angle / height, the
+        // grazing stretch).
+        let p = Vec3::new(0.0, -1.0, -10.0);
+        let [across, along] = camera.pixel_footprint(1).dp_dxy(p, Vec3::Y, 0.0);
+        assert!((across.length() - p.length() * angle).abs() < 1e-5, "{across}");
+        let below = (0.1f32).atan() + angle.atan();
+        let expected = 10.0 - 1.0 / below.tan();
+        assert!((along.length() / expected - 1.0).abs() < 1e-4, "{along} against {expected}");
+        assert!(along.length() > 0.8 * p.length_squared() * angle);
+        // Edge-on, or at the eye: no footprint to speak of.
+        let [edge, _] = camera.pixel_footprint(1).dp_dxy(Vec3::new(0.0, 0.0, -10.0), Vec3::Y, 0.0);
+        assert!(edge.length() >= 1e7);
+        assert_eq!(camera.pixel_footprint(1).dp_dxy(Vec3::ZERO, Vec3::Y, 0.0), [Vec3::ZERO; 2]);
+    }
 
     #[test]
     fn centre_ray_looks_at_the_target_and_edges_span_the_fov() {

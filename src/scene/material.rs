@@ -16,8 +16,32 @@ pub enum Albedo {
 }
 
 /// A shading point's texture coordinates: sets 0 and 1 (glTF's
-/// `TEXCOORD_0` and `TEXCOORD_1`; set 1 is set 0 where a mesh has one set).
-pub type TexCoords = [Vec2; 2];
+/// `TEXCOORD_0` and `TEXCOORD_1`; set 1 is set 0 where a mesh has one set),
+/// and how each changes from one pixel to the next along the film's x and
+/// y (pbrt-v4's dudx, dvdx, dudy, dvdy), which choose the MIP level
+/// (docs/design.md §5.3, "MIP maps"): zero where the point is not seen
+/// through a pixel, which reads the image itself.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct TexCoords {
+    pub uv: [Vec2; 2],
+    pub duv_dx: [Vec2; 2],
+    pub duv_dy: [Vec2; 2],
+}
+
+impl TexCoords {
+    /// Coordinates `uv` (sets 0 and 1) of no footprint.
+    #[must_use]
+    pub fn at(uv: [Vec2; 2]) -> Self {
+        Self { uv, ..Self::default() }
+    }
+
+    /// The same coordinates without their footprint: what reads the image
+    /// itself, as light sampling does (emission, docs/design.md §5.3).
+    #[must_use]
+    pub fn unfiltered(&self) -> Self {
+        Self::at(self.uv)
+    }
+}
 
 /// A texture a material reads: an index into `Scene::textures`, the map
 /// from the mesh's uv to the texture's (repeats, glTF's v axis and
@@ -31,10 +55,15 @@ pub struct TextureRef {
 }
 
 impl TextureRef {
-    /// The texture's value at a point of texture coordinates `uvs`.
+    /// The texture's value at a point of texture coordinates `uvs`,
+    /// filtered over their footprint (the transform's linear part carries
+    /// the footprint into the texture's coordinates).
     #[must_use]
     pub fn lookup(&self, uvs: &TexCoords, textures: &[Texture]) -> Vec3 {
-        textures[self.texture].lookup(self.transform.transform_point2(uvs[self.set.min(1)]))
+        let set = self.set.min(1);
+        let uv = self.transform.transform_point2(uvs.uv[set]);
+        let linear = self.transform.matrix2;
+        textures[self.texture].filtered(uv, linear * uvs.duv_dx[set], linear * uvs.duv_dy[set])
     }
 }
 
@@ -160,7 +189,9 @@ impl Material {
     pub fn emission_at(&self, uvs: &TexCoords, textures: &[Texture]) -> Vec3 {
         match &self.emissive_texture {
             None => self.emission,
-            Some(t) => self.emission * t.lookup(uvs, textures),
+            // Unfiltered, as light sampling reads it: a path that hits an
+            // emitter and one that samples it must see the same radiance.
+            Some(t) => self.emission * t.lookup(&uvs.unfiltered(), textures),
         }
     }
 

@@ -108,7 +108,18 @@ impl Mesh {
             })
         };
         let uv = interpolate(&self.uvs).unwrap_or(Vec2::new(u, v));
-        [uv, interpolate(&self.uvs1).unwrap_or(uv)]
+        TexCoords::at([uv, interpolate(&self.uvs1).unwrap_or(uv)])
+    }
+
+    /// The texture coordinates of triangle `triangle`'s corners, sets 0
+    /// and 1, as [`Mesh::tex_coords`] interpolates them (the barycentric
+    /// corners (0, 0), (1, 0), (0, 1) where the mesh has none).
+    #[must_use]
+    pub fn corner_tex_coords(&self, triangle: usize) -> [[Vec2; 3]; 2] {
+        let tri = self.triangles[triangle];
+        let corners = |uvs: &Option<Vec<Vec2>>| uvs.as_ref().map(|uvs| tri.map(|i| uvs[i as usize]));
+        let set0 = corners(&self.uvs).unwrap_or([Vec2::ZERO, Vec2::X, Vec2::Y]);
+        [set0, corners(&self.uvs1).unwrap_or(set0)]
     }
 
     /// Sets per-vertex tangents from per-corner ones (MikkTSpace's: one per

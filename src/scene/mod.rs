@@ -24,7 +24,7 @@ use std::path::{Path, PathBuf};
 
 use glam::Vec3;
 
-pub use camera::Camera;
+pub use camera::{Camera, PixelFootprint};
 pub use environment::{Environment, EnvironmentMap};
 pub use error::SceneError;
 pub use groups::LightGroups;

@@ -12,7 +12,7 @@ use crate::light::Lights;
 use crate::scene::material::{reflect, Material, NormalMap, TexCoords};
 use crate::scene::mesh::{Mesh, StrandKind, Strands};
 use crate::scene::texture::Texture;
-use crate::scene::Scene;
+use crate::scene::{PixelFootprint, Scene};
 
 /// Embree's view of a scene plus what shading needs to interpret its hits.
 pub struct Geometry<'s> {
@@ -131,8 +131,15 @@ impl<'s> Geometry<'s> {
     }
 
     /// The surface point of a hit along `ray`, in the world, with normals
-    /// facing the ray's origin.
+    /// facing the ray's origin; its textures read unfiltered.
     pub fn surface(&self, ray: &Ray, hit: &Hit) -> SurfacePoint<'s> {
+        self.surface_seen(ray, hit, None)
+    }
+
+    /// The surface point of a hit along `ray`, its textures filtered over
+    /// the `footprint` of a camera's pixel there (docs/design.md §5.3, "MIP
+    /// maps"), if one is given.
+    pub fn surface_seen(&self, ray: &Ray, hit: &Hit, footprint: Option<&PixelFootprint>) -> SurfacePoint<'s> {
         let mesh = &self.scene.meshes[self.mesh_of(hit)];
         if let Some(strands) = &mesh.strands {
             return self.strand_surface(ray, hit, mesh, strands);
@@ -154,7 +161,15 @@ impl<'s> Geometry<'s> {
         if ng.dot(wo) < 0.0 {
             ng = -ng;
         }
-        let uvs = mesh.tex_coords(hit.primitive as usize, u, v);
+        let mut uvs = mesh.tex_coords(hit.primitive as usize, u, v);
+        if let Some(footprint) = footprint {
+            let dp_dxy = footprint.dp_dxy(p, ng, ray.time);
+            let corners = mesh.corner_tex_coords(hit.primitive as usize);
+            for (set, corners) in corners.into_iter().enumerate() {
+                let [dx, dy] = uv_differentials([p0, p1, p2], corners, dp_dxy);
+                (uvs.duv_dx[set], uvs.duv_dy[set]) = (dx, dy);
+            }
+        }
         let material = &self.scene.materials[mesh.material];
         let mut n = match &mesh.normals {
             Some(normals) => {
@@ -171,7 +186,7 @@ impl<'s> Geometry<'s> {
                         let [t0, t1, t2] = tri.map(|i| tangents[i as usize]);
                         let tangent = (w * t0 + u * t1 + v * t2).truncate();
                         let tangent = placement.map_or(tangent, |p| p.to_world.matrix3 * tangent);
-                        perturbed(n, tangent, t0.w, map, uvs[map.set.min(1)], &self.scene.textures)
+                        perturbed(n, tangent, t0.w, map, uvs.uv[map.set.min(1)], &self.scene.textures)
                     }
                     _ => n,
                 }
@@ -214,7 +229,7 @@ impl<'s> Geometry<'s> {
         }
         let uv = Vec2::new(hit.u, hit.v);
         let colour = mesh.colors.as_ref().map(|colors| strands.interpolate(colors, hit.primitive as usize, hit.u));
-        let frame = Frame { p, n: ng, ng, wo, uvs: [uv, uv], colour, emits: false };
+        let frame = Frame { p, n: ng, ng, wo, uvs: TexCoords::at([uv, uv]), colour, emits: false };
         self.shaded(ray, hit, frame, &self.scene.materials[mesh.material])
     }
 
@@ -257,6 +272,33 @@ impl<'s> Geometry<'s> {
             },
         }
     }
+}
+
+/// How texture coordinates change from one pixel to the next along the
+/// film's x and y on a triangle of world corners `p` and texture
+/// coordinates `uv`, the point seen moving by `dp_dxy` (pbrt-v4's
+/// `Triangle::InteractionFromIntersection` for dp/du and dp/dv, then
+/// `SurfaceInteraction::ComputeDifferentials`: the least-squares uv step
+/// whose dp/du du + dp/dv dv is nearest each step, each change clamped to
+/// ±1e8). A triangle whose uvs or corners are degenerate gets none (its
+/// textures read unfiltered).
+fn uv_differentials(p: [Vec3; 3], uv: [Vec2; 3], dp_dxy: [Vec3; 2]) -> [Vec2; 2] {
+    let (duv02, duv12) = (uv[0] - uv[2], uv[1] - uv[2]);
+    let (dp02, dp12) = (p[0] - p[2], p[1] - p[2]);
+    let determinant = duv02.x * duv12.y - duv02.y * duv12.x;
+    let dpdu = (duv12.y * dp02 - duv02.y * dp12) / determinant;
+    let dpdv = (duv02.x * dp12 - duv12.x * dp02) / determinant;
+    let (a00, a01, a11) = (dpdu.dot(dpdu), dpdu.dot(dpdv), dpdv.dot(dpdv));
+    let inverse = 1.0 / (a00 * a11 - a01 * a01);
+    if !(inverse.is_finite() && dpdu.is_finite() && dpdv.is_finite()) {
+        return [Vec2::ZERO; 2];
+    }
+    dp_dxy.map(|step| {
+        let (b0, b1) = (dpdu.dot(step), dpdv.dot(step));
+        let duv = Vec2::new(a11 * b0 - a01 * b1, a00 * b1 - a01 * b0) * inverse;
+        let clamp = |x: f32| if x.is_finite() { x.clamp(-1e8, 1e8) } else { 0.0 };
+        Vec2::new(clamp(duv.x), clamp(duv.y))
+    })
 }
 
 /// Where a hit is and how it faces: what shading needs of the geometry.
@@ -376,6 +418,20 @@ mod tests {
     use glam::Affine2;
 
     use super::*;
+
+    /// On a triangle whose texture coordinates are (x / 2, z / 4), a step
+    /// of the point seen is that step in uv; a step off the plane counts
+    /// by its part in the plane; degenerate uvs give no footprint.
+    #[test]
+    fn uv_differentials_are_the_steps_in_texture_space() {
+        let p = [Vec3::ZERO, Vec3::new(2.0, 0.0, 0.0), Vec3::new(0.0, 0.0, 4.0)];
+        let uv = [Vec2::ZERO, Vec2::X, Vec2::Y];
+        let [dx, dy] = uv_differentials(p, uv, [Vec3::new(0.2, 0.0, 0.0), Vec3::new(0.1, 3.0, 0.4)]);
+        assert!((dx - Vec2::new(0.1, 0.0)).length() < 1e-6, "{dx}");
+        assert!((dy - Vec2::new(0.05, 0.1)).length() < 1e-6, "{dy}");
+        let flat = [Vec2::ZERO, Vec2::X, Vec2::X * 2.0];
+        assert_eq!(uv_differentials(p, flat, [Vec3::X, Vec3::Z]), [Vec2::ZERO; 2]);
+    }
 
     /// A map of one texel encoding the tangent-space normal `local`.
     fn map_of(local: Vec3, scale: f32) -> (NormalMap, Vec<Texture>) {

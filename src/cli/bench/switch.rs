@@ -8,7 +8,7 @@ use serde::Serialize;
 
 use crate::lightcut::CutSettings;
 use crate::render::session::{Mode, Session, SessionError};
-use crate::render::{PassSettings, PixelBounds};
+use crate::render::{PassSettings, PixelBounds, TextureFilter};
 use crate::scene::builder::SceneText;
 use crate::scene::{Scene, SceneError};
 
@@ -54,6 +54,7 @@ pub fn measure(counts: &[usize], threads: usize, repeat: usize) -> Result<Vec<Sw
             bounds: PixelBounds::full(160, 120),
             aovs: crate::render::Aovs::none(),
             transparent: false,
+            texture_filter: TextureFilter::Mip,
         };
         let every_tree_cut = CutSettings { exhaustive_lights: 0, ..CutSettings::default() };
         let fastest = |mode: Mode| -> Result<(f64, crate::render::PassStats), SessionError> {

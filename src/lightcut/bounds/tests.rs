@@ -129,7 +129,10 @@ fn surface<'m>(rng: &mut Rng, material: &'m Material) -> SurfacePoint<'m> {
         Albedo::Constant(c) => c,
         Albedo::Texture(_) => unreachable!(),
     };
-    let pbr = material.pbr.as_ref().map(|m| crate::shading::pbr::Pbr::of(m, base, &[glam::Vec2::ZERO; 2], &[]));
+    let pbr = material
+        .pbr
+        .as_ref()
+        .map(|m| crate::shading::pbr::Pbr::of(m, base, &crate::scene::material::TexCoords::default(), &[]));
     // Drawn in this order, as the random stream always has.
     let p = Vec3::new(rng.range_f32(-3.0, 3.0), rng.range_f32(-3.0, 3.0), rng.range_f32(-3.0, 3.0));
     // Half the time the environment's lights see the diffuse lobe alone

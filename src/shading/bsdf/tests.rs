@@ -20,7 +20,7 @@ fn point(material: &Material, wo: Vec3) -> SurfacePoint<'_> {
         Albedo::Constant(c) => c,
         Albedo::Texture(_) => unreachable!(),
     };
-    let pbr = material.pbr.as_ref().map(|m| Pbr::of(m, base, &[glam::Vec2::ZERO; 2], &[]));
+    let pbr = material.pbr.as_ref().map(|m| Pbr::of(m, base, &crate::scene::material::TexCoords::default(), &[]));
     let kd = pbr.map_or(base, |p| p.diffuse_albedo());
     SurfacePoint { pbr, ..SurfacePoint::bare(material, Vec3::ZERO, Vec3::Z, wo, kd) }
 }
