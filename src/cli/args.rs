@@ -19,7 +19,8 @@ use crate::scene::{check_resolution, LoadOptions, Scene};
 
 #[derive(Debug, Args)]
 pub struct RenderArgs {
-    /// Scene file (TOML, or JSON by its .json extension).
+    /// Scene file: TOML (JSON by its .json extension), glTF 2.0 (.gltf,
+    /// .glb) or a USD stage (.usd, .usda, .usdc, .usdz).
     pub scene: PathBuf,
     /// Output OpenEXR file.
     #[arg(short, long, value_name = "OUT.exr")]
@@ -145,7 +146,8 @@ pub struct ModeArgs {
     pub multidimensional: bool,
     /// Relative error threshold: a cluster is split while its bound exceeds
     /// this fraction of the point's total (bounded: of the estimate, default
-    /// 0.02; stochastic: of the summed bounds, default in `lightcut::stochastic`).
+    /// 0.02; stochastic: of the summed bounds, default 0.05; multidimensional:
+    /// of the pixel's estimate, default 0.02).
     /// 0 splits every cluster, reproducing --exact (bounded) when max-cut allows.
     #[arg(long)]
     pub error: Option<f64>,
@@ -336,7 +338,7 @@ pub struct PassArgs {
     /// camera (from 0) in the file's node order; or a USD stage's camera by
     /// its prim path (/World/Cam). The scene's first camera otherwise;
     /// overrides a TOML's [camera].
-    #[arg(long, value_name = "NAME|#N")]
+    #[arg(long, value_name = "NAME|#N|/PATH")]
     pub camera: Option<String>,
     /// Add an environment: `R,G,B` (a constant radiance, W/(m^2 sr), e.g.
     /// 1,1,1) or a lat-long OpenEXR file; 1,024 directional lights. It
@@ -563,5 +565,34 @@ mod tests {
         assert_eq!(parse_pixel_bounds("1,2,3,4"), Ok([1, 2, 3, 4]));
         assert!(parse_pixel_bounds("1,2,3").is_err());
         assert!(parse_pixel_bounds("1,2,3,x").is_err());
+    }
+
+    /// The help states the defaults the code has, and every scene format
+    /// the loader reads.
+    #[test]
+    fn help_states_the_defaults_and_formats_that_exist() {
+        use clap::CommandFactory;
+        let command = crate::cli::Cli::command();
+        let render = command.find_subcommand("render").expect("a render command");
+        let help = |name: &str| {
+            let arg = render.get_arguments().find(|a| a.get_id() == name).unwrap_or_else(|| panic!("--{name}"));
+            arg.get_long_help().or(arg.get_help()).map(ToString::to_string).unwrap_or_default()
+        };
+        let error = help("error");
+        for (mode, default) in [
+            ("bounded", CutSettings::default().error),
+            ("stochastic", STOCHASTIC_DEFAULTS.error),
+            ("multidimensional", MULTIDIMENSIONAL_DEFAULTS.error),
+        ] {
+            let stated = format!("{mode}: ");
+            let at = error.find(&stated).unwrap_or_else(|| panic!("--error names no default for {mode}: {error}"));
+            let said = &error[at..].split(';').next().unwrap_or_default();
+            assert!(said.contains(&format!("default {default}")), "--error, {mode}: '{said}', the code's {default}");
+        }
+        let scene = help("scene");
+        for extension in [".json", ".gltf", ".glb", ".usd", ".usda", ".usdc", ".usdz", "TOML"] {
+            assert!(scene.contains(extension), "the scene's help names no {extension}: {scene}");
+        }
+        assert!(help("camera").contains("prim path"));
     }
 }

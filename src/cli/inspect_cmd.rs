@@ -15,7 +15,8 @@ use crate::scene::{EnvironmentMap, LightSource, LoadOptions, Scene};
 
 #[derive(Debug, Args)]
 pub struct InspectArgs {
-    /// Scene file (TOML, JSON, glTF or USD).
+    /// Scene file: TOML (JSON by its .json extension), glTF 2.0 (.gltf,
+    /// .glb) or a USD stage (.usd, .usda, .usdc, .usdz).
     pub scene: PathBuf,
     /// The glTF camera (name or #N) or USD camera (prim path) to load.
     #[arg(long, value_name = "NAME|#N|/PATH")]
