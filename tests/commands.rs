@@ -223,3 +223,23 @@ fn a_sweep_with_paths_has_a_reference_with_paths() {
         assert!(error < 0.05, "{} against the reference with paths: {error}", row["mode"]);
     }
 }
+
+/// Output piped into a reader that has stopped (`lightcuts inspect ... |
+/// head`, the reader gone before the first line) ends the process as it
+/// ends any Unix tool, by SIGPIPE, without a panic's message.
+#[test]
+fn a_closed_pipe_ends_the_output_quietly() {
+    use std::os::unix::process::ExitStatusExt;
+    let (reader, writer) = std::io::pipe().expect("a pipe");
+    drop(reader);
+    let scene = scenes().join("few4.toml");
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_lightcuts"))
+        .args(["inspect", s(&scene), "--json"])
+        .stdout(writer)
+        .stderr(std::process::Stdio::piped())
+        .output()
+        .expect("run lightcuts");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    assert_eq!(out.status.signal(), Some(13), "ended by SIGPIPE: {:?}, {stderr}", out.status);
+}
