@@ -156,6 +156,9 @@ impl Level {
 /// texels a lookup sums.
 const MAX_ANISOTROPY: f32 = 8.0;
 
+/// The most texels one EWA lookup visits.
+const MAX_EWA_TEXELS: i64 = 4096;
+
 #[derive(Debug, Clone)]
 pub struct Texture {
     /// The MIP map: level 0 is the image, each next level half the size
@@ -289,8 +292,10 @@ impl Texture {
         }
         let last = self.levels.len() - 1;
         let level = short.log2().max(0.0);
+        // Wider than the whole image: its mean, the last level's texel (an
+        // ellipse there could span more texels than any loop should visit).
         if level >= last as f32 {
-            return self.ewa(last, uv, major, minor);
+            return self.lookup_level(last, uv);
         }
         let below = level.floor();
         let (i, blend) = (below as usize, level - below);
@@ -319,6 +324,12 @@ impl Texture {
         let (half_x, half_y) = (2.0 * (det * c).max(0.0).sqrt() / det, 2.0 * (det * a).max(0.0).sqrt() / det);
         let (x0, x1) = ((x - half_x).ceil() as i64, (x + half_x).floor() as i64);
         let (y0, y1) = ((y - half_y).ceil() as i64, (y + half_y).floor() as i64);
+        // The chosen level holds the ellipse in about 16 x 16 texels; only a
+        // strip of an image (one texel high, whose levels stop halving
+        // across it) could ask for far more: read that bilinearly.
+        if (x1 - x0).saturating_add(1).saturating_mul((y1 - y0).saturating_add(1)) > MAX_EWA_TEXELS {
+            return self.lookup_level(level, uv);
+        }
         let (mut sum, mut weights) = (Vec3::ZERO, 0.0);
         for ty in y0..=y1 {
             let t = ty as f32 - y;
@@ -456,6 +467,25 @@ mod tests {
             let across = texture.filtered(uv, long.perp(), short).x;
             assert!(along > 0.95, "{along} at {uv}");
             assert!((across - 0.5).abs() < 0.15, "{across} at {uv}");
+        }
+    }
+
+    /// Footprints from a thousandth of a texel to a million images, of
+    /// any shape, on a square image and on a strip one texel high, read a
+    /// value among the texels' (and in bounded time: an ellipse on the
+    /// last level once spanned millions of texels, which the fuzzer found).
+    #[test]
+    fn every_footprint_reads_a_value_among_the_texels() {
+        let strip = Texture::from_texels(64, 1, (0..64).map(|i| Vec3::splat((i % 2) as f32)).collect());
+        for texture in [checks(), strip] {
+            for e in -3..=6 {
+                for shape in [Vec2::new(1.0, 1.0), Vec2::new(1.0, 0.01), Vec2::new(0.3, 7.0), Vec2::new(0.0, 1.0)] {
+                    let (dx, dy) = (Vec2::new(shape.x, 0.2 * shape.y), Vec2::new(-0.1 * shape.x, shape.y));
+                    let scale = 10f32.powi(e) / 64.0;
+                    let read = texture.filtered(Vec2::new(0.37, 0.61), dx * scale, dy * scale);
+                    assert!((0.0..=1.0).contains(&read.x) && read.x == read.y, "{read} at {e}, {shape}");
+                }
+            }
         }
     }
 
