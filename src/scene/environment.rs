@@ -31,7 +31,7 @@ impl EnvironmentMap {
     /// Reads the R, G, B channels of a lat-long EXR.
     pub fn load_exr(path: &Path, scale: f32) -> Result<Self, ImageError> {
         let image = read_radiance_exr(path)?;
-        Ok(Self::LatLong { width: image.width, height: image.height, texels: image.texels, scale })
+        Ok(Self::LatLong { width: image.width, height: image.height, texels: image.texels.into_floats(), scale })
     }
 
     /// The pixel (x, y) of a `width` x `height` lat-long map that unit

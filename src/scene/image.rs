@@ -2,12 +2,14 @@
 //! OpenEXR, Radiance HDR; 8- and 16-bit colours decoded from sRGB where the
 //! scene says they are encoded so, float images scene-linear as stored) and
 //! OpenEXR environment maps (linear radiance). All become linear RGB texels,
-//! row 0 at the top of the image.
+//! row 0 at the top of the image; an 8-bit image is kept as its codes
+//! (`texels`, docs/design.md §5.3 "Textures in memory").
 
 use std::path::Path;
 
 use glam::Vec3;
 
+use super::texels::{Coverage, Texels};
 use crate::util::color::srgb_to_linear;
 
 /// Linear RGB texels, `width * height` of them, row by row from the top.
@@ -15,10 +17,11 @@ use crate::util::color::srgb_to_linear;
 pub struct RgbImage {
     pub width: usize,
     pub height: usize,
-    pub texels: Vec<Vec3>,
+    /// 8-bit codes for an 8-bit image, f32 otherwise.
+    pub texels: Texels,
     /// Coverage (linear, 0 to 1) per texel, for an image with an alpha
     /// channel.
-    pub alpha: Option<Vec<f32>>,
+    pub alpha: Option<Coverage>,
     /// The file stores scene-linear floats (OpenEXR, Radiance HDR, float
     /// TIFF): no sRGB decoding applies to them, whatever the scene says.
     pub scene_linear: bool,
@@ -209,6 +212,9 @@ fn decode_other(bytes: &[u8], name: &str, encoding: Encoding) -> Result<RgbImage
     check_size("header", width.into(), height.into(), 4, bytes.len() as u64)?;
     let image = reader()?.decode().map_err(failed)?;
     let alpha = image.color().has_alpha();
+    if image.color().bytes_per_pixel() == image.color().channel_count() {
+        return Ok(eight_bit_image(image.into_rgba8(), alpha, encoding));
+    }
     let scene_linear = matches!(image.color(), image::ColorType::Rgb32F | image::ColorType::Rgba32F);
     let rgba = image.into_rgba32f();
     let (width, height) = (rgba.width() as usize, rgba.height() as usize);
@@ -224,15 +230,23 @@ fn decode_other(bytes: &[u8], name: &str, encoding: Encoding) -> Result<RgbImage
         let c = |v: f32| if scene_linear { v } else { encoding.decode(v) };
         texels.push(Vec3::new(c(r), c(g), c(b)));
     }
-    let alpha = alpha.then(|| rgba.pixels().map(|t| t.0[3].clamp(0.0, 1.0)).collect());
-    Ok(RgbImage { width, height, texels, alpha, scene_linear })
+    let alpha = alpha.then(|| Coverage::Float(rgba.pixels().map(|t| t.0[3].clamp(0.0, 1.0)).collect()));
+    Ok(RgbImage { width, height, texels: Texels::Float(texels), alpha, scene_linear })
+}
+
+/// An image of 8 bits a channel, kept as its codes.
+fn eight_bit_image(rgba: image::RgbaImage, alpha: bool, encoding: Encoding) -> RgbImage {
+    let (width, height) = (rgba.width() as usize, rgba.height() as usize);
+    let codes = rgba.pixels().map(|t| [t.0[0], t.0[1], t.0[2]]).collect();
+    let alpha = alpha.then(|| Coverage::Codes(rgba.pixels().map(|t| t.0[3]).collect()));
+    RgbImage { width, height, texels: Texels::codes(codes, encoding), alpha, scene_linear: false }
 }
 
 /// An OpenEXR texture: R, G, B (and A) of its first RGB layer, scene-linear,
 /// each finite.
 fn texture_exr(reader: impl std::io::Read + std::io::Seek) -> Result<RgbImage, ImageError> {
     let image = exr_rgba(reader, true)?;
-    if let Some(index) = image.texels.iter().position(|t| !t.is_finite()) {
+    if let Some(index) = (0..image.texels.len()).position(|k| !image.texels.get(k).is_finite()) {
         return Err(ImageError::NotFinite { x: index % image.width, y: index / image.width });
     }
     if image.texels.is_empty() {
@@ -261,21 +275,22 @@ fn decode_jpeg(bytes: &[u8], encoding: Encoding) -> Result<RgbImage, ImageError>
     if width * height == 0 || pixels.len() < width * height * channels {
         return Err(ImageError::Empty);
     }
-    let texels = (0..width * height)
-        .map(|p| {
-            let at = |k: usize| f32::from(pixels[p * channels + k]) / 255.0;
-            let rgb = match channels {
-                1 => Vec3::splat(at(0)),
-                // 16-bit grey, big-endian.
-                2 => Vec3::splat(f32::from(u16::from_be_bytes([pixels[2 * p], pixels[2 * p + 1]])) / 65535.0),
-                3 => Vec3::new(at(0), at(1), at(2)),
-                // CMYK: RGB = (1 - CMY)(1 - K), as the `image` crate
-                // converts the same decoder's output.
-                _ => (Vec3::ONE - Vec3::new(at(0), at(1), at(2))) * (1.0 - at(3)),
-            };
-            Vec3::new(encoding.decode(rgb.x), encoding.decode(rgb.y), encoding.decode(rgb.z))
-        })
-        .collect();
+    let texel = |p: usize| -> Vec3 {
+        let at = |k: usize| f32::from(pixels[p * channels + k]) / 255.0;
+        let rgb = match channels {
+            // 16-bit grey, big-endian.
+            2 => Vec3::splat(f32::from(u16::from_be_bytes([pixels[2 * p], pixels[2 * p + 1]])) / 65535.0),
+            // CMYK: RGB = (1 - CMY)(1 - K), as the `image` crate converts
+            // the same decoder's output.
+            _ => (Vec3::ONE - Vec3::new(at(0), at(1), at(2))) * (1.0 - at(3)),
+        };
+        Vec3::new(encoding.decode(rgb.x), encoding.decode(rgb.y), encoding.decode(rgb.z))
+    };
+    let texels = match channels {
+        1 => Texels::codes(pixels[..width * height].iter().map(|&g| [g; 3]).collect(), encoding),
+        3 => Texels::codes(pixels.chunks_exact(3).take(width * height).map(|c| [c[0], c[1], c[2]]).collect(), encoding),
+        _ => Texels::Float((0..width * height).map(texel).collect()),
+    };
     Ok(RgbImage { width, height, texels, alpha: None, scene_linear: false })
 }
 
@@ -293,29 +308,34 @@ fn decode_png(reader: impl std::io::Read, length: u64, encoding: Encoding) -> Re
     let (width, height) = (info.width as usize, info.height as usize);
     let channels = info.color_type.samples();
     let sixteen = info.bit_depth == png::BitDepth::Sixteen;
-    let sample = |i: usize| -> f32 {
-        if sixteen {
-            f32::from(u16::from_be_bytes([buf[2 * i], buf[2 * i + 1]])) / 65535.0
-        } else {
-            f32::from(buf[i]) / 255.0
-        }
-    };
-    let mut texels = Vec::with_capacity(width * height);
-    for p in 0..width * height {
-        let base = p * channels;
-        let rgb = match channels {
-            1 | 2 => Vec3::splat(sample(base)),
-            _ => Vec3::new(sample(base), sample(base + 1), sample(base + 2)),
-        };
-        texels.push(Vec3::new(encoding.decode(rgb.x), encoding.decode(rgb.y), encoding.decode(rgb.z)));
-    }
-    if texels.is_empty() {
+    if width * height == 0 {
         return Err(ImageError::Empty);
     }
-    // Alpha is linear coverage (PNG's grey + alpha and RGBA), not sRGB.
-    let alpha =
-        matches!(channels, 2 | 4).then(|| (0..width * height).map(|p| sample(p * channels + channels - 1)).collect());
-    Ok(RgbImage { width, height, texels, alpha, scene_linear: false })
+    if !sixteen {
+        // Grey, grey + alpha, RGB or RGBA codes, as they are.
+        let codes = buf.chunks_exact(channels).take(width * height);
+        let texels = match channels {
+            1 | 2 => codes.clone().map(|c| [c[0]; 3]).collect(),
+            _ => codes.clone().map(|c| [c[0], c[1], c[2]]).collect(),
+        };
+        // Alpha is linear coverage (PNG's grey + alpha and RGBA), not sRGB.
+        let alpha = matches!(channels, 2 | 4).then(|| Coverage::Codes(codes.map(|c| c[channels - 1]).collect()));
+        return Ok(RgbImage { width, height, texels: Texels::codes(texels, encoding), alpha, scene_linear: false });
+    }
+    let sample = |i: usize| -> f32 { f32::from(u16::from_be_bytes([buf[2 * i], buf[2 * i + 1]])) / 65535.0 };
+    let texels = (0..width * height)
+        .map(|p| {
+            let base = p * channels;
+            let rgb = match channels {
+                1 | 2 => Vec3::splat(sample(base)),
+                _ => Vec3::new(sample(base), sample(base + 1), sample(base + 2)),
+            };
+            Vec3::new(encoding.decode(rgb.x), encoding.decode(rgb.y), encoding.decode(rgb.z))
+        })
+        .collect();
+    let alpha = matches!(channels, 2 | 4)
+        .then(|| Coverage::Float((0..width * height).map(|p| sample(p * channels + channels - 1)).collect()));
+    Ok(RgbImage { width, height, texels: Texels::Float(texels), alpha, scene_linear: false })
 }
 
 /// Reads the R, G and B channels of an OpenEXR's first RGB layer as radiance,
@@ -349,17 +369,16 @@ fn exr_rgba(reader: impl std::io::Read + std::io::Seek, alpha: bool) -> Result<R
         .no_deep_data()
         .largest_resolution_level()
         .rgba_channels(
-            |size, channels: &exr::prelude::RgbaChannels| RgbImage {
-                width: size.width(),
-                height: size.height(),
-                texels: vec![Vec3::ZERO; size.area()],
-                alpha: (alpha && channels.3.is_some()).then(|| vec![1.0; size.area()]),
-                scene_linear: true,
+            |size, channels: &exr::prelude::RgbaChannels| {
+                let alpha = (alpha && channels.3.is_some()).then(|| vec![1.0; size.area()]);
+                (size.width(), size.height(), vec![Vec3::ZERO; size.area()], alpha)
             },
-            |image: &mut RgbImage, at, (r, g, b, a): (f32, f32, f32, f32)| {
-                let index = at.y() * image.width + at.x();
-                image.texels[index] = Vec3::new(r, g, b);
-                if let Some(alpha) = image.alpha.as_mut() {
+            |(width, _, texels, alpha): &mut (usize, usize, Vec<Vec3>, Option<Vec<f32>>),
+             at,
+             (r, g, b, a): (f32, f32, f32, f32)| {
+                let index = at.y() * *width + at.x();
+                texels[index] = Vec3::new(r, g, b);
+                if let Some(alpha) = alpha.as_mut() {
                     alpha[index] = if a.is_finite() { a.clamp(0.0, 1.0) } else { 1.0 };
                 }
             },
@@ -368,15 +387,16 @@ fn exr_rgba(reader: impl std::io::Read + std::io::Seek, alpha: bool) -> Result<R
         .all_attributes()
         .from_buffered(reader)
         .map_err(ImageError::Exr)?;
-    Ok(image.layer_data.channel_data.pixels)
+    let (width, height, texels, alpha) = image.layer_data.channel_data.pixels;
+    Ok(RgbImage { width, height, texels: Texels::Float(texels), alpha: alpha.map(Coverage::Float), scene_linear: true })
 }
 
 /// `image` as radiance: every texel finite, non-negative and at most
 /// [`MAX_EMISSION`](super::MAX_EMISSION), and at least one.
 pub fn check_radiance(image: &RgbImage) -> Result<(), ImageError> {
-    let bad = |t: &Vec3| !t.is_finite() || t.min_element() < 0.0 || t.max_element() > super::MAX_EMISSION;
-    if let Some(index) = image.texels.iter().position(bad) {
-        let t = image.texels[index];
+    let bad = |t: Vec3| !t.is_finite() || t.min_element() < 0.0 || t.max_element() > super::MAX_EMISSION;
+    if let Some(index) = (0..image.texels.len()).position(|k| bad(image.texels.get(k))) {
+        let t = image.texels.get(index);
         let value = format!("({:e}, {:e}, {:e})", t.x, t.y, t.z);
         return Err(ImageError::BadRadiance { x: index % image.width, y: index / image.width, value });
     }
@@ -414,7 +434,7 @@ mod tests {
             let (y0, x0) = (8 * (k / 2), 8 * (k % 2));
             for y in y0..y0 + 8 {
                 for x in x0..x0 + 8 {
-                    let got = image.texels[y * image.width + x];
+                    let got = image.texels.get(y * image.width + x);
                     let want = expected(k);
                     assert!(
                         (got - want).abs().max_element() <= tolerance * want.max_element().max(1.0),
@@ -445,18 +465,21 @@ mod tests {
         ] {
             let image = read(name, Encoding::Srgb);
             assert!(!image.scene_linear, "{name}");
+            // Kept as their 8-bit codes (CMYK's product of two is not one).
+            let codes = if name == "cmyk.jpg" { 12 } else { 3 };
+            assert_eq!(image.texels.bytes_per_texel(), codes, "{name}");
             check(name, &image, tolerance, srgb);
             assert_eq!(image.alpha.is_some(), alpha, "{name}");
             if let Some(a) = &image.alpha {
-                for k in 0..4 {
-                    assert!((a[at(&image, k)] - f32::from(QUADRANTS[k][3]) / 255.0).abs() < 1e-6, "{name}");
+                for (k, quadrant) in QUADRANTS.iter().enumerate() {
+                    assert!((a.get(at(&image, k)) - f32::from(quadrant[3]) / 255.0).abs() < 1e-6, "{name}");
                 }
             }
             // Linear data is read as stored.
             let raw = read(name, Encoding::Linear);
             let q = QUADRANTS[0];
             let want = Vec3::new(q[0].into(), q[1].into(), q[2].into()) / 255.0;
-            assert!((raw.texels[at(&raw, 0)] - want).abs().max_element() <= tolerance.max(0.01), "{name}");
+            assert!((raw.texels.get(at(&raw, 0)) - want).abs().max_element() <= tolerance.max(0.01), "{name}");
         }
     }
 
@@ -464,6 +487,7 @@ mod tests {
     fn sixteen_bit_grey_reads_its_full_precision() {
         for name in ["grey16.png", "grey16.tif"] {
             let image = read(name, Encoding::Srgb);
+            assert_eq!(image.texels.bytes_per_texel(), 12, "{name}");
             check(name, &image, 1e-6, |k| Vec3::splat(srgb(k).x));
         }
     }

@@ -17,6 +17,7 @@ pub mod material;
 pub mod mesh;
 pub mod object;
 pub mod subdivision;
+pub mod texels;
 pub mod texture;
 pub mod usd;
 

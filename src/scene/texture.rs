@@ -6,6 +6,7 @@
 use glam::{Vec2, Vec3};
 
 use super::image::RgbImage;
+use super::texels::Texels;
 
 /// What a lookup outside [0, 1] reads, per axis (glTF's `wrapS`, `wrapT`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -24,104 +25,6 @@ pub enum Filter {
     Linear,
     /// The nearest texel.
     Nearest,
-}
-
-/// Texels as compactly as they can be kept exactly (docs/design.md §5.3,
-/// "Textures in memory"): what a lookup reads is the same f32 either way.
-#[derive(Debug, Clone)]
-enum Texels {
-    /// 8-bit codes, each channel read through `table` (an encoding's
-    /// decoding of k/255: sRGB's, or linear's): 3 bytes a texel.
-    Codes { codes: Vec<[u8; 3]>, table: &'static [f32; 256] },
-    /// Half floats (an OpenEXR's half channels): 6 bytes a texel.
-    Half(Vec<[half::f16; 3]>),
-    /// Anything else (16-bit and float data, generated texels): 12 bytes.
-    Float(Vec<Vec3>),
-}
-
-/// The decoding of 8-bit code k as an sRGB value and as a linear one,
-/// computed as the image readers compute it (k as f32 / 255, then decoded),
-/// so a code stands for exactly the f32 the reader made.
-fn tables() -> [&'static [f32; 256]; 2] {
-    static TABLES: std::sync::OnceLock<[[f32; 256]; 2]> = std::sync::OnceLock::new();
-    let tables = TABLES.get_or_init(|| {
-        let code = |k: usize| f32::from(k as u8) / 255.0;
-        [std::array::from_fn(|k| crate::util::color::srgb_to_linear(code(k))), std::array::from_fn(code)]
-    });
-    [&tables[0], &tables[1]]
-}
-
-impl Texels {
-    /// The most compact exact form of `texels`.
-    fn compact(texels: Vec<Vec3>) -> Self {
-        for table in tables() {
-            let code = |v: f32| -> Option<u8> {
-                let k = table.partition_point(|&t| t < v);
-                (k < 256 && table[k].to_bits() == v.to_bits()).then_some(k as u8)
-            };
-            let codes: Option<Vec<[u8; 3]>> =
-                texels.iter().map(|t| Some([code(t.x)?, code(t.y)?, code(t.z)?])).collect();
-            if let Some(codes) = codes {
-                return Self::Codes { codes, table };
-            }
-        }
-        let half = |v: f32| -> Option<half::f16> {
-            let h = half::f16::from_f32(v);
-            (h.to_f32().to_bits() == v.to_bits()).then_some(h)
-        };
-        let halves: Option<Vec<[half::f16; 3]>> =
-            texels.iter().map(|t| Some([half(t.x)?, half(t.y)?, half(t.z)?])).collect();
-        match halves {
-            Some(halves) => Self::Half(halves),
-            None => Self::Float(texels),
-        }
-    }
-
-    /// `texels` (a coarser MIP level of `self`) in `self`'s encoding,
-    /// each value rounded to the nearest one it can hold: a level of 8-bit
-    /// codes stays 3 bytes a texel, as a GPU keeps an 8-bit texture's MIP
-    /// levels.
-    fn encoded_like(&self, texels: Vec<Vec3>) -> Self {
-        match self {
-            Self::Codes { table, .. } => {
-                let code = |v: f32| -> u8 {
-                    let k = table.partition_point(|&t| t < v).min(255);
-                    // The code below may be nearer (the table increases).
-                    if k > 0 && (v - table[k - 1]).abs() <= (table[k] - v).abs() {
-                        (k - 1) as u8
-                    } else {
-                        k as u8
-                    }
-                };
-                let codes = texels.iter().map(|t| [code(t.x), code(t.y), code(t.z)]).collect();
-                Self::Codes { codes, table }
-            }
-            Self::Half(_) => Self::Half(texels.iter().map(|t| t.to_array().map(half::f16::from_f32)).collect()),
-            Self::Float(_) => Self::Float(texels),
-        }
-    }
-
-    fn get(&self, index: usize) -> Vec3 {
-        match self {
-            Self::Codes { codes, table } => {
-                let [r, g, b] = codes[index];
-                Vec3::new(table[r as usize], table[g as usize], table[b as usize])
-            }
-            Self::Half(halves) => {
-                let [r, g, b] = halves[index];
-                Vec3::new(r.to_f32(), g.to_f32(), b.to_f32())
-            }
-            Self::Float(texels) => texels[index],
-        }
-    }
-
-    fn bytes_per_texel(&self) -> usize {
-        match self {
-            Self::Codes { .. } => 3,
-            Self::Half(_) => 6,
-            Self::Float(_) => 12,
-        }
-    }
 }
 
 /// One level of a texture's MIP map.
@@ -173,14 +76,25 @@ impl Texture {
     /// A texture of a decoded image (see [`super::image::read_texture`]).
     #[must_use]
     pub fn from_image(image: RgbImage) -> Self {
-        Self::from_texels(image.width, image.height, image.texels)
+        Self::from_compact(image.width, image.height, image.texels)
     }
 
     /// A texture from linear texels (tests and generated scenes).
     #[must_use]
     pub fn from_texels(width: usize, height: usize, texels: Vec<Vec3>) -> Self {
+        Self::from_compact(width, height, Texels::compact(texels))
+    }
+
+    /// A texture of `texels` as they are kept (f32 ones put in their most
+    /// compact exact form).
+    #[must_use]
+    pub fn from_compact(width: usize, height: usize, texels: Texels) -> Self {
         assert_eq!(width * height, texels.len());
-        let mut levels = vec![Level { width, height, texels: Texels::compact(texels) }];
+        let texels = match texels {
+            Texels::Float(floats) => Texels::compact(floats),
+            kept => kept,
+        };
+        let mut levels = vec![Level { width, height, texels }];
         while let Some(last) = levels.last().filter(|l| l.width * l.height > 1) {
             levels.push(last.halved());
         }
@@ -381,30 +295,6 @@ impl Texture {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn texels_are_kept_in_the_most_compact_exact_form() {
-        let srgb = |k: u8| crate::util::color::srgb_to_linear(f32::from(k) / 255.0);
-        let cases: [(Vec<Vec3>, usize); 4] = [
-            // An 8-bit sRGB image as the readers decode it.
-            ((0..=255u8).map(|k| Vec3::new(srgb(k), srgb(255 - k), srgb(k / 2))).collect(), 3),
-            // 8-bit linear data (a metallic-roughness map).
-            ((0..=255u8).map(|k| Vec3::splat(f32::from(k) / 255.0)).collect(), 3),
-            // Half floats (an OpenEXR's), beyond 1.
-            ((0..256).map(|k| Vec3::new(k as f32 * 0.25, 1000.0, 0.5)).collect(), 6),
-            // Anything else.
-            ((0..256).map(|k| Vec3::splat(k as f32 * 0.123_456_7)).collect(), 12),
-        ];
-        for (texels, bytes) in cases {
-            let texture = Texture::from_texels(256, 1, texels.clone()).with_sampler([Wrap::Repeat; 2], Filter::Nearest);
-            assert_eq!(texture.bytes_per_texel(), bytes);
-            for (i, t) in texels.iter().enumerate() {
-                assert_eq!(texture.texel_at(i).to_array().map(f32::to_bits), t.to_array().map(f32::to_bits));
-                let uv = Vec2::new((i as f32 + 0.5) / 256.0, 0.5);
-                assert_eq!(texture.lookup(uv), *t, "texel {i}");
-            }
-        }
-    }
 
     /// A 64 x 64 checkerboard of 8-texel checks, 0 and 1.
     fn checks() -> Texture {

@@ -10,6 +10,7 @@ use gltf::texture::{MagFilter, WrappingMode};
 use super::Importer;
 use crate::scene::image::{Encoding, RgbImage};
 use crate::scene::material::{Albedo, Cutout, Material, NormalMap, PbrMaterial, TextureRef};
+use crate::scene::texels::Texels;
 use crate::scene::texture::{Filter, Texture, Wrap};
 use crate::scene::SceneError;
 
@@ -55,10 +56,7 @@ impl Importer<'_, '_> {
                 let at = format!("{location}.pbrMetallicRoughness.baseColorTexture");
                 match self.texture(Slot::of(&info), &at, Encoding::Srgb, |t, _| t * base_rgb)? {
                     Some((texture, image)) => {
-                        coverage = image.alpha.as_ref().map(|a| {
-                            let alpha = a.iter().map(|x| x * base.w).collect::<Vec<f32>>();
-                            (alpha, image.width, image.height, texture.transform)
-                        });
+                        coverage = image.alpha.is_some().then_some((image, texture.transform));
                         Albedo::Texture(texture)
                     }
                     None => Albedo::Constant(base_rgb),
@@ -102,7 +100,15 @@ impl Importer<'_, '_> {
         }
         // Only a mask that removes something costs Embree a filter call.
         let cutout = cutoff.and_then(|cutoff| {
-            let (alpha, width, height, transform) = coverage.unwrap_or_else(|| (vec![base.w], 1, 1, Affine2::IDENTITY));
+            // The image's alpha times the factor's, made only for a mask.
+            let (alpha, width, height, transform) = match coverage {
+                Some((image, transform)) => {
+                    let a = image.alpha.as_ref().expect("an image with alpha");
+                    let texels = image.width * image.height;
+                    ((0..texels).map(|k| a.get(k) * base.w).collect(), image.width, image.height, transform)
+                }
+                None => (vec![base.w], 1, 1, Affine2::IDENTITY),
+            };
             alpha.iter().any(|&a| a < cutoff).then_some(Cutout {
                 alpha,
                 width: width as u32,
@@ -253,11 +259,13 @@ impl Importer<'_, '_> {
             Some(MagFilter::Nearest) => Filter::Nearest,
             Some(MagFilter::Linear) | None => Filter::Linear,
         };
-        let texels = match &image.alpha {
-            Some(alpha) => image.texels.iter().zip(alpha).map(|(t, a)| map(*t, *a)).collect(),
-            None => image.texels.iter().map(|t| map(*t, 1.0)).collect(),
-        };
-        let texture = Texture::from_texels(image.width, image.height, texels)
+        // A map that keeps the image's codes (a factor of 1) keeps them
+        // (docs/design.md §5.3, "Textures in memory").
+        let alpha = |k: usize| image.alpha.as_ref().map_or(1.0, |a| a.get(k));
+        let texels = Texels::collect(image.width * image.height, image.texels.encoding(), |k| {
+            map(image.texels.get(k), alpha(k))
+        });
+        let texture = Texture::from_compact(image.width, image.height, texels)
             .with_sampler([wrap(sampler.wrap_s()), wrap(sampler.wrap_t())], filter);
         self.parts.textures.push(texture);
         Ok(Some((TextureRef { texture: self.parts.textures.len() - 1, transform, set }, image)))

@@ -18,8 +18,8 @@ use super::schema::Reader;
 use super::stage::{Asset, Stage};
 use crate::scene::image::{self, Encoding, RgbImage};
 use crate::scene::material::{Albedo, Cutout, Material, NormalMap, PbrMaterial, TextureRef};
+use crate::scene::texels::{Coverage, Texels};
 use crate::scene::texture::{Filter, Texture, Wrap};
-use crate::util::color::srgb_to_linear;
 
 /// Largest texture file read (256 MiB).
 const MAX_TEXTURE_BYTES: u64 = 256 << 20;
@@ -665,7 +665,7 @@ impl<'s> Materials<'s> {
             }
         }
         let (r, m) = (channel(roughness), channel(metallic));
-        let image = self.image(first)?.clone();
+        let image = self.image(first)?;
         let (width, height) = (image.width, image.height);
         let sample = |this: &mut Self, t: &TextureSource| -> Result<Vec<f32>, Located> {
             let img = this.image(t)?;
@@ -693,9 +693,11 @@ impl<'s> Materials<'s> {
             (Some(t), false) => sample(self, t)?,
             (None, false) => vec![constant(metallic); width * height],
         };
-        let texels =
-            rough.iter().zip(&metal).map(|(&g, &b)| Vec3::new(0.0, g.clamp(0.0, 1.0), b.clamp(0.0, 1.0))).collect();
-        textures.push(Texture::from_texels(width, height, texels).with_sampler(first.wrap, Filter::Linear));
+        // Channels of 8-bit data stay codes (docs/design.md §5.3).
+        let texels = Texels::collect(width * height, Some(Encoding::Linear), |k| {
+            Vec3::new(0.0, rough[k].clamp(0.0, 1.0), metal[k].clamp(0.0, 1.0))
+        });
+        textures.push(Texture::from_compact(width, height, texels).with_sampler(first.wrap, Filter::Linear));
         Ok(TextureRef { texture: textures.len() - 1, transform: first.transform, set: 0 })
     }
 
@@ -716,10 +718,9 @@ impl<'s> Materials<'s> {
         // from sRGB texel by texel is what decoding the file as sRGB gives.
         let key = format!("{}\u{0}", t.file);
         if !self.images.contains_key(&key) {
-            let decoded = self.images[&t.file].as_ref().map(|linear| RgbImage {
-                texels: linear.texels.iter().map(|v| v.to_array().map(srgb_to_linear).into()).collect(),
-                ..linear.clone()
-            });
+            let decoded = self.images[&t.file]
+                .as_ref()
+                .map(|linear| RgbImage { texels: linear.texels.decoded_from_srgb(), ..linear.clone() });
             self.images.insert(key.clone(), decoded.map_err(Clone::clone));
         }
         self.images[&key].as_ref().map_err(|e| (at(), e.clone()))
@@ -757,33 +758,38 @@ impl<'s> Materials<'s> {
             return Err(format!("no UDIM tile of '{authored}' was found (looked for {first} and the tiles after it)"));
         }
         let (cols, rows) = udim_grid(&tiles);
-        let mut atlas: Option<RgbImage> = None;
+        let mut images = HashMap::new();
         for (c, r, tile) in tiles {
             self.load(&tile.location, &tile.authored)?;
             // The tile is kept only in the atlas.
-            let image = self.images.remove(&tile.location).expect("loaded above")?;
-            let atlas = atlas.get_or_insert_with(|| RgbImage {
-                width: cols * image.width,
-                height: rows * image.height,
-                texels: vec![Vec3::ZERO; cols * image.width * rows * image.height],
-                alpha: None,
-                scene_linear: image.scene_linear,
-            });
-            let (w, h) = (atlas.width / cols, atlas.height / rows);
-            if image.alpha.is_some() && atlas.alpha.is_none() {
-                atlas.alpha = Some(vec![1.0; atlas.texels.len()]);
-            }
-            let top = (rows - 1 - r) * h;
-            for (y, x) in (0..h).flat_map(|y| (0..w).map(move |x| (y, x))) {
-                let k = (y * image.height / h) * image.width + x * image.width / w;
-                let at = (top + y) * atlas.width + c * w + x;
-                atlas.texels[at] = image.texels[k];
-                if let Some(alpha) = &mut atlas.alpha {
-                    alpha[at] = image.alpha.as_ref().map_or(1.0, |a| a[k]);
-                }
-            }
+            images.insert((c, r), self.images.remove(&tile.location).expect("loaded above")?);
         }
-        Ok(atlas.expect("at least one tile"))
+        let first = images.values().next().expect("at least one tile");
+        let (w, h) = (first.width, first.height);
+        let (width, height) = (cols * w, rows * h);
+        // The tile and texel an atlas texel reads, None where no tile is.
+        let source = |at: usize| -> Option<(&RgbImage, usize)> {
+            let (x, y) = (at % width, at / width);
+            let image = images.get(&(x / w, rows - 1 - y / h))?;
+            let (x, y) = (x % w, y % h);
+            Some((image, (y * image.height / h) * image.width + x * image.width / w))
+        };
+        // Codes where every tile is codes of one encoding (black is code 0
+        // in both).
+        let encodings: Vec<Option<Encoding>> = images.values().map(|i| i.texels.encoding()).collect();
+        let codes_in = encodings.iter().all(|e| *e == encodings[0]).then_some(encodings[0]).flatten();
+        let texels =
+            Texels::collect(width * height, codes_in, |at| source(at).map_or(Vec3::ZERO, |(i, k)| i.texels.get(k)));
+        let alpha = images.values().any(|i| i.alpha.is_some()).then(|| {
+            let coverage = |at: usize| source(at).and_then(|(i, k)| Some(i.alpha.as_ref()?.get(k))).unwrap_or(1.0);
+            let codes = images.values().all(|i| matches!(i.alpha, None | Some(Coverage::Codes(_))));
+            if codes {
+                Coverage::Codes((0..width * height).map(|at| (coverage(at) * 255.0).round() as u8).collect())
+            } else {
+                Coverage::Float((0..width * height).map(coverage).collect())
+            }
+        });
+        Ok(RgbImage { width, height, texels, alpha, scene_linear: first.scene_linear })
     }
 
     /// A texture as a TextureRef: one source's channels with its scale and
@@ -815,18 +821,18 @@ impl<'s> Materials<'s> {
             return Ok(TextureRef { texture: index, transform: t.transform, set: 0 });
         }
         let image = self.image_as(t, srgb)?;
-        let texels = (0..image.width * image.height)
-            .map(|k| {
-                let raw = match t.channel {
-                    Channel::Rgb => image.texels[k],
-                    c => Vec3::splat(channel_value(image, k, c)),
-                };
-                let v = raw.as_dvec3() * t.scale.truncate() + t.bias.truncate();
-                let v = if normal { (v + 1.0) * 0.5 } else { v };
-                v.as_vec3().max(Vec3::ZERO)
-            })
-            .collect();
-        textures.push(Texture::from_texels(image.width, image.height, texels).with_sampler(t.wrap, Filter::Linear));
+        // A texture that reads the image's codes as they are (scale 1,
+        // bias 0) stays codes (docs/design.md §5.3).
+        let texels = Texels::collect(image.width * image.height, image.texels.encoding(), |k| {
+            let raw = match t.channel {
+                Channel::Rgb => image.texels.get(k),
+                c => Vec3::splat(channel_value(image, k, c)),
+            };
+            let v = raw.as_dvec3() * t.scale.truncate() + t.bias.truncate();
+            let v = if normal { (v + 1.0) * 0.5 } else { v };
+            v.as_vec3().max(Vec3::ZERO)
+        });
+        textures.push(Texture::from_compact(image.width, image.height, texels).with_sampler(t.wrap, Filter::Linear));
         let index = textures.len() - 1;
         self.textures.insert(key, index);
         Ok(TextureRef { texture: index, transform: t.transform, set: 0 })
@@ -857,10 +863,10 @@ fn udim_grid(tiles: &[(usize, usize, Asset)]) -> (usize, usize) {
 /// A texel's channel (alpha 1 where the image has none).
 fn channel_value(image: &RgbImage, k: usize, channel: Channel) -> f32 {
     match channel {
-        Channel::R | Channel::Rgb => image.texels[k].x,
-        Channel::G => image.texels[k].y,
-        Channel::B => image.texels[k].z,
-        Channel::A => image.alpha.as_ref().map_or(1.0, |a| a[k]),
+        Channel::R | Channel::Rgb => image.texels.get(k).x,
+        Channel::G => image.texels.get(k).y,
+        Channel::B => image.texels.get(k).z,
+        Channel::A => image.alpha.as_ref().map_or(1.0, |a| a.get(k)),
     }
 }
 

@@ -799,7 +799,7 @@ impl Walker<'_, '_> {
                     let (u, v) = openexr_latlong(local);
                     let tx = ((u * width as f64) as usize).min(width - 1);
                     let ty = ((v * height as f64) as usize).min(height - 1);
-                    sum += image.texels[ty * width + tx];
+                    sum += image.texels.get(ty * width + tx);
                 }
                 sum / (SUB * SUB) as f32 * radiance
             })
