@@ -18,7 +18,10 @@ const SCENE_EXTENSIONS: [&str; 8] = ["toml", "json", "gltf", "glb", "usd", "usda
 fn is_scene(path: &Path) -> bool {
     let name = path.file_name().and_then(|n| n.to_str()).unwrap_or_default();
     let broken = path.parent().and_then(Path::file_name).is_some_and(|d| d == "broken");
-    name != "expected.json" && !matches!(name, "asset.usda" | "payload.usda" | "main.usda") && !broken
+    // geo.usda and mtl.usda: the geometry and material layers of the USD
+    // asset structure (scenes/usdwg/).
+    let layer = matches!(name, "asset.usda" | "payload.usda" | "main.usda" | "geo.usda" | "mtl.usda" | "_scene.usda");
+    name != "expected.json" && !layer && !broken
 }
 
 fn scene_files(dir: &Path, found: &mut Vec<PathBuf>) {
