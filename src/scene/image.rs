@@ -9,8 +9,8 @@ use std::path::Path;
 
 use glam::Vec3;
 
+pub use super::texels::Encoding;
 use super::texels::{Coverage, Texels};
-use crate::util::color::srgb_to_linear;
 
 /// Linear RGB texels, `width * height` of them, row by row from the top.
 #[derive(Debug, Clone, PartialEq)]
@@ -129,24 +129,6 @@ pub const MAX_TEXTURE_FILE_BYTES: u64 = 1 << 31;
 pub fn read_texture(path: &Path, encoding: Encoding) -> Result<RgbImage, ImageError> {
     let bytes = crate::util::file::read_regular(path, MAX_TEXTURE_FILE_BYTES).map_err(ImageError::Open)?;
     decode_named(&bytes, &path.to_string_lossy(), encoding)
-}
-
-/// How an image's colour values are encoded.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-pub enum Encoding {
-    /// sRGB-encoded colours (base colour, emission), decoded to linear.
-    Srgb,
-    /// Linear data (glTF's metallic-roughness texture), read as is.
-    Linear,
-}
-
-impl Encoding {
-    fn decode(self, value: f32) -> f32 {
-        match self {
-            Self::Srgb => srgb_to_linear(value),
-            Self::Linear => value,
-        }
-    }
 }
 
 /// [`decode`] from sRGB to linear.
@@ -409,6 +391,7 @@ pub fn check_radiance(image: &RgbImage) -> Result<(), ImageError> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::util::color::srgb_to_linear;
 
     /// The quadrants `scenes/textures/make_textures.py` wrote: 8-bit sRGB
     /// colours with their alpha, and the float files' linear values.

@@ -6,8 +6,6 @@
 
 use glam::Vec3;
 
-use super::image::Encoding;
-
 /// Linear RGB texels, each kept in the most compact form that holds its
 /// value exactly.
 #[derive(Debug, Clone, PartialEq)]
@@ -19,6 +17,26 @@ pub enum Texels {
     Half(Vec<[half::f16; 3]>),
     /// Anything else (16-bit and float data, generated texels): 12 bytes.
     Float(Vec<Vec3>),
+}
+
+/// How an image's colour values are encoded.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Encoding {
+    /// sRGB-encoded colours (base colour, emission), decoded to linear.
+    Srgb,
+    /// Linear data (glTF's metallic-roughness texture), read as is.
+    Linear,
+}
+
+impl Encoding {
+    /// A value k / max of the image decoded to linear.
+    #[must_use]
+    pub fn decode(self, value: f32) -> f32 {
+        match self {
+            Self::Srgb => crate::util::color::srgb_to_linear(value),
+            Self::Linear => value,
+        }
+    }
 }
 
 /// The decoding of 8-bit code k in `encoding`, computed as the image
