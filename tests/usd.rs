@@ -1020,3 +1020,112 @@ fn the_usd_working_group_s_assets_render_in_every_texture_format_they_carry() {
         .concat(),
     );
 }
+
+/// Primvar readers into inputs other than diffuseColor (roughness,
+/// metallic, emissiveColor): each gprim reads its own constant value of
+/// the primvar, its own or inherited from an ancestor (UsdGeomPrimvarsAPI),
+/// so the stage renders bit for bit as one with those values written into
+/// a material per gprim. A gprim without the primvar reads the reader's
+/// fallback, with a note naming the gprim and the primvar that `--strict`
+/// makes an error.
+#[test]
+fn primvar_readers_give_each_gprim_its_constant_values_in_any_input() {
+    let dir = TempDir::new("usd-primvar-inputs");
+    let reader = |name: &str, kind: &str, varname: &str, fallback: &str, output: &str| {
+        format!(
+            "    def Shader \"{name}\"\n    {{\n        uniform token info:id = \"UsdPrimvarReader_{kind}\"\n        \
+             string inputs:varname = \"{varname}\"\n        {fallback}\n        {output} outputs:result\n    }}\n"
+        )
+    };
+    let surface = |inputs: &str| {
+        format!(
+            "    token outputs:surface.connect = <Surface.outputs:surface>\n    def Shader \"Surface\"\n    {{\n        \
+             uniform token info:id = \"UsdPreviewSurface\"\n        color3f inputs:diffuseColor = (0.5, 0.5, 0.5)\n{inputs}        \
+             token outputs:surface\n    }}\n"
+        )
+    };
+    let stage = |left: &str, right: &str, materials: &str| {
+        format!(
+            "#usda 1.0\n(\n    metersPerUnit = 1\n    upAxis = \"Y\"\n)\n{left}\n{right}\n{materials}\n\
+             def Camera \"Camera\"\n{{\n    float focalLength = 35\n    double3 xformOp:translate = (0, 0, 8)\n    \
+             uniform token[] xformOpOrder = [\"xformOp:translate\"]\n}}\n"
+        )
+    };
+    let ball = |name: &str, x: f64, extra: &str, material: &str| {
+        format!(
+            "def Sphere \"{name}\"\n{{\n    double radius = 1\n    double3 xformOp:translate = ({x}, 0, 0)\n    \
+             uniform token[] xformOpOrder = [\"xformOp:translate\"]\n{extra}    rel material:binding = <{material}>\n}}\n"
+        )
+    };
+    let connected = surface(
+        "        float inputs:roughness.connect = </M/Rough.outputs:result>\n        \
+         float inputs:metallic.connect = </M/Metal.outputs:result>\n        \
+         color3f inputs:emissiveColor.connect = </M/Glow.outputs:result>\n",
+    );
+    let read = stage(
+        &format!(
+            "def Xform \"Left\" \n{{\n    float primvars:metal = 1 (\n        interpolation = \"constant\"\n    )\n{}}}",
+            ball(
+                "Ball",
+                -1.5,
+                "    float[] primvars:rough = [0.2] (\n        interpolation = \"constant\"\n    )\n    \
+                 color3f[] primvars:glow = [(0.5, 0.25, 0.125)]\n",
+                "/M"
+            )
+        ),
+        &ball("Right", 1.5, "    float primvars:rough = 0.6\n    color3f[] primvars:glow = [(0, 0, 0)]\n", "/M"),
+        &format!(
+            "def Material \"M\"\n{{\n{connected}{}{}{}}}",
+            reader("Rough", "float", "rough", "float inputs:fallback = 0.9", "float"),
+            reader("Metal", "float", "metal", "float inputs:fallback = 0", "float"),
+            reader("Glow", "float3", "glow", "float3 inputs:fallback = (0, 0, 0)", "float3"),
+        ),
+    );
+    let direct = stage(
+        &format!("def Xform \"Left\"\n{{\n{}}}", ball("Ball", -1.5, "", "/A")),
+        &ball("Right", 1.5, "", "/B"),
+        &format!(
+            "def Material \"A\"\n{{\n{}}}\ndef Material \"B\"\n{{\n{}}}",
+            surface(
+                "        float inputs:roughness = 0.2\n        float inputs:metallic = 1\n        \
+                 color3f inputs:emissiveColor = (0.5, 0.25, 0.125)\n"
+            ),
+            surface("        float inputs:roughness = 0.6\n        float inputs:metallic = 0\n"),
+        ),
+    );
+    let flags =
+        ["--resolution", "48x32", "--exact", "--environment", "0.5,0.5,0.5", "--sun", "30,45", "--aovs", "none"];
+    let run = |name: &str, text: &str| {
+        let path = dir.write(&format!("{name}.usda"), text);
+        let out =
+            lightcuts(&[&["render", s(&path), "-o", s(&dir.path(&format!("{name}.exr"))), "-q"][..], &flags].concat());
+        assert!(out.status.success(), "{name}: {}", String::from_utf8_lossy(&out.stderr));
+        (path, String::from_utf8_lossy(&out.stderr).into_owned())
+    };
+    let (read_path, stderr) = run("read", &read);
+    let (_, direct_stderr) = run("direct", &direct);
+    let a = common::read_exr(&dir.path("read.exr")).unwrap();
+    let b = common::read_exr(&dir.path("direct.exr")).unwrap();
+    for c in ["R", "G", "B"] {
+        assert!(channel(&a, c) == channel(&b, c), "channel {c} differs from the materials written out");
+    }
+    assert!(channel(&a, "R").iter().any(|&v| v > 0.0), "a black frame proves nothing");
+    // Right has no 'metal': the reader's fallback (0), noted.
+    assert!(stderr.contains("/Right") && stderr.contains("'metal'"), "{stderr}");
+    assert!(!stderr.contains("'rough'") && !stderr.contains("'glow'"), "{stderr}");
+    assert!(!direct_stderr.contains("primvar"), "{direct_stderr}");
+    let strict = lightcuts_fails(
+        &[&["render", s(&read_path), "-o", s(&dir.path("strict.exr")), "--strict"][..], &flags].concat(),
+    );
+    assert!(strict.contains("'metal'"), "{strict}");
+    assert!(!dir.path("strict.exr").exists());
+    // A primvar no reader reads (a 2-vector), or one varying over the
+    // surface: the fallback, noted; not an error.
+    for (name, rough) in [
+        ("vec2", "texCoord2f[] primvars:rough = [(0.2, 0.2)]"),
+        ("varying", "float[] primvars:rough = [0.2, 0.4] (\n        interpolation = \"vertex\"\n    )"),
+    ] {
+        let (_, stderr) = run(name, &read.replace("float primvars:rough = 0.6", rough));
+        assert!(stderr.contains("/Right") && stderr.contains("'rough'"), "{name}: {stderr}");
+    }
+}

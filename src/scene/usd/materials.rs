@@ -82,6 +82,11 @@ pub(super) struct Imported {
     /// and the reader's fallback where a mesh lacks it: the mesh's vertex
     /// colours, times a white base colour.
     pub colour_primvar: Option<(String, Vec3)>,
+    /// The primvars its other inputs read through primvar readers (not
+    /// given a value by the import), each with the note of what a gprim
+    /// without a constant value of it gets instead (docs/design.md §6.8,
+    /// "Primvar readers").
+    pub primvars: Vec<(String, String)>,
 }
 
 /// Imports materials and their textures, each once.
@@ -99,6 +104,12 @@ pub(super) struct Materials<'s> {
     lacking: Vec<String>,
     /// Bound materials no layer defines.
     pub(super) undefined: Vec<String>,
+    /// The values primvar readers read in the import under way: a gprim's
+    /// constant primvars, by name (empty for the material all gprims share).
+    constants: HashMap<String, DVec4>,
+    /// The primvars read with no value in `constants` in the import under
+    /// way, with the note of what is used instead.
+    primvar_reads: Vec<(String, String)>,
 }
 
 impl<'s> Materials<'s> {
@@ -111,6 +122,8 @@ impl<'s> Materials<'s> {
             read: Vec::new(),
             lacking: Vec::new(),
             undefined: Vec::new(),
+            constants: HashMap::new(),
+            primvar_reads: Vec::new(),
         }
     }
 
@@ -129,8 +142,25 @@ impl<'s> Materials<'s> {
         inputs: &mut Vec<std::path::PathBuf>,
         warnings: &mut Vec<String>,
     ) -> Result<Imported, Located> {
+        self.primvar_reads.clear();
         let imported = self.import_surface(path, textures, warnings);
         inputs.extend(self.read.drain(..).filter(|f| !inputs.contains(f)).collect::<Vec<_>>());
+        imported
+    }
+
+    /// [`Self::import`] for a gprim whose constant primvars `constants`
+    /// (by name) are what the material's primvar readers read.
+    pub(super) fn import_with(
+        &mut self,
+        path: &str,
+        constants: HashMap<String, DVec4>,
+        textures: &mut Vec<Texture>,
+        inputs: &mut Vec<std::path::PathBuf>,
+        warnings: &mut Vec<String>,
+    ) -> Result<Imported, Located> {
+        self.constants = constants;
+        let imported = self.import(path, textures, inputs, warnings);
+        self.constants.clear();
         imported
     }
 
@@ -140,7 +170,12 @@ impl<'s> Materials<'s> {
         textures: &mut Vec<Texture>,
         warnings: &mut Vec<String>,
     ) -> Result<Imported, Located> {
-        let grey = || Imported { material: default_material(path), varname: "st".to_string(), colour_primvar: None };
+        let grey = || Imported {
+            material: default_material(path),
+            varname: "st".to_string(),
+            colour_primvar: None,
+            primvars: Vec::new(),
+        };
         let info = self.stage.prim(path).map_err(|e| (path.to_string(), e))?;
         if info.type_name.is_empty() {
             // Nothing defines it: the layer that would is missing or not read.
@@ -315,11 +350,21 @@ impl<'s> Materials<'s> {
                 // (A number's fallback reads as grey already: Self::value.)
                 return Ok((Source::Value(DVec4::ONE), Some((varname, reader_fallback.unwrap_or(DVec4::ZERO)))));
             }
+            // A gprim's constant value; else the reader's fallback, noted
+            // for each gprim that gets it (docs/design.md §6.8).
+            if let Some(&value) = self.constants.get(&varname) {
+                return Ok((Source::Value(value), None));
+            }
             let (what, value) = instead(self, reader_fallback.or(Some(DVec4::ZERO)))?;
-            self.lacking.push(format!(
-                "{source}: a primvar ('{varname}') read into {shader}.inputs:{name} is not varied over the surface: \
-                 {what} is used"
-            ));
+            let note = format!(
+                "{source}: a primvar ('{varname}') read into {shader}.inputs:{name} has no constant value on the \
+                 gprim (one that varies over the surface is read only into diffuseColor): {what} is used"
+            );
+            if varname.is_empty() {
+                self.lacking.push(note);
+            } else {
+                self.primvar_reads.push((varname, note));
+            }
             return Ok((value, None));
         }
         let (what, value) = instead(self, None)?;
@@ -543,6 +588,7 @@ impl<'s> Materials<'s> {
             material,
             varname: varname.unwrap_or_else(|| "st".to_string()),
             colour_primvar: colour_primvar.map(|(name, fallback)| (name, fallback.truncate().as_vec3())),
+            primvars: std::mem::take(&mut self.primvar_reads),
         })
     }
 

@@ -21,7 +21,7 @@ mod xform;
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
-use glam::{Affine3A, DMat4, DQuat, DVec3, Mat4, Vec3};
+use glam::{Affine3A, DMat4, DQuat, DVec3, DVec4, Mat4, Vec3};
 
 use self::geometry::Located;
 use self::stage::Stage;
@@ -214,6 +214,9 @@ struct Bound {
     material: usize,
     st: String,
     colour: Option<(String, Vec3)>,
+    /// The primvars its other inputs read, each with the note of what a
+    /// gprim without a constant value of it gets.
+    primvars: Vec<(String, String)>,
 }
 
 /// An instance being walked. Its prims are walked where they stand for
@@ -466,7 +469,7 @@ impl Walker<'_, '_> {
         if let Some(found) = self.material_index.get(&(key.clone(), culls)) {
             return Ok(found.clone());
         }
-        let (mut material, st, colour) = match binding {
+        let (mut material, st, colour, primvars) = match binding {
             Some(path) => {
                 let mut warnings = Vec::new();
                 let imported = self.materials.import(path, self.parts.textures, self.parts.inputs, &mut warnings);
@@ -477,18 +480,117 @@ impl Walker<'_, '_> {
                     self.lacks(lacking);
                 }
                 let imported = imported?;
-                (imported.material, imported.varname, imported.colour_primvar)
+                (imported.material, imported.varname, imported.colour_primvar, imported.primvars)
             }
             None => {
                 let grey = materials::display_material(&key, display.unwrap_or(materials::DEFAULT_GREY));
-                (grey, "st".to_string(), None)
+                (grey, "st".to_string(), None, Vec::new())
             }
         };
         material.culls_back_faces = culls;
         self.parts.materials.push(material);
-        let found = Bound { material: self.parts.materials.len() - 1, st, colour };
+        let found = Bound { material: self.parts.materials.len() - 1, st, colour, primvars };
         self.material_index.insert((key, culls), found.clone());
         Ok(found)
+    }
+
+    /// [`Self::material`] as gprim `prim` sees it: where the material's
+    /// primvar readers read primvars the gprim holds constant values of,
+    /// the material imported again with those values (one material for
+    /// each set of values); a reader whose primvar the gprim lacks, or
+    /// varies over its surface, reads its fallback, with a note
+    /// (docs/design.md §6.8, "Primvar readers").
+    fn material_for(
+        &mut self,
+        prim: &str,
+        binding: Option<&str>,
+        display: Option<Vec3>,
+        culls: bool,
+    ) -> Result<usize, Located> {
+        let shared = self.material(binding, display, culls)?;
+        let (Some(path), false) = (binding, shared.primvars.is_empty()) else { return Ok(shared.material) };
+        let mut constants = HashMap::new();
+        for (name, note) in &shared.primvars {
+            match self.constant_primvar(prim, name)? {
+                Some(value) => {
+                    constants.insert(name.clone(), value);
+                }
+                None => self.lacks(format!("{prim}: {note}")),
+            }
+        }
+        if constants.is_empty() {
+            return Ok(shared.material);
+        }
+        let mut values: Vec<_> = constants.iter().map(|(n, v)| format!("{n}={v}")).collect();
+        values.sort();
+        let key = (format!("{path} {}", values.join(" ")), culls);
+        if let Some(found) = self.material_index.get(&key) {
+            return Ok(found.material);
+        }
+        let mut warnings = Vec::new();
+        let imported =
+            self.materials.import_with(path, constants, self.parts.textures, self.parts.inputs, &mut warnings);
+        for w in warnings {
+            self.warn(w);
+        }
+        for lacking in self.materials.take_lacking() {
+            self.lacks(lacking);
+        }
+        let mut material = imported?.material;
+        material.culls_back_faces = culls;
+        material.name = format!("{} ({})", material.name, values.join(", "));
+        self.parts.materials.push(material);
+        let found = Bound { material: self.parts.materials.len() - 1, ..shared };
+        self.material_index.insert(key, found.clone());
+        Ok(found.material)
+    }
+
+    /// The value primvar `name` holds over the whole of gprim `prim`: one
+    /// authored on it with `constant` interpolation (or none), or of any
+    /// interpolation with every element equal; else a constant one on an
+    /// ancestor (constant primvars inherit down the namespace,
+    /// UsdGeomPrimvarsAPI's `FindPrimvarWithInheritance`). None where the
+    /// gprim's own varies over its surface, or no prim has one (or one of a
+    /// type no reader reads). A number reads as grey, a 4-vector as its
+    /// first three.
+    fn constant_primvar(&self, prim: &str, name: &str) -> Result<Option<DVec4>, Located> {
+        let attribute = format!("primvars:{name}");
+        let time = self.time();
+        let stage = self.stage;
+        let at = |p: &str| format!("{p}.{attribute}");
+        let mut owner = prim.to_string();
+        loop {
+            if stage.has_value(&owner, &attribute, time).map_err(|e| (at(&owner), e))? {
+                let interpolation = stage.interpolation(&owner, &attribute).map_err(|e| (at(&owner), e))?;
+                let constant = matches!(interpolation.as_deref(), None | Some("constant"));
+                let values: Vec<DVec4> = if let Some(v) = stage.number(&owner, &attribute, time).ok().flatten() {
+                    vec![DVec4::new(v, v, v, 1.0)]
+                } else if let Some(v) = stage.vec3(&owner, &attribute, time).ok().flatten() {
+                    vec![v.extend(1.0)]
+                } else if let Some(v) = stage.vec4(&owner, &attribute, time).ok().flatten() {
+                    vec![v]
+                } else {
+                    // A type no reader's output has (a 2-vector, a string):
+                    // no value, so the fallback.
+                    let colours = stage.colours(&owner, &attribute, time).ok().flatten();
+                    colours.unwrap_or_default().into_iter().map(|c| c.extend(1.0)).collect()
+                };
+                if let Some(v) = values.iter().find(|v| !v.is_finite()) {
+                    return Err((at(&owner), format!("must be finite, got {v:?}")));
+                }
+                let first = values.first().copied();
+                if owner == prim {
+                    return Ok(first.filter(|f| constant || values.iter().all(|v| v == f)));
+                }
+                if constant {
+                    return Ok(first);
+                }
+            }
+            match owner.rfind('/') {
+                Some(k) if k > 0 => owner.truncate(k),
+                _ => return Ok(None),
+            }
+        }
     }
 
     fn mesh(&mut self, prim: &str, here: &Context) -> Result<(), Located> {
@@ -604,7 +706,7 @@ impl Walker<'_, '_> {
             }
             (None, None) => None,
         };
-        let material = self.material(binding, display, !double_sided)?.material;
+        let material = self.material_for(prim, binding, display, !double_sided)?;
         mesh.material = material;
         if self.parts.materials[material].pbr.as_ref().is_some_and(|p| p.normal_map.is_some()) && mesh.uvs.is_some() {
             geometry::add_tangents(&mut mesh);
