@@ -89,21 +89,12 @@ pub fn import(
         spec.asset_paths.iter().map(|d| base.join(d)).chain(spec.search_paths.iter().cloned()).collect();
     // The reader is a young library: should it panic on a hostile file,
     // the panic is caught here and reported as the file's error, without
-    // the panic's own message on stderr.
-    let previous = std::panic::take_hook();
-    std::panic::set_hook(Box::new(|_| {}));
-    let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-        import_stage(&path, &search_paths, spec, want_camera, parts)
-    }));
-    std::panic::set_hook(previous);
-    match result {
+    // the panic's own message on stderr (and without silencing any other
+    // thread's: crate::util::panic).
+    match crate::util::panic::catch_quietly(|| import_stage(&path, &search_paths, spec, want_camera, parts)) {
         Ok(result) => result,
         Err(panic) => {
-            let what = panic
-                .downcast_ref::<String>()
-                .cloned()
-                .or_else(|| panic.downcast_ref::<&str>().map(|s| (*s).to_string()))
-                .unwrap_or_default();
+            let what = crate::util::panic::message(&*panic);
             Err(SceneError::new(&path, "file", format!("the USD reader failed on this file ({what})")))
         }
     }
