@@ -827,11 +827,12 @@ fn curves_and_points_cover_what_their_widths_say() {
 fn udim_tiles_are_read_where_their_coordinates_fall() {
     let dir = TempDir::new("usd-udim");
     std::fs::create_dir(dir.path("tex")).unwrap();
-    for (tile, rgb) in [(1001, [255u8, 0, 0]), (1002, [0, 255, 0]), (1011, [0, 0, 255])] {
+    // Tile 1011 is smaller: resampled to the first tile's size.
+    for (tile, rgb, size) in [(1001, [255u8, 0, 0], 4), (1002, [0, 255, 0], 4), (1011, [0, 0, 255], 2)] {
         let file = std::fs::File::create(dir.path(&format!("tex/c.{tile}.png"))).unwrap();
-        let mut encoder = png::Encoder::new(file, 4, 4);
+        let mut encoder = png::Encoder::new(file, size, size);
         encoder.set_color(png::ColorType::Rgb);
-        let texels: Vec<u8> = (0..16).flat_map(|_| rgb).collect();
+        let texels: Vec<u8> = (0..size * size).flat_map(|_| rgb).collect();
         encoder.write_header().unwrap().write_image_data(&texels).unwrap();
     }
     let stage = dir.write(

@@ -804,11 +804,12 @@ impl<'s> Materials<'s> {
             return Err(format!("no UDIM tile of '{authored}' was found (looked for {first} and the tiles after it)"));
         }
         let (cols, rows) = udim_grid(&tiles);
-        let mut images = HashMap::new();
+        // By (row, column): in tile order, so the first is the lowest tile.
+        let mut images = std::collections::BTreeMap::new();
         for (c, r, tile) in tiles {
             self.load(&tile.location, &tile.authored)?;
             // The tile is kept only in the atlas.
-            images.insert((c, r), self.images.remove(&tile.location).expect("loaded above")?);
+            images.insert((r, c), self.images.remove(&tile.location).expect("loaded above")?);
         }
         let first = images.values().next().expect("at least one tile");
         let (w, h) = (first.width, first.height);
@@ -816,7 +817,7 @@ impl<'s> Materials<'s> {
         // The tile and texel an atlas texel reads, None where no tile is.
         let source = |at: usize| -> Option<(&RgbImage, usize)> {
             let (x, y) = (at % width, at / width);
-            let image = images.get(&(x / w, rows - 1 - y / h))?;
+            let image = images.get(&(rows - 1 - y / h, x / w))?;
             let (x, y) = (x % w, y % h);
             Some((image, (y * image.height / h) * image.width + x * image.width / w))
         };
