@@ -1120,6 +1120,11 @@ fn primvar_readers_give_each_gprim_its_constant_values_in_any_input() {
     );
     assert!(strict.contains("'metal'"), "{strict}");
     assert!(!dir.path("strict.exr").exists());
+    // Two gprims without 'metal': one line naming the first and the count.
+    let (_, both) =
+        run("both", &read.replace("    float primvars:metal = 1 (\n        interpolation = \"constant\"\n    )\n", ""));
+    assert_eq!(both.matches("'metal'").count(), 1, "{both}");
+    assert!(both.contains("/Left/Ball and 1 more"), "{both}");
     // A primvar no reader reads (a 2-vector), or one varying over the
     // surface: the fallback, noted; not an error.
     for (name, rough) in [

@@ -166,6 +166,7 @@ fn import_stage(
         still_moving: 0,
         cages: std::collections::BTreeMap::new(),
         skipped: std::collections::BTreeMap::new(),
+        primvar_fallbacks: std::collections::BTreeMap::new(),
     };
     walker.materials = materials::Materials::new(&stage, walker.time());
     let roots = stage.root_prims().map_err(|e| SceneError::new(path, "/", e))?;
@@ -281,6 +282,9 @@ struct Walker<'a, 'p> {
     cages: std::collections::BTreeMap<&'static str, (usize, String)>,
     /// The prim types not drawn: how many of each, and the first one's path.
     skipped: std::collections::BTreeMap<String, (usize, String)>,
+    /// Primvar readers that read their fallback on some gprims: the note,
+    /// how many gprims, and the first one's path.
+    primvar_fallbacks: std::collections::BTreeMap<String, (usize, String)>,
 }
 
 /// "/First" for one prim, "/First and 2 more" for three: how a warning
@@ -506,7 +510,7 @@ impl Walker<'_, '_> {
                 Some(value) => {
                     constants.insert(name.clone(), value);
                 }
-                None => self.lacks(format!("{prim}: {note}")),
+                None => self.primvar_fallbacks.entry(note.clone()).or_insert((0, prim.to_string())).0 += 1,
             }
         }
         if constants.is_empty() {
@@ -1124,6 +1128,9 @@ impl Walker<'_, '_> {
         for (type_name, (count, first)) in std::mem::take(&mut self.skipped) {
             let because = not_drawn_because(&type_name);
             self.lacks(format!("{}: {type_name} not drawn ({because})", first_and_more(&first, count)));
+        }
+        for (note, (count, first)) in std::mem::take(&mut self.primvar_fallbacks) {
+            self.lacks(format!("{}: {note}", first_and_more(&first, count)));
         }
         for (why, (count, first)) in std::mem::take(&mut self.cages) {
             let prims = first_and_more(&first, count);
