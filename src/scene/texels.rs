@@ -61,6 +61,16 @@ fn exact_code(table: &[f32; 256], v: f32) -> Option<u8> {
     (k < 256 && table[k].to_bits() == v.to_bits()).then_some(k as u8)
 }
 
+/// The codes in `encoding` of `texel(0)`, ..., `texel(count - 1)`, if
+/// every channel of each is a code's value exactly.
+fn exact_codes(encoding: Encoding, count: usize, texel: impl Fn(usize) -> Vec3) -> Option<Texels> {
+    let table = table(encoding);
+    let code = |v: f32| exact_code(table, v);
+    let codes: Option<Vec<[u8; 3]>> =
+        (0..count).map(texel).map(|t| Some([code(t.x)?, code(t.y)?, code(t.z)?])).collect();
+    Some(Texels::Codes { codes: codes?, table })
+}
+
 /// The code whose value in `table` is nearest `v`.
 fn nearest_code(table: &[f32; 256], v: f32) -> u8 {
     let k = table.partition_point(|&t| t < v).min(255);
@@ -83,13 +93,8 @@ impl Texels {
     #[must_use]
     pub fn compact(texels: Vec<Vec3>) -> Self {
         for encoding in [Encoding::Srgb, Encoding::Linear] {
-            let table = table(encoding);
-            let codes: Option<Vec<[u8; 3]>> = texels
-                .iter()
-                .map(|t| Some([exact_code(table, t.x)?, exact_code(table, t.y)?, exact_code(table, t.z)?]))
-                .collect();
-            if let Some(codes) = codes {
-                return Self::Codes { codes, table };
+            if let Some(codes) = exact_codes(encoding, texels.len(), |k| texels[k]) {
+                return codes;
             }
         }
         let half = |v: f32| -> Option<half::f16> {
@@ -121,17 +126,8 @@ impl Texels {
     /// what decoding an image to codes saves is not spent again here.
     #[must_use]
     pub fn collect(count: usize, codes_in: Option<Encoding>, texel: impl Fn(usize) -> Vec3) -> Self {
-        if let Some(encoding) = codes_in {
-            let table = table(encoding);
-            let codes: Option<Vec<[u8; 3]>> = (0..count)
-                .map(|k| {
-                    let t = texel(k);
-                    Some([exact_code(table, t.x)?, exact_code(table, t.y)?, exact_code(table, t.z)?])
-                })
-                .collect();
-            if let Some(codes) = codes {
-                return Self::Codes { codes, table };
-            }
+        if let Some(codes) = codes_in.and_then(|encoding| exact_codes(encoding, count, &texel)) {
+            return codes;
         }
         Self::compact((0..count).map(texel).collect())
     }

@@ -134,23 +134,9 @@ impl<'s> Materials<'s> {
 
     /// The material at `path` (a `Material` prim), with its textures added
     /// to `textures` and the files read to `inputs`; warnings for what it
-    /// renders otherwise.
+    /// renders otherwise. Its primvar readers read `constants` (a gprim's
+    /// constant primvars, by name; empty for the material all gprims share).
     pub(super) fn import(
-        &mut self,
-        path: &str,
-        textures: &mut Vec<Texture>,
-        inputs: &mut Vec<std::path::PathBuf>,
-        warnings: &mut Vec<String>,
-    ) -> Result<Imported, Located> {
-        self.primvar_reads.clear();
-        let imported = self.import_surface(path, textures, warnings);
-        inputs.extend(self.read.drain(..).filter(|f| !inputs.contains(f)).collect::<Vec<_>>());
-        imported
-    }
-
-    /// [`Self::import`] for a gprim whose constant primvars `constants`
-    /// (by name) are what the material's primvar readers read.
-    pub(super) fn import_with(
         &mut self,
         path: &str,
         constants: HashMap<String, DVec4>,
@@ -159,8 +145,10 @@ impl<'s> Materials<'s> {
         warnings: &mut Vec<String>,
     ) -> Result<Imported, Located> {
         self.constants = constants;
-        let imported = self.import(path, textures, inputs, warnings);
+        self.primvar_reads.clear();
+        let imported = self.import_surface(path, textures, warnings);
         self.constants.clear();
+        inputs.extend(self.read.drain(..).filter(|f| !inputs.contains(f)).collect::<Vec<_>>());
         imported
     }
 

@@ -466,15 +466,7 @@ impl Walker<'_, '_> {
         }
         let (mut material, st, colour, primvars) = match binding {
             Some(path) => {
-                let mut warnings = Vec::new();
-                let imported = self.materials.import(path, self.parts.textures, self.parts.inputs, &mut warnings);
-                for w in warnings {
-                    self.warn(w);
-                }
-                for lacking in self.materials.take_lacking() {
-                    self.lacks(lacking);
-                }
-                let imported = imported?;
+                let imported = self.import_material(path, HashMap::new())?;
                 (imported.material, imported.varname, imported.colour_primvar, imported.primvars)
             }
             None => {
@@ -487,6 +479,25 @@ impl Walker<'_, '_> {
         let found = Bound { material: self.parts.materials.len() - 1, st, colour, primvars };
         self.material_index.insert((key, culls), found.clone());
         Ok(found)
+    }
+
+    /// The material at `path`, its primvar readers reading `constants` (by
+    /// primvar name; empty for the material every gprim shares), with its
+    /// warnings and what it lacks reported.
+    fn import_material(
+        &mut self,
+        path: &str,
+        constants: HashMap<String, DVec4>,
+    ) -> Result<materials::Imported, Located> {
+        let mut warnings = Vec::new();
+        let imported = self.materials.import(path, constants, self.parts.textures, self.parts.inputs, &mut warnings);
+        for w in warnings {
+            self.warn(w);
+        }
+        for lacking in self.materials.take_lacking() {
+            self.lacks(lacking);
+        }
+        imported
     }
 
     /// [`Self::material`] as gprim `prim` sees it: where the material's
@@ -522,16 +533,7 @@ impl Walker<'_, '_> {
         if let Some(found) = self.material_index.get(&key) {
             return Ok(found.material);
         }
-        let mut warnings = Vec::new();
-        let imported =
-            self.materials.import_with(path, constants, self.parts.textures, self.parts.inputs, &mut warnings);
-        for w in warnings {
-            self.warn(w);
-        }
-        for lacking in self.materials.take_lacking() {
-            self.lacks(lacking);
-        }
-        let mut material = imported?.material;
+        let mut material = self.import_material(path, constants)?.material;
         material.culls_back_faces = culls;
         material.name = format!("{} ({})", material.name, values.join(", "));
         self.parts.materials.push(material);
