@@ -820,6 +820,55 @@ fn curves_and_points_cover_what_their_widths_say() {
     assert!(!dir.path("bad.exr").exists());
 }
 
+/// A round curve is a fibre (docs/design.md §5.7): lit only by lights
+/// behind it (a 4 x 4 grid of them, the camera's view passing between),
+/// its near side shows the light that crossed it (the TT lobe), where a
+/// ray-facing ribbon of the same material, a surface, is black; its own
+/// far side does not shadow it. The cuts stay within their error of the
+/// exact render.
+#[test]
+fn a_tube_is_a_fibre_lit_through_from_behind() {
+    let dir = TempDir::new("usd-fibre");
+    let lights: String = (0..16)
+        .map(|k| {
+            let (x, y) = (-1.5 + (k % 4) as f64, -1.5 + (k / 4) as f64);
+            format!(
+                "def SphereLight \"L{k}\"\n{{\n    float inputs:intensity = 30\n    float inputs:radius = 0.05\n    \
+                 double3 xformOp:translate = ({x}, {y}, -4)\n    uniform token[] xformOpOrder = [\"xformOp:translate\"]\n}}\n"
+            )
+        })
+        .collect();
+    let stage = |normals: &str| {
+        format!(
+            "#usda 1.0\n(\n    metersPerUnit = 1\n    upAxis = \"Y\"\n)\ndef Camera \"Cam\"\n{{\n    float focalLength = 50\n    \
+             float horizontalAperture = 20\n    float verticalAperture = 20\n    double3 xformOp:translate = (0, 0, 10)\n    \
+             uniform token[] xformOpOrder = [\"xformOp:translate\"]\n}}\ndef BasisCurves \"Hair\"\n{{\n    \
+             uniform token type = \"linear\"\n    int[] curveVertexCounts = [2]\n    point3f[] points = [(-3,0,0),(3,0,0)]\n    \
+             float[] widths = [0.8] (interpolation = \"constant\")\n{normals}    \
+             color3f[] primvars:displayColor = [(0.9, 0.8, 0.6)]\n}}\n{lights}"
+        )
+    };
+    let tube = dir.write("tube.usda", &stage(""));
+    let ribbon = dir.write("ribbon.usda", &stage("    normal3f[] normals = [(0,0,1),(0,0,1)]\n"));
+    let flags = ["--resolution", "64x64", "--spp", "4"];
+    // The middle row of the image crosses the curve's axis.
+    let middle = |image: &common::ExrImage| -> f64 {
+        let r = channel(image, "G");
+        (16..48).map(|x| f64::from(r[32 * 64 + x])).sum::<f64>() / 32.0
+    };
+    let exact = render(&tube, &dir.path("exact.exr"), &[&flags[..], &["--exact"]].concat());
+    let lit = middle(&exact);
+    assert!(lit > 0.01, "the fibre lit from behind is black: {lit}");
+    let surface = middle(&render(&ribbon, &dir.path("ribbon.exr"), &[&flags[..], &["--exact"]].concat()));
+    assert!(surface < 1e-3 * lit, "a ribbon, a surface, shows light from behind it: {surface} against {lit}");
+    for mode in ["--bounded", "--stochastic"] {
+        let out = dir.path(&format!("{}.exr", &mode[2..]));
+        let image = render(&tube, &out, &[&flags[..], &[mode]].concat());
+        let value = middle(&image);
+        assert!((value / lit - 1.0).abs() < 0.03, "{mode}: {value} against the exact {lit}");
+    }
+}
+
 /// A `<UDIM>` texture reads tile 1001 + u + 10 v where the texture
 /// coordinates fall in [u, u + 1) x [v, v + 1), and black where the tile
 /// is absent, its tiles found beside the layer that names the pattern.

@@ -173,6 +173,10 @@ pub struct PointBounds {
     phong: Option<(Frame, f32)>,
     /// A metallic-roughness material's lobe (instead of diffuse + Phong).
     ggx: Option<GgxBounds>,
+    /// A fibre's largest f cos over every direction (instead of any
+    /// surface's lobes; docs/design.md §5.7): per channel, and
+    /// luminance-weighted.
+    fibre: Option<(Vec3, V3)>,
     /// Luminance weights times the diffuse BRDF k_d / pi, and times the
     /// Phong lobe's peak k_s (n + 2) / (2 pi): M's luminance against an
     /// intensity I is diffuse.I + cos_r^n lobe.I, times cos theta.
@@ -210,6 +214,10 @@ impl PointBounds {
                 back: Frame::splat(-sp.wo),
                 diffuse_fresnel: f32x4::splat(1.0 - pbr.f0.max_element()),
             }),
+            fibre: sp.fibre.map(|f| {
+                let peak = f.peak();
+                (peak, splat3(LUMINANCE * peak))
+            }),
             diffuse: splat3(LUMINANCE * sp.kd * (1.0 / PI)),
             lobe: splat3(LUMINANCE * lobe),
             luminance: splat3(LUMINANCE),
@@ -240,6 +248,7 @@ impl PointBounds {
             normal: Frame::splat(g.axis),
             phong: None,
             ggx: None,
+            fibre: None,
             diffuse: splat3(weights * g.diffuse),
             lobe: splat3(Vec3::ZERO),
             luminance: splat3(LUMINANCE),
@@ -255,6 +264,9 @@ impl PointBounds {
     /// over a box holding every unit vector.
     #[must_use]
     pub fn gather_terms(&self, kd: Vec3) -> (Vec3, Vec3) {
+        if let Some((peak, _)) = self.fibre {
+            return (Vec3::ZERO, peak);
+        }
         if self.phong.is_none() && self.ggx.is_none() {
             return (kd * (1.0 / PI), Vec3::ZERO);
         }
@@ -279,6 +291,10 @@ impl PointBounds {
                 widen(self.normal.cos_bound(c, h), cluster.cos_cone, cluster.sin_cone).fast_max(f32x4::ZERO);
             let weighted = cos_theta * dot3(&self.diffuse, intensity) + dot3(&cluster.glossy, intensity);
             return (weighted.cmp_gt(f32x4::ZERO).blend(f32x4::ONE, f32x4::ZERO), weighted);
+        }
+        if let Some((_, peak)) = &self.fibre {
+            // Lit from every side: no cosine, the peak towards any box.
+            return (f32x4::ONE, dot3(peak, intensity));
         }
         if let Some(ggx) = &self.ggx {
             return self.ggx(ggx, c, h, intensity, lobes);

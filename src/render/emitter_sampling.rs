@@ -108,18 +108,22 @@ impl<'a> EmitterSampling<'a> {
     /// bright a uniform sky), an area light by its estimated irradiance
     /// ([`crate::light::area::AreaEmitter::weight`]), 0 when its box lies
     /// wholly behind the shading normal's plane.
+    /// A fibre is lit from every side (docs/design.md §5.7): no emitter is
+    /// behind it.
     pub fn weigh(&self, sp: &SurfacePoint<'_>, choice: &mut EmitterChoice) {
-        self.weigh_at(sp.p, sp.n, choice);
+        self.weigh_at(sp.p, sp.fibre.is_none().then_some(sp.n), choice);
     }
 
-    /// [`EmitterSampling::weigh`] at point `p` of shading normal `n`.
-    pub fn weigh_at(&self, p: Vec3, n: Vec3, choice: &mut EmitterChoice) {
+    /// [`EmitterSampling::weigh`] at point `p` of shading normal `n` (None:
+    /// lit from every side).
+    pub fn weigh_at(&self, p: Vec3, n: Option<Vec3>, choice: &mut EmitterChoice) {
         choice.weights.clear();
         if let Some(e) = &self.environment {
             choice.weights.push(std::f32::consts::PI * e.light.mean_luminance());
         }
         for e in &self.area.emitters {
-            choice.weights.push(if e.above(p, n) { e.weight(p) } else { 0.0 });
+            let faces = n.is_none_or(|n| e.above(p, n));
+            choice.weights.push(if faces { e.weight(p) } else { 0.0 });
         }
         choice.total = choice.weights.iter().sum();
     }
@@ -238,7 +242,7 @@ radiance = [0.2, 0.2, 0.2]
         assert_eq!(sampling.area.emitters.len(), 2);
         let choose = |p: Vec3, n: Vec3| -> EmitterChoice {
             let mut choice = EmitterChoice::default();
-            sampling.weigh_at(p, n, &mut choice);
+            sampling.weigh_at(p, Some(n), &mut choice);
             choice
         };
         for (p, n) in [(Vec3::ZERO, Vec3::Y), (Vec3::new(1.5, 0.5, 0.0), Vec3::X), (Vec3::new(0.0, 3.0, 0.0), Vec3::Y)]

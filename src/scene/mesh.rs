@@ -79,6 +79,38 @@ impl Strands {
     }
 }
 
+impl Strands {
+    /// The direction along curve segment `primitive` at parameter `u`
+    /// (dP/du of its basis over `positions`, not normalised); None for a
+    /// sphere. B-spline: dB/du = (-(1-u)^2, 3u^2 - 4u, -3u^2 + 2u + 1,
+    /// u^2) / 2; Catmull-Rom: the derivative of its cubic in u; Bezier:
+    /// 3 the quadratic of the control polygon's legs.
+    #[must_use]
+    pub fn tangent(&self, positions: &[Vec3], primitive: usize, u: f32) -> Option<Vec3> {
+        let StrandKind::Curves { basis, segments, .. } = &self.kind else { return None };
+        let first = segments[primitive] as usize;
+        let p = |k: usize| positions[first + k];
+        let u = u.clamp(0.0, 1.0);
+        let s = 1.0 - u;
+        Some(match basis {
+            CurveBasis::Linear => p(1) - p(0),
+            CurveBasis::Bezier => 3.0 * (s * s * (p(1) - p(0)) + 2.0 * u * s * (p(2) - p(1)) + u * u * (p(3) - p(2))),
+            CurveBasis::BSpline => {
+                0.5 * (-s * s * p(0)
+                    + (3.0 * u * u - 4.0 * u) * p(1)
+                    + (-3.0 * u * u + 2.0 * u + 1.0) * p(2)
+                    + u * u * p(3))
+            }
+            CurveBasis::CatmullRom => {
+                let (p0, p1, p2, p3) = (p(0), p(1), p(2), p(3));
+                0.5 * ((p2 - p0)
+                    + 2.0 * u * (2.0 * p0 - 5.0 * p1 + 4.0 * p2 - p3)
+                    + 3.0 * u * u * (-p0 + 3.0 * p1 - 3.0 * p2 + p3))
+            }
+        })
+    }
+}
+
 impl Mesh {
     /// Whether some triangle has an area (an emitter of none emits nothing).
     #[must_use]
@@ -476,5 +508,54 @@ mod tests {
             let centre = (p0 + p1 + p2) / 3.0;
             assert!(n.dot(centre) > 0.0, "face at {centre} points inwards");
         }
+    }
+
+    /// Each basis's tangent is the derivative of its curve: a central
+    /// difference of the curve's points, evaluated from the basis
+    /// functions written out, matches it at interior parameters, and the
+    /// known end tangents hold (Bezier: 3 (P1 - P0); Catmull-Rom: (P2 -
+    /// P0) / 2).
+    #[test]
+    fn a_curve_s_tangent_is_the_derivative_of_its_points() {
+        let points =
+            [Vec3::new(0.0, 0.0, 0.0), Vec3::new(1.0, 2.0, 0.0), Vec3::new(3.0, 2.5, 1.0), Vec3::new(4.0, 0.0, 2.0)];
+        let position = |basis: CurveBasis, u: f32| -> Vec3 {
+            let s = 1.0 - u;
+            let w = match basis {
+                CurveBasis::Linear => [s, u, 0.0, 0.0],
+                CurveBasis::Bezier => [s * s * s, 3.0 * u * s * s, 3.0 * u * u * s, u * u * u],
+                CurveBasis::BSpline => [
+                    s * s * s / 6.0,
+                    (3.0 * u * u * u - 6.0 * u * u + 4.0) / 6.0,
+                    (-3.0 * u * u * u + 3.0 * u * u + 3.0 * u + 1.0) / 6.0,
+                    u * u * u / 6.0,
+                ],
+                CurveBasis::CatmullRom => [
+                    0.5 * (-u + 2.0 * u * u - u * u * u),
+                    0.5 * (2.0 - 5.0 * u * u + 3.0 * u * u * u),
+                    0.5 * (u + 4.0 * u * u - 3.0 * u * u * u),
+                    0.5 * (-u * u + u * u * u),
+                ],
+            };
+            points.iter().zip(w).map(|(p, w)| *p * w).sum()
+        };
+        for basis in [CurveBasis::Linear, CurveBasis::Bezier, CurveBasis::BSpline, CurveBasis::CatmullRom] {
+            let strands =
+                Strands { radii: vec![0.1; 4], kind: StrandKind::Curves { basis, ribbon: false, segments: vec![0] } };
+            for u in [0.2f32, 0.5, 0.8] {
+                let h = 1e-3;
+                let difference = (position(basis, u + h) - position(basis, u - h)) / (2.0 * h);
+                let tangent = strands.tangent(&points, 0, u).unwrap();
+                assert!((tangent - difference).length() < 1e-2, "{basis:?} at {u}: {tangent} against {difference}");
+            }
+            let start = strands.tangent(&points, 0, 0.0).unwrap();
+            match basis {
+                CurveBasis::Bezier => assert_eq!(start, 3.0 * (points[1] - points[0])),
+                CurveBasis::CatmullRom => assert_eq!(start, 0.5 * (points[2] - points[0])),
+                _ => {}
+            }
+        }
+        let spheres = Strands { radii: vec![0.1], kind: StrandKind::Spheres };
+        assert_eq!(spheres.tangent(&points, 0, 0.5), None);
     }
 }

@@ -9,6 +9,7 @@
 //! - glTF's metallic-roughness specular lobe (GGX): the visible normals of
 //!   the distribution (Heitz, "Sampling the GGX Distribution of Visible
 //!   Normals", JCGT 2018), reflected: pdf D(h) G1(wo) / (4 n.wo).
+//! - A fibre (`shading::fibre`): its own sampling, over the whole sphere.
 //!
 //! A material with both lobes picks one in proportion to an estimate of its
 //! reflectance and returns the mixture's density (one-sample MIS over the
@@ -25,6 +26,7 @@ use std::f32::consts::PI;
 use glam::Vec3;
 
 use super::direct::MaterialLanes;
+use super::fibre::Fibre;
 use super::lobes::Lobes;
 use super::pbr::{Pbr, MIN_COS_VIEW};
 use super::surface::SurfacePoint;
@@ -43,6 +45,9 @@ pub struct BsdfSample {
 /// The glossy lobe a BSDF samples.
 #[derive(Debug, Clone, Copy)]
 enum Glossy {
+    /// A fibre's lobes (docs/design.md §5.7), over the whole sphere: the
+    /// BSDF is this alone.
+    Fibre(Fibre),
     /// No continuous glossy lobe (none, or a perfect mirror).
     None,
     /// Phong's cos^e about the mirror direction (world space).
@@ -79,15 +84,16 @@ impl Bsdf {
         let local = Vec3::new(sp.wo.dot(t), sp.wo.dot(b), sp.wo.dot(n));
         let wo = Vec3::new(local.x, local.y, local.z.max(MIN_COS_VIEW)).normalize_or(Vec3::Z);
         let m = sp.material;
-        let (glossy, diffuse_weight, glossy_weight) = match &sp.pbr {
-            Some(pbr) => {
+        let (glossy, diffuse_weight, glossy_weight) = match (&sp.fibre, &sp.pbr) {
+            (Some(fibre), _) => (Glossy::Fibre(*fibre), 0.0, fibre.weight()),
+            (None, Some(pbr)) => {
                 let glossy = if pbr.is_smooth() { Glossy::None } else { Glossy::Ggx { alpha: pbr.alpha } };
                 (glossy, luminance(sp.kd), ggx_weight(pbr, wo.z))
             }
-            None if m.has_specular() => {
+            (None, None) if m.has_specular() => {
                 (Glossy::Phong { exponent: m.exponent, r: sp.r }, luminance(sp.kd), luminance(m.specular))
             }
-            None => (Glossy::None, luminance(sp.kd), 0.0),
+            (None, None) => (Glossy::None, luminance(sp.kd), 0.0),
         };
         let glossy_weight = if matches!(glossy, Glossy::None) { 0.0 } else { glossy_weight };
         Self { material: MaterialLanes::new(sp), t, b, n, wo, glossy, diffuse_weight, glossy_weight }
@@ -117,6 +123,9 @@ impl Bsdf {
     #[must_use]
     pub fn pdf(&self, wi: Vec3, lobes: Lobes) -> f32 {
         let Some(p_glossy) = self.glossy_probability(lobes) else { return 0.0 };
+        if let Glossy::Fibre(fibre) = &self.glossy {
+            return fibre.pdf(wi);
+        }
         let local = self.in_frame(wi);
         let mut pdf = 0.0;
         if p_glossy < 1.0 {
@@ -136,6 +145,10 @@ impl Bsdf {
     #[must_use]
     pub fn sample(&self, u: [f32; 3], lobes: Lobes) -> Option<BsdfSample> {
         let p_glossy = self.glossy_probability(lobes)?;
+        if let Glossy::Fibre(fibre) = &self.glossy {
+            let (wi, pdf) = fibre.sample(u)?;
+            return Some(BsdfSample { wi, f_cos: self.eval(wi, lobes), pdf });
+        }
         let local = if u[0] < p_glossy { self.sample_glossy(u[1], u[2]) } else { cosine_hemisphere(u[1], u[2]) };
         let wi = (self.t * local.x + self.b * local.y + self.n * local.z).normalize();
         let pdf = self.pdf(wi, lobes);
@@ -158,7 +171,8 @@ impl Bsdf {
     #[must_use]
     pub fn glossy_solid_angle(&self) -> Option<f32> {
         match self.glossy {
-            Glossy::None => None,
+            // A fibre's lobes wrap round it: every light sees them.
+            Glossy::None | Glossy::Fibre(_) => None,
             Glossy::Phong { exponent, .. } => Some(2.0 * PI / (exponent + 1.0)),
             Glossy::Ggx { alpha } => Some((4.0 * PI * alpha * alpha).min(2.0 * PI)),
         }
@@ -171,7 +185,7 @@ impl Bsdf {
     /// A direction of the glossy lobe, in the shading frame.
     fn sample_glossy(&self, u1: f32, u2: f32) -> Vec3 {
         match self.glossy {
-            Glossy::None => Vec3::Z,
+            Glossy::None | Glossy::Fibre(_) => Vec3::Z,
             Glossy::Phong { exponent, r } => {
                 // cos^e about r: cos alpha = u^(1 / (e + 1)).
                 let cos_alpha = u1.powf(1.0 / (exponent + 1.0));
@@ -192,6 +206,7 @@ impl Bsdf {
     fn glossy_pdf(&self, wi: Vec3, local: Vec3) -> f32 {
         match self.glossy {
             Glossy::None => 0.0,
+            Glossy::Fibre(fibre) => fibre.pdf(wi),
             Glossy::Phong { exponent, r } => {
                 let cos_alpha = r.dot(wi).max(0.0);
                 (exponent + 1.0) / (2.0 * PI) * cos_alpha.powf(exponent)

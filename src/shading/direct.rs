@@ -13,6 +13,7 @@ use std::f32::consts::PI;
 use glam::{DVec3, Vec3};
 use wide::{f32x4, f64x4, CmpEq, CmpLe};
 
+use super::fibre::Fibre;
 use super::lobes::Lobes;
 use super::pbr::PbrLanes;
 use super::surface::SurfacePoint;
@@ -136,6 +137,8 @@ pub struct MaterialLanes {
     wo: V3,
     /// A metallic-roughness material's BRDF (instead of diffuse + Phong).
     pbr: Option<PbrLanes>,
+    /// A fibre's BSDF (instead of any surface's), evaluated lane by lane.
+    fibre: Option<Fibre>,
     /// k_d / pi, per channel.
     diffuse: V3,
     /// k_s (n + 2) / (2 pi), and the exponent n, of a Phong lobe.
@@ -153,6 +156,7 @@ impl MaterialLanes {
             r: splat3(sp.r),
             wo: splat3(sp.wo),
             pbr: sp.pbr.map(|p| PbrLanes::new(&p, sp.n.dot(sp.wo))),
+            fibre: sp.fibre,
             diffuse: splat3(sp.kd * (1.0 / PI)),
             phong: m.has_specular().then(|| (m.specular, phong_normalisation(m.exponent), m.exponent)),
         }
@@ -160,10 +164,14 @@ impl MaterialLanes {
 
     /// M = f_r(wi, wo) cos(theta_i) of `lobes` for unit directions wi, per
     /// channel ([LC05] eq. 1); 0 when wi is below the shading or the
-    /// geometric surface.
+    /// geometric surface. A fibre has no below: its f cos is every lobe's
+    /// towards any direction (docs/design.md §5.7).
     #[inline(always)]
     pub fn term(&self, wi: &V3, lobes: Lobes) -> V3 {
         let zero = f32x4::ZERO;
+        if let Some(fibre) = &self.fibre {
+            return fibre_lanes(fibre, wi, lobes);
+        }
         let cos_theta = dot3(&self.n, wi);
         let below = cos_theta.cmp_le(zero) | dot3(&self.ng, wi).cmp_le(zero);
         if let Some(pbr) = &self.pbr {
@@ -182,6 +190,19 @@ impl MaterialLanes {
         }
         [below.blend(zero, f[0] * cos_theta), below.blend(zero, f[1] * cos_theta), below.blend(zero, f[2] * cos_theta)]
     }
+}
+
+/// A fibre's f cos towards four directions, one lane at a time (its
+/// lobes' transcendentals have no lane-wise form here). Its lobes are all
+/// glossy and diffuse at once: either asks for all of them.
+#[inline(never)]
+fn fibre_lanes(fibre: &Fibre, wi: &V3, lobes: Lobes) -> V3 {
+    if !(lobes.diffuse || lobes.glossy) {
+        return [f32x4::ZERO; 3];
+    }
+    let [x, y, z] = wi.map(f32x4::to_array);
+    let f: [Vec3; 4] = std::array::from_fn(|k| fibre.f_cos(Vec3::new(x[k], y[k], z[k])));
+    [f32x4::new(f.map(|v| v.x)), f32x4::new(f.map(|v| v.y)), f32x4::new(f.map(|v| v.z))]
 }
 
 /// Keeps the points drawn on area lights' triangles apart from other
@@ -249,7 +270,7 @@ impl<'a, 'p> LightEvaluator<'a, 'p> {
                     ShadowRay::new(Ray {
                         origin: self.origin_point,
                         direction,
-                        t_near: 0.0,
+                        t_near: self.sp.fibre_exit(direction),
                         t_far: f32::INFINITY,
                         time: self.sp.time,
                     })
@@ -314,12 +335,14 @@ impl<'a, 'p> LightEvaluator<'a, 'p> {
                 continue;
             }
             let value = DVec3::new(terms[0][k], terms[1][k], terms[2][k]) * *w;
-            let ray = (value != DVec3::ZERO && too_close[k] == 0.0).then(|| {
-                let direction = Vec3::new(direction[0][k], direction[1][k], direction[2][k]);
+            let direction = Vec3::new(direction[0][k], direction[1][k], direction[2][k]);
+            // Past a fibre's own tube (a light inside it: nothing between).
+            let t_near = self.sp.fibre_exit(direction);
+            let ray = (value != DVec3::ZERO && too_close[k] == 0.0 && t_near < t_far[k]).then(|| {
                 ShadowRay::new(Ray {
                     origin: self.origin_point,
                     direction,
-                    t_near: 0.0,
+                    t_near,
                     t_far: t_far[k],
                     time: self.sp.time,
                 })

@@ -5,6 +5,7 @@ use std::sync::Arc;
 
 use glam::{Affine3A, Mat3A, Vec2, Vec3, Vec4};
 
+use super::fibre::{self, Fibre};
 use super::pbr::Pbr;
 use super::surface::SurfacePoint;
 use crate::embree::{self, AlphaMask, Device, EmbreeError, Hit, MeshError, Ray};
@@ -230,7 +231,17 @@ impl<'s> Geometry<'s> {
         let uv = Vec2::new(hit.u, hit.v);
         let colour = mesh.colors.as_ref().map(|colors| strands.interpolate(colors, hit.primitive as usize, hit.u));
         let frame = Frame { p, n: ng, ng, wo, uvs: TexCoords::at([uv, uv]), colour, emits: false };
-        self.shaded(ray, hit, frame, &self.scene.materials[mesh.material])
+        let mut sp = self.shaded(ray, hit, frame, &self.scene.materials[mesh.material]);
+        if matches!(strands.kind, StrandKind::Curves { ribbon: false, .. }) && !sp.material.unlit {
+            let primitive = hit.primitive as usize;
+            let to_world = |v: Vec3| placement.map_or(v, |p| p.to_world.matrix3 * v);
+            let tangent = strands.tangent(&mesh.positions, primitive, hit.u).map(to_world);
+            // The radius in world units: the object's scale across the tube.
+            let scale = to_world(hit.ng.normalize_or_zero()).length();
+            let radius = strands.interpolate(&strands.radii, primitive, hit.u) * scale;
+            make_fibre(&mut sp, tangent, radius);
+        }
+        sp
     }
 
     /// The surface point of `frame`, shaded with `material`.
@@ -253,6 +264,8 @@ impl<'s> Geometry<'s> {
             kd,
             material,
             pbr,
+            fibre: None,
+            fibre_radius: 0.0,
             distance: hit.t * ray.direction.length(),
             time: ray.time,
             emitted: if material.unlit {
@@ -272,6 +285,20 @@ impl<'s> Geometry<'s> {
             },
         }
     }
+}
+
+/// Makes a tube's hit a fibre's (docs/design.md §5.7): the fibre BSDF of
+/// the material's colour (a metallic-roughness material's base colour, or
+/// the diffuse albedo) and roughness (0.3 for a material without one)
+/// takes the place of its lobes and of any mirror.
+fn make_fibre(sp: &mut SurfacePoint<'_>, tangent: Option<Vec3>, radius: f32) {
+    let colour = sp.pbr.map_or(sp.kd, |p| p.base);
+    let roughness = sp.pbr.map_or(fibre::DEFAULT_BETA, |p| p.alpha.sqrt());
+    let Some(bsdf) = tangent.and_then(|t| Fibre::new(t, sp.ng, sp.wo, colour, roughness)) else { return };
+    sp.fibre = Some(bsdf);
+    sp.fibre_radius = if radius.is_finite() { radius.max(0.0) } else { 0.0 };
+    sp.pbr = None;
+    sp.mirror = Vec3::ZERO;
 }
 
 /// How texture coordinates change from one pixel to the next along the

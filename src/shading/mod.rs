@@ -6,6 +6,7 @@
 pub mod bsdf;
 pub mod direct;
 pub mod evaluate;
+pub mod fibre;
 pub mod geometry;
 pub mod lobes;
 pub mod pbr;

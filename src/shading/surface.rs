@@ -3,6 +3,7 @@
 
 use glam::Vec3;
 
+use super::fibre::Fibre;
 use super::lobes::Lobes;
 use super::pbr::Pbr;
 use crate::embree::{Ray, ShadowRay};
@@ -28,6 +29,13 @@ pub struct SurfacePoint<'s> {
     /// The metallic-roughness BRDF's parameters here (textures looked up),
     /// for a material that has one.
     pub pbr: Option<Pbr>,
+    /// A round curve's hit is a fibre's (docs/design.md §5.7): its BSDF,
+    /// which takes the place of the material's lobes and lights the point
+    /// from every side, not from above a surface alone.
+    pub fibre: Option<Fibre>,
+    /// The fibre's radius, metres (0 for a surface): the rays that leave
+    /// through the fibre start past its far side.
+    pub fibre_radius: f32,
     /// Distance from the ray origin, metres.
     pub distance: f32,
     /// The time of the ray that found the point, in the shutter (0 at its
@@ -74,6 +82,8 @@ impl<'m> SurfacePoint<'m> {
             kd,
             material,
             pbr: None,
+            fibre: None,
+            fibre_radius: 0.0,
             distance: 1.0,
             time: 0.0,
             emitted: Vec3::ZERO,
@@ -105,8 +115,13 @@ impl SurfacePoint<'_> {
     /// = (1 - cos delta) / (1 + cos delta) <= a = alpha^2 (sqrt(ratio) - 1),
     /// so cos delta >= (1 - a) / (1 + a). -1 (any turn) where no glossy lobe
     /// takes lights (none, or a perfect mirror's).
+    /// A fibre's lobes turn with its tangent, which `r` does not follow:
+    /// 2, no turn at all.
     #[must_use]
     pub fn lobe_turn_cos(&self, ratio: f32) -> f32 {
+        if self.fibre.is_some() {
+            return 2.0;
+        }
         if let Some(pbr) = &self.pbr {
             if pbr.is_smooth() {
                 return -1.0;
@@ -135,16 +150,41 @@ impl SurfacePoint<'_> {
         let origin = self.offset_origin();
         let direction = y - origin;
         let length = direction.length();
-        if length <= 2.0 * self.epsilon {
+        let (t_near, t_far) = (self.fibre_exit(direction), 1.0 - self.epsilon / length);
+        if length <= 2.0 * self.epsilon || t_near >= t_far {
             return None;
         }
-        Some(ShadowRay::new(Ray {
-            origin,
-            direction,
-            t_near: 0.0,
-            t_far: 1.0 - self.epsilon / length,
-            time: self.time,
-        }))
+        Some(ShadowRay::new(Ray { origin, direction, t_near, t_far, time: self.time }))
+    }
+
+    /// Where a ray from `offset_origin` along `d` (any length) leaves a
+    /// fibre's tube, in units of `d`, and a ray offset past it: 0 for a
+    /// surface, and for a direction on the viewer's side of the fibre.
+    /// The fibre's BSDF already holds the light that crosses the fibre
+    /// (TT, TRT), so its own far side must not shadow it (docs/design.md
+    /// §5.7). The tube is taken as straight, of axis p - r ng: the far
+    /// root of |(r + e) ng_perp + s d_perp| = r, d_perp square to the axis.
+    #[must_use]
+    #[inline]
+    pub fn fibre_exit(&self, d: Vec3) -> f32 {
+        let Some(fibre) = &self.fibre else { return 0.0 };
+        let x = fibre.axis();
+        let across = d - x * x.dot(d);
+        let a = across.length_squared();
+        let lifted = self.fibre_radius + self.epsilon;
+        let b = 2.0 * lifted * self.ng.dot(across);
+        let c = lifted * lifted - self.fibre_radius * self.fibre_radius;
+        let discriminant = b * b - 4.0 * a * c;
+        if b >= 0.0 || a <= 0.0 || discriminant <= 0.0 {
+            return 0.0;
+        }
+        let far = (-b + discriminant.sqrt()) / (2.0 * a);
+        let exit = far * 1.001 + self.epsilon / d.length();
+        if exit.is_finite() {
+            exit
+        } else {
+            0.0
+        }
     }
 
     /// The shadow ray towards a light at infinity in unit direction `d`.
@@ -153,7 +193,7 @@ impl SurfacePoint<'_> {
         ShadowRay::new(Ray {
             origin: self.offset_origin(),
             direction: d,
-            t_near: 0.0,
+            t_near: self.fibre_exit(d),
             t_far: f32::INFINITY,
             time: self.time,
         })
@@ -179,7 +219,8 @@ impl SurfacePoint<'_> {
     /// a BSDF draw's, a light path's).
     #[must_use]
     pub fn ray_towards(&self, direction: Vec3) -> Ray {
-        Ray { origin: self.offset_origin(), direction, t_near: 0.0, t_far: f32::INFINITY, time: self.time }
+        let t_near = self.fibre_exit(direction);
+        Ray { origin: self.offset_origin(), direction, t_near, t_far: f32::INFINITY, time: self.time }
     }
 
     /// The distance clamp for point-light singularities: squared distances

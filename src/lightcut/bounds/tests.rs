@@ -287,6 +287,12 @@ fn cones_of<'a>(kind: LightKind, b: &'a (Block, ConeBlock, SpotBlock)) -> Option
 fn check_random_cluster(rng: &mut Rng, kind: LightKind) {
     let m = material(rng);
     let sp = surface(rng, &m);
+    check_cluster_at(rng, kind, &sp);
+}
+
+/// One random cluster of one kind against the bounds at `sp`.
+fn check_cluster_at(rng: &mut Rng, kind: LightKind, sp: &SurfacePoint<'_>) {
+    let sp = sp.clone();
     let cluster = RandomCluster::new(rng, kind, &sp);
     let slot = rng.below(2) as usize;
     // Channel by channel: the luminance bound against a unit intensity in
@@ -354,6 +360,27 @@ fn quad_bounds_and_walk_weights_hold_at_random_points() {
         let mut rng = Rng::seeded(20 + seed as u64);
         for _ in 0..5_000 {
             check_random_quad(&mut rng, kind);
+        }
+    }
+}
+
+/// A fibre is lit from every side: its bound (the peak of its f cos)
+/// holds for lights behind it as well as in front, for every kind of light
+/// and every roughness and colour.
+#[test]
+fn fibre_bounds_hold_at_random_points() {
+    let mut rng = Rng::seeded(31);
+    for kind in LightKind::ALL {
+        for _ in 0..3_000 {
+            let m = material(&mut rng);
+            let mut sp = surface(&mut rng, &m);
+            let tangent = unit(&mut rng).cross(sp.ng).normalize_or(Vec3::X);
+            let colour = Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32());
+            let roughness = rng.range_f32(0.0, 1.0);
+            sp.fibre = crate::shading::fibre::Fibre::new(tangent, sp.ng, sp.wo, colour, roughness);
+            sp.pbr = None;
+            assert!(sp.fibre.is_some());
+            check_cluster_at(&mut rng, kind, &sp);
         }
     }
 }

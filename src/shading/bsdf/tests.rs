@@ -374,3 +374,30 @@ fn the_glossy_lobe_s_solid_angle() {
     let ggx = solid(&gltf(Vec3::ONE, 1.0, 0.1)).unwrap();
     assert!((ggx - 4.0 * PI * 1e-4).abs() < 1e-8, "{ggx}");
 }
+
+/// A fibre's BSDF (docs/design.md §5.7) through the same three checks, its
+/// lobes over the whole sphere (light from behind included), with a grid
+/// about the fibre's axis: light and dark fibres, narrow and wide lobes,
+/// views from along the fibre to across it, hits from edge to middle.
+#[test]
+fn a_fibre_s_sampling_matches_its_density_and_albedo() {
+    let material = lambert(0.5);
+    let mut seed = 100;
+    for (colour, roughness) in [(Vec3::new(0.9, 0.7, 0.5), 0.2), (Vec3::splat(0.1), 0.4), (Vec3::ONE, 0.8)] {
+        for wo in [Vec3::new(0.0, 0.0, 1.0), Vec3::new(0.7, 0.0, 0.714).normalize()] {
+            for h in [-0.8f32, 0.0, 0.5] {
+                seed += 1;
+                let x = Vec3::X;
+                let across = (wo - x * x.dot(wo)).normalize();
+                let normal = glam::Quat::from_axis_angle(x, -h.asin()) * across;
+                let mut sp = SurfacePoint::bare(&material, Vec3::ZERO, normal, wo, colour);
+                sp.fibre = Fibre::new(x, normal, wo, colour, roughness);
+                with_bsdf(&sp, Lobes::ALL, |strategy, _| {
+                    if let Err(e) = check(strategy, x, seed) {
+                        panic!("fibre {colour} beta {roughness}, wo = {wo}, h = {h}: {e}");
+                    }
+                });
+            }
+        }
+    }
+}
