@@ -162,17 +162,21 @@ impl SurfacePoint<'_> {
     /// surface, and for a direction on the viewer's side of the fibre.
     /// The fibre's BSDF already holds the light that crosses the fibre
     /// (TT, TRT), so its own far side must not shadow it (docs/design.md
-    /// §5.7). The tube is taken as straight, of axis p - r ng: the far
-    /// root of |(r + e) ng_perp + s d_perp| = r, d_perp square to the axis.
+    /// §5.7). The tube is taken as straight, of axis p - r n_perp: the
+    /// far root of |(r + e) n_perp + s d_perp| = r, n_perp (unit) and
+    /// d_perp square to the axis.
     #[must_use]
     #[inline]
     pub fn fibre_exit(&self, d: Vec3) -> f32 {
         let Some(fibre) = &self.fibre else { return 0.0 };
         let x = fibre.axis();
         let across = d - x * x.dot(d);
+        // A tapering tube's normal leans along it: the axis is square to
+        // the axis's direction.
+        let outwards = (self.ng - x * x.dot(self.ng)).normalize_or(self.ng);
         let a = across.length_squared();
         let lifted = self.fibre_radius + self.epsilon;
-        let b = 2.0 * lifted * self.ng.dot(across);
+        let b = 2.0 * lifted * outwards.dot(across);
         let c = lifted * lifted - self.fibre_radius * self.fibre_radius;
         let discriminant = b * b - 4.0 * a * c;
         if b >= 0.0 || a <= 0.0 || discriminant <= 0.0 {
@@ -349,5 +353,34 @@ mod tests {
         mirror.pbr = Some(Pbr::new(Vec3::ONE, 1.0, 0.5 * MIN_ALPHA.sqrt(), 1.0, Vec3::ONE));
         assert!(mirror.pbr.as_ref().unwrap().is_smooth());
         assert_eq!(mirror.lobe_turn_cos(4.0), -1.0);
+    }
+
+    /// A ray leaving through a fibre's tube starts past its far side: the
+    /// chord through a tube of radius r from its top (+z) straight down is
+    /// 2 r, and half that at 60 degrees from the axis of the chord's plane,
+    /// for a straight tube and for a tapering one (its normal leaning along
+    /// it); a ray leaving on the viewer's side starts at once, and a
+    /// surface has no tube.
+    #[test]
+    fn a_ray_through_a_fibre_starts_past_its_far_side() {
+        let material = Material::diffuse("hair", crate::scene::material::Albedo::Constant(Vec3::ONE));
+        let r = 0.01;
+        for lean in [0.0f32, 0.4] {
+            let ng = Vec3::new(lean, 0.0, 1.0).normalize();
+            let mut sp =
+                SurfacePoint { ng, ..SurfacePoint::bare(&material, Vec3::new(0.0, 0.0, r), ng, Vec3::Z, Vec3::ONE) };
+            sp.epsilon = 1e-5;
+            assert_eq!(sp.fibre_exit(-Vec3::Z), 0.0, "a surface");
+            sp.fibre = super::super::fibre::Fibre::new(Vec3::X, ng, Vec3::Z, Vec3::ONE, 0.3);
+            sp.fibre_radius = r;
+            let down = sp.fibre_exit(-Vec3::Z);
+            assert!(down > 2.0 * r && down < 2.0 * r * 1.01, "lean {lean}: {down}");
+            // Twice as long a direction: half the parameter.
+            assert!((sp.fibre_exit(-2.0 * Vec3::Z) - 0.5 * down).abs() < 1e-6);
+            let slanted = Vec3::new(0.0, 0.75f32.sqrt(), -0.5);
+            let exit = sp.fibre_exit(slanted);
+            assert!(exit > r && exit < r * 1.01, "lean {lean}: {exit}");
+            assert_eq!(sp.fibre_exit(Vec3::new(0.0, 0.6, 0.8)), 0.0);
+        }
     }
 }
