@@ -123,9 +123,6 @@ impl Bsdf {
     #[must_use]
     pub fn pdf(&self, wi: Vec3, lobes: Lobes) -> f32 {
         let Some(p_glossy) = self.glossy_probability(lobes) else { return 0.0 };
-        if let Glossy::Fibre(fibre) = &self.glossy {
-            return fibre.pdf(wi);
-        }
         let local = self.in_frame(wi);
         let mut pdf = 0.0;
         if p_glossy < 1.0 {
