@@ -23,63 +23,65 @@ pub struct RenderArgs {
     /// .glb) or a USD stage (.usd, .usda, .usdc, .usdz).
     pub scene: PathBuf,
     /// Output OpenEXR file.
-    #[arg(short, long, value_name = "OUT.exr")]
+    #[arg(short, long, value_name = "OUT.exr", help_heading = "Output")]
     pub output: PathBuf,
-    #[command(flatten)]
-    pub mode: ModeArgs,
-    /// Samples per pixel, overriding the scene's.
-    #[arg(long, value_name = "N")]
-    pub spp: Option<u32>,
-    #[command(flatten)]
-    pub pass: PassArgs,
     /// Write the beauty (R, G, B, A) as 16-bit half floats.
-    #[arg(long)]
+    #[arg(long, help_heading = "Output")]
     pub half: bool,
     /// The AOV layers to write beside the beauty: a comma-separated list of
     /// albedo, N, Z, lightcuts (the cut's size and shadow rays; cut modes
     /// only), groups (Combined_<group>.R/G/B per light group; scenes with
     /// groups), cryptomatte, or none. Default: all but cryptomatte.
-    #[arg(long, value_name = "LIST", value_parser = Aovs::parse)]
+    #[arg(long, value_name = "LIST", value_parser = Aovs::parse, help_heading = "Output")]
     pub aovs: Option<Aovs>,
     /// Also write Cryptomatte's object and material ID mattes
     /// (CryptoObject00..02, CryptoMaterial00..02).
-    #[arg(long)]
+    #[arg(long, help_heading = "Output")]
     pub cryptomatte: bool,
     /// A transparent background: where a camera ray hits nothing the pixel
     /// gets RGB 0 and alpha 0 (premultiplied, ready for "over" onto a
     /// plate) instead of the environment with alpha 1. The environment
     /// still lights the scene and shows in mirrors.
-    #[arg(long)]
+    #[arg(long, help_heading = "Output")]
     pub transparent: bool,
-    /// How textures are read: `mip` filters them over each pixel's
-    /// footprint by a MIP map (docs/design.md §5.3); `off` reads the image
-    /// at each hit, which aliases where a texel is smaller than a pixel.
-    #[arg(long, value_name = "FILTER", value_parser = crate::render::TextureFilter::parse, default_value = "mip")]
-    pub texture_filter: crate::render::TextureFilter,
     /// Also write a tone-mapped sRGB PNG preview.
-    #[arg(long, value_name = "PREVIEW.png")]
+    #[arg(long, value_name = "PREVIEW.png", help_heading = "Output")]
     pub png: Option<PathBuf>,
     /// Preview exposure in stops (the EXR is never scaled).
-    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true, help_heading = "Output")]
     pub exposure: f32,
     /// No progress output.
-    #[arg(long, short)]
+    #[arg(long, short, help_heading = "Output")]
     pub quiet: bool,
     /// The full statistics block: cut-size histogram, share of time in
     /// Embree (times every ray query), peak memory.
-    #[arg(long)]
+    #[arg(long, help_heading = "Output")]
     pub stats: bool,
+    #[command(flatten)]
+    pub mode: ModeArgs,
+    /// Samples per pixel, overriding the scene's.
+    #[arg(long, value_name = "N", help_heading = "Sampling")]
+    pub spp: Option<u32>,
+    #[command(flatten)]
+    pub pass: PassArgs,
     /// Render tile I of N (I from 0): the horizontal band of rows
     /// floor(I H / N) to floor((I + 1) H / N), every column; the EXR's data
     /// window is the band, its display window the frame (see `assemble`).
-    #[arg(long, value_name = "I/N", value_parser = parse_tile, conflicts_with = "pixel_bounds")]
+    #[arg(long, value_name = "I/N", value_parser = parse_tile, conflicts_with = "pixel_bounds", help_heading = "Farm")]
     pub tile: Option<(u32, u32)>,
     /// Skip the render when the output exists, and claim the output
     /// atomically (OUT.exr.claim, created exclusively) before rendering, so
     /// that two processes never render the same file and a re-run renders
     /// only what is missing.
-    #[arg(long)]
+    #[arg(long, help_heading = "Farm")]
     pub no_overwrite: bool,
+    #[command(flatten)]
+    pub knobs: CutKnobs,
+    /// How textures are read: `mip` filters them over each pixel's
+    /// footprint by a MIP map (docs/design.md §5.3); `off` reads the image
+    /// at each hit, which aliases where a texel is smaller than a pixel.
+    #[arg(long, value_name = "FILTER", value_parser = crate::render::TextureFilter::parse, default_value = "mip", help_heading = "Advanced")]
+    pub texture_filter: crate::render::TextureFilter,
 }
 
 impl RenderArgs {
@@ -101,13 +103,13 @@ impl RenderArgs {
             let (y0, y1) = tile_rows(index, count, settings.height);
             settings.bounds = PixelBounds { x0: 0, x1: settings.width, y0, y1 };
         }
-        let mode = self.mode.mode(settings.spp)?;
+        let mode = self.mode.mode(settings.spp, &self.knobs)?;
         let mut aovs = self.aovs.unwrap_or(Aovs::all(mode.cut().is_some()));
         aovs.cryptomatte |= self.cryptomatte;
         if aovs.lightcuts && mode.cut().is_none() {
             return Err(CliError::Usage {
                 flag: "--aovs",
-                message: "lightcuts (the cut's size and shadow rays) needs a cut mode, not --exact".into(),
+                message: "lightcuts (the cut's size and shadow rays) needs a cut method, not --method exact".into(),
             });
         }
         if !self.exposure.is_finite() {
@@ -123,32 +125,66 @@ impl RenderArgs {
     }
 }
 
-/// How direct light is computed. Without a mode flag, the mode that gave
+/// How each shading point's lights are chosen (`--method`): the closed set
+/// of [`Mode`]s a user names.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum Method {
+    /// Every light, one shadow ray each: the reference.
+    Exact,
+    /// Lightcuts [LC05]: every cluster's error bounded.
+    Bounded,
+    /// Stochastic lightcuts [SLC19]: each cut node's light drawn per sample.
+    Stochastic,
+    /// Multidimensional lightcuts [MDLC06]: one cut over a pixel's samples.
+    Multidimensional,
+}
+
+impl Method {
+    fn name(self) -> &'static str {
+        match self {
+            Self::Exact => "exact",
+            Self::Bounded => "bounded",
+            Self::Stochastic => "stochastic",
+            Self::Multidimensional => "multidimensional",
+        }
+    }
+}
+
+/// How direct light is computed. Without `--method`, the method that gave
 /// the smaller error for the time at the samples per pixel asked for (see
 /// [`default_mode`]).
 #[derive(Debug, Args)]
+#[command(next_help_heading = "Light selection")]
 pub struct ModeArgs {
-    /// Reference mode: every light, one shadow ray each.
-    #[arg(long, conflicts_with_all = ["bounded", "stochastic", "multidimensional", "error", "max_cut"])]
+    /// How each shading point's lights are chosen: `exact` (every light,
+    /// one shadow ray each: the reference), `bounded` (Lightcuts [LC05]:
+    /// each cluster's error bounded, its representative fixed when the tree
+    /// is built), `stochastic` (stochastic lightcuts [SLC19]: each cut
+    /// node's light drawn per sample, so the error falls with samples per
+    /// pixel) or `multidimensional` (multidimensional lightcuts [MDLC06]:
+    /// one cut per pixel through (gather cluster, light cluster) pairs over
+    /// all its samples). Default: bounded below 16 samples per pixel,
+    /// stochastic from 16 (docs/design.md §10.8); bounded with --reconstruct.
+    #[arg(long, value_enum, value_name = "METHOD")]
+    pub method: Option<Method>,
+    /// Short for --method exact.
+    #[arg(long, hide = true, conflicts_with_all = ["method", "bounded", "stochastic", "multidimensional"])]
     pub exact: bool,
-    /// Lightcuts [LC05]: each cluster's error is bounded, its representative
-    /// fixed when the tree is built.
-    #[arg(long, conflicts_with = "stochastic")]
+    /// Short for --method bounded.
+    #[arg(long, hide = true, conflicts_with_all = ["method", "stochastic", "multidimensional"])]
     pub bounded: bool,
-    /// Stochastic lightcuts [SLC19]: each cut node's light is drawn per
-    /// sample, so the error falls with samples per pixel.
-    #[arg(long)]
+    /// Short for --method stochastic.
+    #[arg(long, hide = true, conflicts_with_all = ["method", "multidimensional"])]
     pub stochastic: bool,
-    /// Multidimensional lightcuts [MDLC06]: one cut per pixel through
-    /// (gather cluster, light cluster) pairs over all its samples (pixel
-    /// area, lens, mirror paths); --error is relative to the pixel's total.
-    #[arg(long, conflicts_with_all = ["bounded", "stochastic"])]
+    /// Short for --method multidimensional.
+    #[arg(long, hide = true, conflicts_with = "method")]
     pub multidimensional: bool,
     /// Relative error threshold: a cluster is split while its bound exceeds
     /// this fraction of the point's total (bounded: of the estimate, default
     /// 0.02; stochastic: of the summed bounds, default 0.05; multidimensional:
     /// of the pixel's estimate, default 0.02).
-    /// 0 splits every cluster, reproducing --exact (bounded) when max-cut allows.
+    /// 0 splits every cluster, reproducing the exact method (bounded) when
+    /// --max-cut allows.
     #[arg(long)]
     pub error: Option<f64>,
     /// Largest cut per shading point, in nodes (bounded default 1000; per
@@ -159,40 +195,47 @@ pub struct ModeArgs {
     /// `group` (a cut per group, relative to the group's own light: every
     /// group layer as accurate as the beauty) or `pixel` (one cut through
     /// every group's trees, relative to the pixel's total: cheaper, dim
-    /// groups' layers less accurate). Both cut modes.
-    #[arg(long, value_name = "group|pixel", value_parser = parse_group_error, conflicts_with = "exact")]
+    /// groups' layers less accurate). Every method but exact.
+    #[arg(long, value_name = "group|pixel", value_parser = parse_group_error)]
     pub group_error: Option<GroupError>,
-    /// Stochastic mode: shadow rays per cut, resampled among the cut's
-    /// drawn lights by their unoccluded contributions (resampled importance
-    /// sampling; unbiased). 0 (the default) traces every cut node's light.
-    #[arg(long, value_name = "N")]
-    pub resampled_rays: Option<usize>,
-    /// Stochastic mode: choose a cut at every sample's shading point,
-    /// instead of once per pixel at its first sample's camera hit, for the
-    /// later samples on the same surface (the default: docs/design.md §10.9).
-    #[arg(long, conflicts_with_all = ["exact", "bounded", "multidimensional", "reconstruct"])]
-    pub cut_per_sample: bool,
-    /// Stochastic mode: draw M lights per shading point over the whole
-    /// cut, each cut node by its importance, one shadow ray each, instead
-    /// of one light from every cut node (docs/design.md §10.10; unbiased).
-    /// Pays at many samples per pixel: with a finer cut (a smaller
-    /// --error) for the same rays.
-    #[arg(long, value_name = "M", conflicts_with_all = ["exact", "bounded", "multidimensional", "reconstruct", "resampled_rays"])]
-    pub cut_draws: Option<usize>,
-    /// Stochastic mode: light each camera hit by the drawn lights of every
+    /// Bounded method: reconstruction cuts [LC05] section 6. Full cuts only
+    /// at the corners of B x B pixel blocks; every camera hit between them
+    /// cuts the trees again with the same bounds, but traces a shadow ray
+    /// only where the corners' cuts disagree on what they saw. Implies the
+    /// bounded method when none is given.
+    #[arg(long, value_name = "B")]
+    pub reconstruct: Option<u32>,
+    /// Stochastic method: light each camera hit by the drawn lights of every
     /// camera hit of its B x B pixel block (B from 2 to 8) at the same
     /// sample, weighted by multiple importance sampling (docs/design.md
     /// §10.11; unbiased): B^2 times the shadow rays of a cut, for less noise
     /// from the same cuts.
-    #[arg(long, value_name = "B", conflicts_with_all = ["exact", "bounded", "multidimensional", "reconstruct", "resampled_rays"])]
+    #[arg(long, value_name = "B", conflicts_with = "resampled_rays")]
     pub reuse: Option<u32>,
-    /// Bounded mode: reconstruction cuts [LC05] section 6. Full cuts only at the
-    /// corners of B x B pixel blocks; every camera hit between them cuts
-    /// the trees again with the same bounds, but traces a shadow ray only
-    /// where the corners' cuts disagree on what they saw. Implies
-    /// --bounded when no mode is given.
-    #[arg(long, value_name = "B", conflicts_with_all = ["exact", "stochastic", "multidimensional"])]
-    pub reconstruct: Option<u32>,
+}
+
+/// The stochastic method's research knobs, shown under "Advanced": each
+/// changes how a cut's light is drawn, none is needed to render well.
+#[derive(Debug, Args)]
+#[command(next_help_heading = "Advanced")]
+pub struct CutKnobs {
+    /// Stochastic method: shadow rays per cut, resampled among the cut's
+    /// drawn lights by their unoccluded contributions (resampled importance
+    /// sampling; unbiased). 0 (the default) traces every cut node's light.
+    #[arg(long, value_name = "N")]
+    pub resampled_rays: Option<usize>,
+    /// Stochastic method: choose a cut at every sample's shading point,
+    /// instead of once per pixel at its first sample's camera hit, for the
+    /// later samples on the same surface (the default: docs/design.md §10.9).
+    #[arg(long)]
+    pub cut_per_sample: bool,
+    /// Stochastic method: draw M lights per shading point over the whole
+    /// cut, each cut node by its importance, one shadow ray each, instead
+    /// of one light from every cut node (docs/design.md §10.10; unbiased).
+    /// Pays at many samples per pixel: with a finer cut (a smaller
+    /// --error) for the same rays.
+    #[arg(long, value_name = "M", conflicts_with = "resampled_rays")]
+    pub cut_draws: Option<usize>,
 }
 
 /// Parses `--group-error`.
@@ -205,102 +248,96 @@ pub fn parse_group_error(s: &str) -> Result<GroupError, String> {
 }
 
 impl ModeArgs {
-    /// The mode these flags ask for, at `spp` samples per pixel.
-    pub fn mode(&self, spp: u32) -> Result<Mode, CliError> {
-        let mode = self.mode_without_resampling(spp)?;
-        let mode = match (mode, self.reconstruct) {
-            (_, Some(0)) => {
-                return Err(CliError::Usage {
-                    flag: "--reconstruct",
-                    message: "the block must be at least 1 pixel".into(),
-                })
-            }
-            (Mode::Bounded(mut cut), Some(block)) => {
-                cut.reconstruction_block = block;
-                Mode::Bounded(cut)
-            }
-            (Mode::Stochastic(_), Some(block)) if !self.stochastic => {
-                // The default mode at this spp is stochastic; --reconstruct
-                // asks for the bounded one.
-                let d = CutSettings::default();
-                let mut cut = cut_settings(self.error.unwrap_or(d.error), self.max_cut.unwrap_or(d.max_cut))?;
-                cut.group_error = self.group_error.unwrap_or(d.group_error);
-                cut.reconstruction_block = block;
-                Mode::Bounded(cut)
-            }
-            (mode, _) => mode,
+    /// The method named by `--method` or by one of its short forms.
+    fn named_method(&self) -> Option<Method> {
+        self.method.or_else(|| {
+            [
+                (self.exact, Method::Exact),
+                (self.bounded, Method::Bounded),
+                (self.stochastic, Method::Stochastic),
+                (self.multidimensional, Method::Multidimensional),
+            ]
+            .into_iter()
+            .find_map(|(given, method)| given.then_some(method))
+        })
+    }
+
+    /// The mode these flags ask for, at `spp` samples per pixel: the named
+    /// method, or the default at `spp`; a flag of another method is a usage
+    /// error naming the method this render uses.
+    pub fn mode(&self, spp: u32, knobs: &CutKnobs) -> Result<Mode, CliError> {
+        let named = self.named_method();
+        let method = named.unwrap_or(if self.reconstruct.is_some() {
+            Method::Bounded
+        } else if matches!(default_mode(spp), Mode::Stochastic(_)) {
+            Method::Stochastic
+        } else {
+            Method::Bounded
+        });
+        let chosen = match named {
+            Some(_) => format!("this render's method is {}", method.name()),
+            None => format!("at {spp} spp this render's method is {} by default", method.name()),
         };
-        match (mode, self.resampled_rays) {
-            (Mode::Stochastic(mut cut), Some(rays)) => {
-                cut.resampled_rays = rays;
+        let only = |flag: &'static str, given: bool, wanted: &[Method]| {
+            if given && !wanted.contains(&method) {
+                let names: Vec<&str> = wanted.iter().map(|m| m.name()).collect();
+                return Err(CliError::Usage {
+                    flag,
+                    message: format!("applies to the {} method only; {chosen}", names.join(" or ")),
+                });
+            }
+            Ok(())
+        };
+        let cut_methods = [Method::Bounded, Method::Stochastic, Method::Multidimensional];
+        only("--error", self.error.is_some(), &cut_methods)?;
+        only("--max-cut", self.max_cut.is_some(), &cut_methods)?;
+        only("--group-error", self.group_error.is_some(), &cut_methods)?;
+        only("--reconstruct", self.reconstruct.is_some(), &[Method::Bounded])?;
+        only("--reuse", self.reuse.is_some(), &[Method::Stochastic])?;
+        only("--resampled-rays", knobs.resampled_rays.is_some(), &[Method::Stochastic])?;
+        only("--cut-per-sample", knobs.cut_per_sample, &[Method::Stochastic])?;
+        only("--cut-draws", knobs.cut_draws.is_some(), &[Method::Stochastic])?;
+        match method {
+            Method::Exact => Ok(Mode::Exact),
+            Method::Multidimensional => Ok(Mode::Multidimensional(self.cut(MULTIDIMENSIONAL_DEFAULTS)?)),
+            Method::Bounded => {
+                let mut cut = self.cut(CutSettings::default())?;
+                if let Some(block) = self.reconstruct {
+                    if block == 0 {
+                        return Err(CliError::Usage {
+                            flag: "--reconstruct",
+                            message: "the block must be at least 1 pixel".into(),
+                        });
+                    }
+                    cut.reconstruction_block = block;
+                }
+                Ok(Mode::Bounded(cut))
+            }
+            Method::Stochastic => {
+                let mut cut = self.cut(STOCHASTIC_DEFAULTS)?;
+                cut.pixel_cut = !knobs.cut_per_sample;
+                cut.cut_draws = knobs.cut_draws.unwrap_or(cut.cut_draws);
+                cut.resampled_rays = knobs.resampled_rays.unwrap_or(cut.resampled_rays);
+                if let Some(block) = self.reuse {
+                    if !(2..=MAX_REUSE_BLOCK).contains(&block) {
+                        return Err(CliError::Usage {
+                            flag: "--reuse",
+                            message: format!("the block's edge must be 2 to {MAX_REUSE_BLOCK} pixels, not {block}"),
+                        });
+                    }
+                    cut.reuse_block = block;
+                }
                 Ok(Mode::Stochastic(cut))
             }
-            (Mode::Stochastic(_), None) => Ok(mode),
-            (_, Some(_)) => Err(CliError::Usage {
-                flag: "--resampled-rays",
-                message: format!(
-                    "applies to the stochastic mode only; this render is {}: add --stochastic",
-                    mode.describe()
-                ),
-            }),
-            (_, None) => Ok(mode),
         }
     }
 
-    fn mode_without_resampling(&self, spp: u32) -> Result<Mode, CliError> {
-        let stochastic = if self.exact {
-            return Ok(Mode::Exact);
-        } else if self.multidimensional {
-            let d = MULTIDIMENSIONAL_DEFAULTS;
-            let mut cut = cut_settings(self.error.unwrap_or(d.error), self.max_cut.unwrap_or(d.max_cut))?;
-            cut.group_error = self.group_error.unwrap_or(d.group_error);
-            return Ok(Mode::Multidimensional(cut));
-        } else if self.bounded || self.stochastic {
-            self.stochastic
-        } else {
-            matches!(default_mode(spp), Mode::Stochastic(_))
-        };
-        let defaults = if stochastic { STOCHASTIC_DEFAULTS } else { CutSettings::default() };
+    /// A cut method's settings: its defaults with `--error`, `--max-cut`
+    /// and `--group-error` applied.
+    fn cut(&self, defaults: CutSettings) -> Result<CutSettings, CliError> {
         let mut cut = cut_settings(self.error.unwrap_or(defaults.error), self.max_cut.unwrap_or(defaults.max_cut))?;
         cut.group_error = self.group_error.unwrap_or(defaults.group_error);
-        cut.pixel_cut = stochastic && !self.cut_per_sample;
-        if let Some(draws) = self.cut_draws {
-            if !stochastic {
-                return Err(CliError::Usage {
-                    flag: "--cut-draws",
-                    message: format!(
-                        "applies to the stochastic mode only; at {spp} spp this render is bounded: add --stochastic"
-                    ),
-                });
-            }
-            cut.cut_draws = draws;
-        }
-        if let Some(block) = self.reuse {
-            if !stochastic {
-                return Err(CliError::Usage {
-                    flag: "--reuse",
-                    message: format!(
-                        "applies to the stochastic mode only; at {spp} spp this render is bounded: add --stochastic"
-                    ),
-                });
-            }
-            if !(2..=MAX_REUSE_BLOCK).contains(&block) {
-                return Err(CliError::Usage {
-                    flag: "--reuse",
-                    message: format!("the block's edge must be 2 to {MAX_REUSE_BLOCK} pixels, not {block}"),
-                });
-            }
-            cut.reuse_block = block;
-        }
-        if self.cut_per_sample && !stochastic {
-            return Err(CliError::Usage {
-                flag: "--cut-per-sample",
-                message: format!(
-                    "applies to the stochastic mode only; at {spp} spp this render is bounded: add --stochastic"
-                ),
-            });
-        }
-        Ok(if stochastic { Mode::Stochastic(cut) } else { Mode::Bounded(cut) })
+        Ok(cut)
     }
 }
 
@@ -323,37 +360,48 @@ pub fn default_mode(spp: u32) -> Mode {
 #[derive(Debug, Args)]
 pub struct PassArgs {
     /// Film size, overriding the scene's.
-    #[arg(long, value_name = "WxH", value_parser = parse_resolution)]
+    #[arg(long, value_name = "WxH", value_parser = parse_resolution, help_heading = "Sampling")]
     pub resolution: Option<(u32, u32)>,
     /// Seed of every random choice (sample positions, representatives, VPLs).
-    #[arg(long, default_value_t = 0)]
+    #[arg(long, default_value_t = 0, help_heading = "Sampling")]
     pub seed: u64,
     /// Worker threads (0: one per CPU; at most 1024). The image does not depend on it.
-    #[arg(long, default_value_t = 0, value_parser = parse_threads)]
+    #[arg(long, default_value_t = 0, value_parser = parse_threads, help_heading = "Sampling")]
     pub threads: usize,
     /// Render only this half-open window of the full frame, in pixels.
-    #[arg(long, value_name = "x0,x1,y0,y1", value_parser = parse_pixel_bounds)]
+    #[arg(long, value_name = "x0,x1,y0,y1", value_parser = parse_pixel_bounds, help_heading = "Sampling")]
     pub pixel_bounds: Option<[u32; 4]>,
+    /// Indirect light, overriding the scene's `[indirect]`: `path` (camera
+    /// paths with next-event estimation at every vertex), `vpl` (virtual
+    /// point lights) or `none` (direct light only). The scene's settings
+    /// of the method are kept; otherwise max-depth 8, or 10,000 one-bounce
+    /// VPL paths (docs/design.md §6.7).
+    #[arg(long, value_name = "path|vpl|none", value_parser = ["path", "vpl", "none"], help_heading = "Indirect light")]
+    pub indirect: Option<String>,
+    /// The path method's most surface interactions per camera path (1:
+    /// direct light only; Mitsuba 3's max_depth counts one more).
+    #[arg(long, value_name = "N", help_heading = "Indirect light")]
+    pub max_depth: Option<u32>,
     /// Render through the glTF camera of this name, or `#N` for the N-th
     /// camera (from 0) in the file's node order; or a USD stage's camera by
     /// its prim path (/World/Cam). The scene's first camera otherwise;
     /// overrides a TOML's [camera].
-    #[arg(long, value_name = "NAME|#N|/PATH")]
+    #[arg(long, value_name = "NAME|#N|/PATH", help_heading = "Scene overrides")]
     pub camera: Option<String>,
     /// Add an environment: `R,G,B` (a constant radiance, W/(m^2 sr), e.g.
     /// 1,1,1) or a lat-long OpenEXR file; 1,024 directional lights. It
     /// replaces the scene's own environment.
-    #[arg(long, value_name = "R,G,B|FILE.exr")]
+    #[arg(long, value_name = "R,G,B|FILE.exr", help_heading = "Scene overrides")]
     pub environment: Option<String>,
     /// Add a sun: azimuth and elevation in degrees (azimuth from +Z towards
     /// +X, elevation above the horizon, +Y up), irradiance in W/m^2
     /// (default 3).
-    #[arg(long, value_name = "AZIMUTH,ELEVATION[,IRRADIANCE]", value_parser = parse_sun, allow_hyphen_values = true)]
+    #[arg(long, value_name = "AZIMUTH,ELEVATION[,IRRADIANCE]", value_parser = parse_sun, allow_hyphen_values = true, help_heading = "Scene overrides")]
     pub sun: Option<[f32; 3]>,
     /// Luminous efficacy converting a glTF file's light units (candela,
     /// lux) to W/sr and W/m^2: 683 (Blender's convention) unless given; 1
     /// matches glTF viewers, which take 1 cd as 1 W/sr.
-    #[arg(long, value_name = "LM_PER_W")]
+    #[arg(long, value_name = "LM_PER_W", help_heading = "Scene overrides")]
     pub lumens_per_watt: Option<f32>,
     /// Open the shutter from OPEN to CLOSE seconds (overrides the scene's
     /// [camera] shutter): what moves blurs, and a glTF file's animation is
@@ -365,37 +413,26 @@ pub struct PassArgs {
     /// --shutter 0.2396,0.2604. For a USD stage OPEN and CLOSE are its time
     /// codes (frames, for Blender's exports), and what its time samples
     /// move blurs.
-    #[arg(long, value_name = "OPEN,CLOSE", value_parser = parse_shutter, allow_hyphen_values = true)]
+    #[arg(long, value_name = "OPEN,CLOSE", value_parser = parse_shutter, allow_hyphen_values = true, help_heading = "Scene overrides")]
     pub shutter: Option<[f32; 2]>,
     /// The glTF file's animation to play over the shutter, by name (its
     /// first otherwise). A name the file lacks is an error; without a
     /// shutter the animation is not played (a warning says so).
-    #[arg(long, value_name = "NAME")]
+    #[arg(long, value_name = "NAME", help_heading = "Scene overrides")]
     pub animation: Option<String>,
     /// The USD stage's time code to render (its start time code
     /// otherwise): every attribute is read at it.
-    #[arg(long, value_name = "T", allow_hyphen_values = true)]
+    #[arg(long, value_name = "T", allow_hyphen_values = true, help_heading = "Scene overrides")]
     pub time: Option<f64>,
-    /// Indirect light, overriding the scene's `[indirect]`: `path` (camera
-    /// paths with next-event estimation at every vertex), `vpl` (virtual
-    /// point lights) or `none` (direct light only). The scene's settings
-    /// of the method are kept; otherwise max-depth 8, or 10,000 one-bounce
-    /// VPL paths (docs/design.md §6.7).
-    #[arg(long, value_name = "path|vpl|none", value_parser = ["path", "vpl", "none"])]
-    pub indirect: Option<String>,
-    /// The path method's most surface interactions per camera path (1:
-    /// direct light only; Mitsuba 3's max_depth counts one more).
-    #[arg(long, value_name = "N")]
-    pub max_depth: Option<u32>,
     /// A directory where a USD stage's assets are looked for when they are
     /// not beside the layer that names them (USD's search paths, as
     /// PXR_AR_DEFAULT_SEARCH_PATH, which is read too); may be repeated.
-    #[arg(long, value_name = "DIR")]
+    #[arg(long, value_name = "DIR", help_heading = "Scene overrides")]
     pub asset_path: Vec<PathBuf>,
     /// Make what the scene lacks an error: a missing layer, texture or
     /// file, a format or prim type this renderer does not read (a warning
     /// otherwise, and the render goes on without it).
-    #[arg(long)]
+    #[arg(long, help_heading = "Scene overrides")]
     pub strict: bool,
 }
 
@@ -594,5 +631,105 @@ mod tests {
             assert!(scene.contains(extension), "the scene's help names no {extension}: {scene}");
         }
         assert!(help("camera").contains("prim path"));
+    }
+
+    /// Every `--flag` a help string names is a flag of that command (or of
+    /// one of its subcommands), so no help points at a flag that was
+    /// renamed or removed.
+    #[test]
+    fn every_flag_a_help_names_exists() {
+        use clap::CommandFactory;
+        let root = crate::cli::Cli::command();
+        let render = root.find_subcommand("render").expect("a render command").clone();
+        fn check(command: &clap::Command, render: &clap::Command, path: &str) {
+            // A help may also name a flag of `render` (`a --method exact render`).
+            let longs: Vec<String> = command
+                .get_arguments()
+                .chain(render.get_arguments())
+                .filter_map(|a| a.get_long())
+                .map(String::from)
+                .collect();
+            let mut texts: Vec<String> = command
+                .get_arguments()
+                .filter_map(|a| a.get_long_help().or(a.get_help()))
+                .map(ToString::to_string)
+                .collect();
+            texts.extend(command.get_about().map(ToString::to_string));
+            for text in &texts {
+                for (at, _) in text.match_indices("--") {
+                    let name: String =
+                        text[at + 2..].chars().take_while(|c| c.is_ascii_lowercase() || *c == '-').collect();
+                    let name = name.trim_end_matches('-');
+                    let known = longs.iter().any(|l| l == name)
+                        || command.get_subcommands().any(|sub| sub.get_arguments().any(|a| a.get_long() == Some(name)));
+                    assert!(name.is_empty() || known, "{path}: the help names --{name}, which is no flag: {text}");
+                }
+            }
+            for sub in command.get_subcommands() {
+                check(sub, render, &format!("{path} {}", sub.get_name()));
+            }
+        }
+        check(&root, &render, "lightcuts");
+    }
+
+    /// `render --help` groups every flag under a heading a user looks for.
+    #[test]
+    fn render_help_groups_every_flag() {
+        use clap::CommandFactory;
+        let command = crate::cli::Cli::command();
+        let render = command.find_subcommand("render").expect("a render command");
+        let headings =
+            ["Output", "Sampling", "Light selection", "Indirect light", "Scene overrides", "Farm", "Advanced"];
+        for arg in render.get_arguments().filter(|a| !a.is_hide_set() && !a.is_positional()) {
+            if matches!(arg.get_id().as_str(), "help" | "version") {
+                continue;
+            }
+            let heading = arg.get_help_heading().unwrap_or_else(|| panic!("--{} has no heading", arg.get_id()));
+            assert!(headings.contains(&heading), "--{}: heading {heading}", arg.get_id());
+        }
+        for heading in headings {
+            assert!(render.get_arguments().any(|a| a.get_help_heading() == Some(heading)), "no flag under {heading}");
+        }
+    }
+
+    fn render_mode(flags: &[&str], spp: u32) -> Result<Mode, String> {
+        use clap::Parser;
+        let argv = ["lightcuts", "render", "scene.toml", "-o", "out.exr"].iter().chain(flags);
+        let cli = crate::cli::Cli::try_parse_from(argv).map_err(|e| e.to_string())?;
+        let crate::cli::Command::Render(args) = cli.command else { unreachable!("a render command") };
+        args.mode.mode(spp, &args.knobs).map_err(|e| e.to_string())
+    }
+
+    /// `--method` names every mode, its short forms mean the same, the
+    /// default follows the samples, and a flag of another method is refused
+    /// with the method this render uses.
+    #[test]
+    fn method_chooses_the_mode_and_refuses_other_methods_flags() {
+        use clap::ValueEnum;
+        for method in Method::value_variants() {
+            let name = method.name();
+            let long = render_mode(&["--method", name], 1).expect(name);
+            let short = render_mode(&[&format!("--{name}")], 1).expect(name);
+            assert_eq!(format!("{long:?}"), format!("{short:?}"), "{name}");
+            assert!(long.describe().starts_with(name) || name == "bounded", "{name}: {}", long.describe());
+        }
+        assert!(matches!(render_mode(&[], 1), Ok(Mode::Bounded(_))));
+        assert!(matches!(render_mode(&[], STOCHASTIC_FROM_SPP), Ok(Mode::Stochastic(_))));
+        assert!(
+            matches!(render_mode(&["--reconstruct", "2"], STOCHASTIC_FROM_SPP), Ok(Mode::Bounded(c)) if c.reconstruction_block == 2)
+        );
+        assert!(
+            matches!(render_mode(&["--reuse", "2"], STOCHASTIC_FROM_SPP), Ok(Mode::Stochastic(c)) if c.reuse_block == 2)
+        );
+        for (flags, refusal) in [
+            (&["--method", "exact", "--error", "0.1"][..], "--error: applies to the bounded or stochastic or multidimensional method only; this render's method is exact"),
+            (&["--method", "bounded", "--reuse", "2"][..], "--reuse: applies to the stochastic method only; this render's method is bounded"),
+            (&["--reuse", "2"][..], "at 1 spp this render's method is bounded by default"),
+            (&["--method", "multidimensional", "--reconstruct", "2"][..], "--reconstruct: applies to the bounded method only"),
+            (&["--stochastic", "--cut-draws", "2", "--method", "bounded"][..], "cannot be used with"),
+        ] {
+            let error = render_mode(flags, 1).expect_err(&flags.join(" "));
+            assert!(error.contains(refusal), "{flags:?}: {error}");
+        }
     }
 }

@@ -14,7 +14,7 @@ use crate::output::{check_outputs, Staged};
 pub struct CompareArgs {
     /// The image under test.
     pub test: PathBuf,
-    /// The reference (usually an --exact render of the same scene and settings).
+    /// The reference (usually a `--method exact` render of the same scene and settings).
     pub reference: PathBuf,
     /// Print the figures as JSON.
     #[arg(long)]

@@ -51,7 +51,7 @@ pub struct SwitchArgs {
 #[derive(Debug, Args)]
 pub struct RaysArgs {
     pub scene: std::path::PathBuf,
-    /// The lightcut mode whose pass is measured (--exact is the pass (c)).
+    /// The lightcut mode whose pass is measured (`--method exact` is the pass (c)).
     #[command(flatten)]
     pub mode: super::args::ModeArgs,
     /// Samples per pixel, overriding the scene's.
@@ -59,6 +59,8 @@ pub struct RaysArgs {
     pub spp: Option<u32>,
     #[command(flatten)]
     pub pass: super::args::PassArgs,
+    #[command(flatten)]
+    pub knobs: super::args::CutKnobs,
     #[arg(long)]
     pub json: bool,
     #[arg(long, short)]
@@ -155,7 +157,7 @@ fn switch(args: &SwitchArgs) -> Result<(), CliError> {
 fn rays(args: &RaysArgs) -> Result<(), CliError> {
     let scene = args.pass.load(&args.scene)?;
     let settings = args.pass.settings(&scene, args.spp)?;
-    let mode = args.mode.mode(settings.spp)?;
+    let mode = args.mode.mode(settings.spp, &args.knobs)?;
     if mode.cut().is_none() {
         return Err(CliError::Usage {
             flag: "--exact",

@@ -56,7 +56,7 @@ pub struct RayFigures {
     /// the measuring scenes): the share of the timed pass's
     /// thread-seconds inside Embree.
     /// (a) is Embree on the exact renderer's rays, which are cheaper per
-    /// ray than the cut's (docs/measurements.md, "What the speed targets
+    /// ray than the cut's (docs/notebook/measurements.md, "What the speed targets
     /// leave the cut"); this is the comparison on the same rays.
     pub lightcuts_over_embree_own_rays: f64,
     pub threads: usize,
