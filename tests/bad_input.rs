@@ -62,7 +62,7 @@ fn bad_command_line_values_are_named() {
     assert!(stderr.contains("--resolution") && stderr.contains("memory"), "{stderr}");
     // Resampling is the stochastic cut's: at 4 spp the default mode is bounded.
     let stderr = lightcuts_fails(&["render", s(&scene), "-o", s(&out), "--spp", "4", "--resampled-rays", "2"]);
-    assert!(stderr.contains("--resampled-rays") && stderr.contains("--stochastic"), "{stderr}");
+    assert!(stderr.contains("--resampled-rays") && stderr.contains("add --method stochastic"), "{stderr}");
     let stderr = lightcuts_fails(&["render", s(&scene), "-o", s(&out), "--bounded", "--resampled-rays", "2"]);
     assert!(stderr.contains("--resampled-rays"), "{stderr}");
     assert!(!out.exists());

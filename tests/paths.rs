@@ -311,7 +311,7 @@ fn the_atrium_by_paths_matches_mitsuba() {
     // (Mitsuba's max_depth 4, 16,384 spp; scenes/atrium/mitsuba_reference.py
     // reads atrium.toml itself). Most of the block error at 64 spp is
     // noise: at 1,024 spp the two agree within 0.53% over 8x8 blocks
-    // (docs/measurements.md).
+    // (docs/notebook/measurements.md).
     let flags = ["--stochastic", "--resolution", "160x120", "--spp", "64", "--indirect", "path", "--max-depth", "3"];
     common::matches_peer("paths-atrium", "atrium", "../atrium.toml", "mitsuba-depth4-16384.exr", &[&flags]);
 }

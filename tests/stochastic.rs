@@ -35,7 +35,7 @@ fn a_pixel_cut_serves_its_samples_and_cut_per_sample_chooses_at_each() {
     let (pixel, each) = (read_exr(&dir.path("pixel.exr")).unwrap(), read_exr(&dir.path("each.exr")).unwrap());
     assert_eq!(each.attributes["lightcuts:renderMode"], "stochastic lightcuts error=0.05 max_cut=1000 cut_per_sample");
     assert_ne!(pixel.channels["R"], each.channels["R"], "the pixel's cut must change the draws");
-    // Measured: 0.46% and 0.42% (coarse pixels: docs/measurements.md, "One
+    // Measured: 0.46% and 0.42% (coarse pixels: docs/notebook/measurements.md, "One
     // cut per pixel"); a cut that left lights out would be biased.
     assert!(
         errors.iter().all(|&e| e < 0.03) && errors[0] < 1.5 * errors[1],
@@ -231,7 +231,7 @@ fn reuse_between_pixels_is_nearer_exact_and_the_same_for_any_threads_window_and_
     for (flags, says) in [
         (&["--reuse", "1", "--stochastic"][..], "2 to 8"),
         (&["--reuse", "9", "--stochastic"][..], "2 to 8"),
-        (&["--reuse", "2", "--spp", "1"][..], "stochastic mode only"),
+        (&["--reuse", "2", "--spp", "1"][..], "stochastic method only"),
     ] {
         let stderr = lightcuts_fails(&[&["render", s(&scene), "-o", s(&dir.path("x.exr"))][..], flags].concat());
         assert!(stderr.contains("--reuse") && stderr.contains(says), "{stderr}");

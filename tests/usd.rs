@@ -41,7 +41,7 @@ fn every_usdlux_light_matches_its_closed_form_in_the_schema_s_units() {
             let tolerance = if stage == "dome_texture" { 0.02 } else { 0.01 };
             // The stage through a TOML that asks for 4,096 points per area
             // light (the default 256 are a quadrature off by up to 1% at
-            // these distances: docs/measurements.md).
+            // these distances: docs/notebook/measurements.md).
             let path = dir.write(
                 &format!("{stage}.toml"),
                 &format!("[usd]\nfile = {:?}\nemitter_samples = 4096\n", s(&folder.join(format!("{stage}.usda")))),

@@ -281,9 +281,13 @@ impl ModeArgs {
         let only = |flag: &'static str, given: bool, wanted: &[Method]| {
             if given && !wanted.contains(&method) {
                 let names: Vec<&str> = wanted.iter().map(|m| m.name()).collect();
+                let remedy = match names[..] {
+                    [only] => format!("add --method {only}"),
+                    _ => "drop it or choose another --method".into(),
+                };
                 return Err(CliError::Usage {
                     flag,
-                    message: format!("applies to the {} method only; {chosen}", names.join(" or ")),
+                    message: format!("applies to the {} method only; {chosen}: {remedy}", names.join(" or ")),
                 });
             }
             Ok(())
@@ -345,7 +349,7 @@ impl ModeArgs {
 /// shadow rays and evaluations.
 const MAX_REUSE_BLOCK: u32 = 8;
 
-/// The mode a render uses when no mode flag is given, at `spp` samples per
+/// The mode a render uses when no `--method` is given, at `spp` samples per
 /// pixel, with its default settings.
 #[must_use]
 pub fn default_mode(spp: u32) -> Mode {

@@ -396,7 +396,7 @@ int32_t lc_occluded_packets(LcScene* scene, const LcRay* rays, uint8_t* occluded
         if (count <= LC_SINGLE_RAYS) {
             /* A packet costs its traversal whatever its lanes: with one or
              * two active rays, Embree's single-ray queries are cheaper
-             * (docs/measurements.md, "Draws over the whole cut"). */
+             * (docs/notebook/measurements.md, "Draws over the whole cut"). */
             for (size_t i = 0; i < count; ++i)
                 occluded[start + i] = (uint8_t)occluded_one(scene->scene, &rays[start + i]);
         } else {

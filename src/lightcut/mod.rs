@@ -31,7 +31,7 @@ use crate::shading::{BatchBuffers, BatchResult, LightBatch, SurfacePoint};
 /// A tree with at most this many lights is evaluated light by light, with
 /// the exact renderer's code, in the bounded and stochastic cuts (the
 /// multidimensional one builds every tree as a tree): below it, the bounds cost
-/// more than the shadow rays they save (docs/measurements.md, "The
+/// more than the shadow rays they save (docs/notebook/measurements.md, "The
 /// exhaustive switch", measures the break-even).
 pub const EXHAUSTIVE_LIGHTS: usize = 200;
 

@@ -56,11 +56,11 @@ pub const STOCHASTIC_DEFAULTS: CutSettings = CutSettings {
     cut_draws: 0,
 };
 
-/// From this many samples per pixel on, a render without a mode flag is
+/// From this many samples per pixel on, a render without `--method` is
 /// stochastic: at 16 spp the stochastic cut (its draws stratified over the
 /// pixel's samples) had the smaller error on every scene measured, at
 /// about the bounded cut's time; at 4 the bounded cut still won on the
-/// atrium (docs/measurements.md, "Stratified over a pixel's samples").
+/// atrium (docs/notebook/measurements.md, "Stratified over a pixel's samples").
 pub const STOCHASTIC_FROM_SPP: u32 = 16;
 
 /// A cut node's key for [`PixelSample::number`]: the same node of the
@@ -146,7 +146,7 @@ const PIXEL_SURFACES: usize = 16;
 /// drawn over the cut, its distribution is the kept point's. On the motion
 /// scene's window at 256 spp (a sphere sliding over the floor) four draws
 /// gave 1.5% mean error at cos 0.9, 1.1% at 0.97, 0.86% at 0.99 and 0.74%
-/// at 0.995, for about the same time (docs/measurements.md, "A pixel's
+/// at 0.995, for about the same time (docs/notebook/measurements.md, "A pixel's
 /// cuts kept per surface").
 const PIXEL_CUT_NORMAL_COS: f32 = 0.995;
 
@@ -162,7 +162,7 @@ const PIXEL_CUT_NORMAL_COS: f32 = 0.995;
 /// draws: 13.3% mean error without the test, 4.0% past a fall of 16,
 /// 3.2% past 4, 3.1% past 2 and weighed again at every sample; 4 leaves
 /// the Phong scenes measured (the motion and dof windows, grid10k, the
-/// atrium) as they were, bit for bit (docs/measurements.md, "A sharp
+/// atrium) as they were, bit for bit (docs/notebook/measurements.md, "A sharp
 /// lobe's turn between a pixel's samples").
 const LOBE_TURN_RATIO: f32 = 4.0;
 
@@ -532,7 +532,7 @@ fn draw_over_cut(
 /// pixel whose point sees a node the first sample's weights gave 0.
 /// 0.02, 0.1 and 0.3 measured alike on `scenes/dof.toml` at 256 spp; with
 /// the walks' weights, 0.03 and 0.1 alike on the motion window and 0.3
-/// worse (docs/measurements.md, "A cut's draws by the walks' weights").
+/// worse (docs/notebook/measurements.md, "A cut's draws by the walks' weights").
 const UNIFORM_SHARE: f64 = 0.1;
 
 /// The cumulative probabilities of drawing each of `cut`'s nodes, appended

@@ -15,7 +15,7 @@ use crate::shading::{Bsdf, SurfacePoint};
 /// them to light it: a lobe that sees fewer (its solid angle times their
 /// density about its mirror direction) shows them as specks, and its
 /// light from the continuous emitters is sampled instead (docs/design.md
-/// §6.2; measured in docs/measurements.md, "Shiny surfaces under an
+/// §6.2; measured in docs/notebook/measurements.md, "Shiny surfaces under an
 /// environment").
 pub const LIGHTS_PER_LOBE: f32 = 128.0;
 

@@ -80,7 +80,7 @@ const EMITTER_STREAM: u64 = 0xe4f1_5a3b;
 /// is mostly its bounces', so a small cut there buys more paths for the
 /// time: 16 nodes reached the full cut's error in 61% of its time on the
 /// Cornell box and 81% on shiny, where 4 nodes let glossy vertices pick
-/// lights badly (docs/measurements.md).
+/// lights badly (docs/notebook/measurements.md).
 const SECONDARY_MAX_CUT: usize = 16;
 
 /// Keeps a path's bounces apart from the other streams of its vertex.

@@ -89,7 +89,7 @@ const POW_SQUARING_LIMIT: f32 = 1_048_576.0;
 /// below f32's, so the result is x^n correctly rounded to f32 or one ulp
 /// off. It costs a tenth of `wide`'s exp2(n log2 x), which the walks of
 /// the stochastic cut evaluated at every step on a glossy surface (14% of
-/// a 256-spp render of `scenes/dof.toml`, docs/measurements.md). Other
+/// a 256-spp render of `scenes/dof.toml`, docs/notebook/measurements.md). Other
 /// exponents take `wide`'s pow.
 #[inline(always)]
 #[must_use]
