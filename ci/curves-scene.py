@@ -2,7 +2,7 @@
 """Writes DIR/fur.usda with usd-core: a ball of COUNT hairs (cubic
 B-spline curves of 6 control points each, 2 mm wide at the root and
 0.2 mm at the tip, brown through displayColor) and LIGHTS sphere lights
-(256 unless given) around it, with a camera. The curves scene docs/measurements.md
+(256 unless given) around it, with a camera. The curves scene docs/notebook/measurements.md
 ("Curves and points") measures.
 
     python3 ci/curves-scene.py DIR [COUNT [LIGHTS]]

@@ -2,7 +2,7 @@
 """Writes two glTF files of the same 10,000 balls (an icosphere of 1,280
 triangles each, on a 100 x 100 grid): DIR/instanced.gltf, one node with
 EXT_mesh_gpu_instancing's 10,000 translations, and DIR/nodes.gltf, 10,000
-nodes sharing one mesh. docs/measurements.md ("Instances") renders both.
+nodes sharing one mesh. docs/notebook/measurements.md ("Instances") renders both.
 
     python3 ci/instancing-scenes.py DIR
 """

@@ -1,5 +1,5 @@
 #!/bin/sh
-# Reproduces docs/measurements.md's light-group table: renders scenes/groups.toml
+# Reproduces docs/notebook/measurements.md's light-group table: renders scenes/groups.toml
 # exactly at 1 and 4 spp, then in each cut mode with and without per-group
 # error control, and compares every render with the exact one at the same
 # spp (beauty and each group's layer). Takes about 15 minutes on one core.

@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """The bounded mode's texture aliasing on scenes/checker.toml, before and
-after MIP maps (docs/measurements.md, "MIP maps"): renders the scene at
+after MIP maps (docs/notebook/measurements.md, "MIP maps"): renders the scene at
 1 spp with `--texture-filter off` (each hit reads the image) and with the
 default MIP filter, and a 256-spp reference reading the image (each
 pixel's own average of the checks), then prints each one's relative RMSE

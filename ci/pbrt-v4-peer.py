@@ -14,7 +14,7 @@ PBRT_SRC is pbrt-v4's source tree with its submodules (`git clone
 pbrt-v4 sources. Needs, beyond what ci/setup.sh installs: cmake and
 libopenexr-dev (`apt-get install cmake libopenexr-dev`) to build pbrt-v4,
 and numpy (`pip install numpy`) for the error measure.
-docs/measurements.md, "Against pbrt-v4 on many point lights", says what it
+docs/notebook/measurements.md, "Against pbrt-v4 on many point lights", says what it
 measured and how to read it.
 
 What it does:

@@ -2,7 +2,7 @@
 """Writes DIR/textured.gltf: a quad under a point light whose material
 carries three 4096 x 4096 PNG textures (an sRGB base colour, a normal map
 and a metallic-roughness map: 50 million texels), with a camera. The
-texture-heavy scene docs/measurements.md ("Textures in memory") measures.
+texture-heavy scene docs/notebook/measurements.md ("Textures in memory") measures.
 
     python3 ci/texture-scene.py DIR
 """

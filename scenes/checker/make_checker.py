@@ -2,7 +2,7 @@
 """Writes checker.png beside this script: 64 x 64 texels, 8 x 8 checks of
 8 texels, light (sRGB 230) and dark (sRGB 40). scenes/checker.toml repeats
 it 500 times across a floor 1 km wide, to measure texture aliasing far
-from the camera (docs/measurements.md, "MIP maps").
+from the camera (docs/notebook/measurements.md, "MIP maps").
 
     python3 scenes/checker/make_checker.py
 """

@@ -1,5 +1,5 @@
 """Cycles' render of cornell.toml with the path method, for time to equal
-error (docs/measurements.md, "Against Cycles on the Cornell box"): the
+error (docs/notebook/measurements.md, "Against Cycles on the Cornell box"): the
 same OBJ walls and blocks, camera and light built in Blender from nothing,
 Cycles on the CPU with BOUNCES bounces of every kind (Cycles counts the
 bounces after the camera's hit, so its 6 is lightcuts' --max-depth 7 and

@@ -42,7 +42,7 @@ MODELS = {
     "water_bottle": ("WaterBottle/glTF/WaterBottle.gltf", 40.0, 15.0, 8.0),
 }
 # Built only when ONLY names them, into OUT (never into the repository):
-# DamagedHelmet is CC BY-NC (docs/measurements.md, "DamagedHelmet against
+# DamagedHelmet is CC BY-NC (docs/notebook/measurements.md, "DamagedHelmet against
 # Cycles").
 MEASURED_ONLY = {
     "damaged_helmet": ("DamagedHelmet/glTF/DamagedHelmet.gltf", 25.0, 20.0, 1.0),

@@ -5,7 +5,7 @@ spheres, 100 sphere lights and a camera, with Pixar's usd-core.
     pip install usd-core
     python3 scenes/usd/make_instancing_stage.py OUT.usdc
 
-docs/measurements.md ("USD stages") times `lightcuts inspect OUT.usdc`.
+docs/notebook/measurements.md ("USD stages") times `lightcuts inspect OUT.usdc`.
 """
 
 import random
