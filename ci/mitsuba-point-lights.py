@@ -8,7 +8,7 @@ light tree) and traces one shadow ray, plus one BSDF sample (MIS).
 
     pip install mitsuba numpy
     DRJIT_LIBLLVM_PATH=/usr/lib/x86_64-linux-gnu/libLLVM.so.19.1 \\
-        python3 ci/mitsuba-point-lights.py TWIN.toml SPP OUT.exr [WIDTHxHEIGHT] [VARIANT]
+        python3 ci/mitsuba-point-lights.py TWIN.toml SPP OUT.exr [WIDTHxHEIGHT] [SEED]
 
 How the two scenes correspond:
 - A point light of intensity I (W/sr) is Mitsuba's `point` of `intensity`
@@ -81,10 +81,11 @@ def scene_dict(scene, spp, width, height):
 def main():
     twin, spp, out = sys.argv[1], int(sys.argv[2]), sys.argv[3]
     width, height = map(int, (sys.argv[4] if len(sys.argv) > 4 else '160x120').split('x'))
-    mi.set_variant(sys.argv[5] if len(sys.argv) > 5 else 'llvm_ad_rgb')
+    seed = int(sys.argv[5]) if len(sys.argv) > 5 else 0
+    mi.set_variant('llvm_ad_rgb')
     scene = mi.load_dict(scene_dict(tomllib.load(open(twin, 'rb')), spp, width, height))
     start = time.time()
-    image = mi.render(scene)
+    image = mi.render(scene, seed=seed)
     mi.Bitmap(image).write(out)
     print(f'{spp} spp: {time.time() - start:.2f} s')
 

@@ -207,6 +207,15 @@ fn one() -> u32 {
     1
 }
 
+/// A perspective camera a glTF or USD file brings, as a TOML's `[camera]`
+/// would say it.
+#[derive(Debug, Clone)]
+pub struct ImportedCamera {
+    pub spec: CameraSpec,
+    /// Width over height, when the file gives one.
+    pub aspect_ratio: Option<f32>,
+}
+
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct CameraSpec {

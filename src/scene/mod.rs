@@ -53,6 +53,12 @@ pub const MAX_SPP: u32 = 1 << 20;
 /// (`FLT_LARGE`; Debian builds it with assertions, which abort), and a
 /// shadow ray's direction spans two points: 1e16 keeps a wide margin.
 pub const MAX_COORDINATE: f32 = 1e16;
+/// Most triangles one glTF or USD import may store (2^28): each copy
+/// counted, an instanced mesh once.
+pub const MAX_IMPORT_TRIANGLES: usize = 1 << 28;
+/// Most instances one glTF or USD import may make (2^24; about 100 bytes
+/// each, with Embree's).
+pub const MAX_IMPORT_INSTANCES: usize = 1 << 24;
 /// Largest number of lights a grid may generate (memory: ~28 bytes each).
 pub const MAX_GRID_LIGHTS: u64 = 1 << 26;
 
@@ -61,6 +67,33 @@ pub struct Film {
     pub width: u32,
     pub height: u32,
     pub spp: u32,
+}
+
+/// An importer's emissive meshes becoming area lights (docs/design.md
+/// §6.1), the step the glTF and the USD importers share: each counts its
+/// emitters and seeds the n-th one's drawn points from its own base, so
+/// that a glTF and a USD file imported into one scene never draw the same
+/// points.
+#[derive(Debug)]
+pub struct EmissiveMeshes {
+    base: u64,
+    count: u64,
+}
+
+impl EmissiveMeshes {
+    /// The glTF importer's emitters (its seeds' base, kept as first chosen
+    /// so that its images stay as they were).
+    pub const GLTF: Self = Self { base: 0x617f_0000, count: 0 };
+    /// The USD importer's emitters.
+    pub const USD: Self = Self { base: 0x05d0_0000, count: 0 };
+
+    /// The area light of the scene's mesh `mesh`, emitting `radiance`
+    /// (W/(m^2 sr)) from the side its winding faces or from `both_sides`,
+    /// drawn at `samples` points.
+    pub fn light(&mut self, mesh: usize, radiance: Vec3, samples: u32, both_sides: bool) -> LightSource {
+        self.count += 1;
+        LightSource::Area { mesh, radiance, samples, seed: self.base + self.count, both_sides }
+    }
 }
 
 /// A light as the scene file describes it, validated. `light::Lights::from_scene`

@@ -10,7 +10,7 @@ use gltf::mesh::Mode;
 use super::{Importer, MAX_JOINTS, MAX_TRIANGLES};
 use crate::scene::groups::GltfLightNames;
 use crate::scene::mesh::Mesh;
-use crate::scene::{within_limits, LightSource, SceneError, MAX_COORDINATE};
+use crate::scene::{within_limits, SceneError, MAX_COORDINATE};
 
 /// A primitive's triangles: its POSITIONs in its mesh's space, and the
 /// vertex indices of each triangle.
@@ -125,14 +125,9 @@ impl Importer<'_, '_> {
         let has_area = mesh.has_area();
         self.parts.meshes.push(mesh);
         if emission != Vec3::ZERO && has_area {
-            self.emitters += 1;
-            self.parts.lights.push(LightSource::Area {
-                mesh: self.parts.meshes.len() - 1,
-                radiance: emission,
-                samples: self.spec.emitter_samples,
-                seed: 0x617f_0000 + self.emitters,
-                both_sides,
-            });
+            let mesh = self.parts.meshes.len() - 1;
+            let light = self.emitters.light(mesh, emission, self.spec.emitter_samples, both_sides);
+            self.parts.lights.push(light);
             self.parts.light_names.push(GltfLightNames {
                 light: None,
                 node: Some(node_name.to_string()),

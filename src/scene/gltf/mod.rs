@@ -23,13 +23,14 @@ use std::collections::HashMap;
 pub(crate) use geometry::{mikktspace_tangents, Tangents};
 use std::path::{Path, PathBuf};
 
-use super::file::{CameraSpec, GltfSpec};
+use super::file::{GltfSpec, ImportedCamera};
 use super::groups::GltfLightNames;
 use super::material::Material;
 use super::mesh::Mesh;
 use super::object::Object;
 use super::texture::Texture;
 use super::{LightSource, SceneError, MAX_EMITTER_SAMPLES};
+use super::{MAX_IMPORT_INSTANCES as MAX_INSTANCES, MAX_IMPORT_TRIANGLES as MAX_TRIANGLES};
 
 /// Extensions whose absence from the renderer changes nothing it draws
 /// (when merely used) and which it implements; anything else listed in
@@ -70,14 +71,6 @@ const MAX_DEPTH: usize = 1024;
 /// Most joints a skin may have.
 const MAX_JOINTS: usize = 1 << 16;
 
-/// Most triangles an import may store (2^28): each copy counted, an
-/// instanced mesh once.
-const MAX_TRIANGLES: usize = 1 << 28;
-
-/// Most instances an import may make (2^24; about 100 bytes each, with
-/// Embree's).
-const MAX_INSTANCES: usize = 1 << 24;
-
 /// Where the imported parts go: the scene's own lists, which the TOML's
 /// parts may already fill (indices are into these lists).
 pub struct Parts<'a> {
@@ -108,14 +101,6 @@ pub struct PlayedAnimation {
     pub shutter: [f32; 2],
 }
 
-/// A perspective camera found in the file.
-#[derive(Debug, Clone)]
-pub struct GltfCamera {
-    pub spec: CameraSpec,
-    /// Width over height, when the file gives one.
-    pub aspect_ratio: Option<f32>,
-}
-
 /// Imports `spec.file` (relative to `base`) into `parts`; returns the chosen
 /// camera when `want_camera` (the TOML gives none). With a `shutter`
 /// (seconds, open <= close), the file's animation (`spec.animation`, else
@@ -130,7 +115,7 @@ pub fn import(
     want_camera: bool,
     shutter: Option<[f32; 2]>,
     parts: Parts<'_>,
-) -> Result<Option<GltfCamera>, SceneError> {
+) -> Result<Option<ImportedCamera>, SceneError> {
     let path = base.join(&spec.file);
     parts.inputs.push(path.clone());
     let check = |ok: bool, field: &str, message: String| {
@@ -191,7 +176,7 @@ pub fn import(
         spec,
         parts,
         skipped_primitives: 0,
-        emitters: 0,
+        emitters: super::EmissiveMeshes::GLTF,
         triangles: 0,
         placements: Vec::new(),
         prototypes: HashMap::new(),
@@ -214,7 +199,7 @@ struct Importer<'a, 'p> {
     spec: &'a GltfSpec,
     parts: Parts<'p>,
     skipped_primitives: usize,
-    emitters: u64,
+    emitters: super::EmissiveMeshes,
     /// Triangles imported so far (every copy counted, an instanced mesh once).
     triangles: usize,
     /// How many rigid, orientation-preserving placements each glTF mesh

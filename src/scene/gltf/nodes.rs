@@ -7,8 +7,9 @@
 use glam::{Affine3A, Mat4, Vec3};
 
 use super::geometry::Placement;
-use super::{GltfCamera, Importer, MAX_DEPTH, MAX_INSTANCES};
+use super::{Importer, MAX_DEPTH, MAX_INSTANCES};
 use crate::scene::file::CameraSpec;
+use crate::scene::file::ImportedCamera;
 use crate::scene::object::{Motion, Object};
 use crate::scene::{within_limits, LightSource, SceneError, MAX_COORDINATE};
 
@@ -85,7 +86,7 @@ impl Importer<'_, '_> {
         Ok(visits)
     }
 
-    pub(super) fn import_scene(&mut self, want_camera: bool) -> Result<Option<GltfCamera>, SceneError> {
+    pub(super) fn import_scene(&mut self, want_camera: bool) -> Result<Option<ImportedCamera>, SceneError> {
         let Some(scene) = self.doc.default_scene().or_else(|| self.doc.scenes().next()) else {
             return Err(self.error("scenes", "the file has no scene to render"));
         };
@@ -167,7 +168,7 @@ impl Importer<'_, '_> {
     /// (each with its node's world transform at the open, its location
     /// and, when it moves, its world transform at the close), else the
     /// first; None when the file has none.
-    fn chosen_camera(&self, cameras: &[CameraNode<'_>]) -> Result<Option<GltfCamera>, SceneError> {
+    fn chosen_camera(&self, cameras: &[CameraNode<'_>]) -> Result<Option<ImportedCamera>, SceneError> {
         let chosen = match &self.spec.camera {
             None => cameras.first(),
             Some(name) => {
@@ -222,7 +223,7 @@ impl Importer<'_, '_> {
             spec.eye_end = Some(eye_end.to_array());
             spec.look_at_end = Some(CameraSpec::aim(eye_end.as_dvec3(), forward_end.as_dvec3(), 1.0));
         }
-        Ok(Some(GltfCamera { spec, aspect_ratio }))
+        Ok(Some(ImportedCamera { spec, aspect_ratio }))
     }
 
     /// A mesh node's mesh: posed by its skin, or placed (and moving, with

@@ -15,7 +15,7 @@ use std::path::Path;
 
 use glam::Vec3;
 
-use super::file::{self, SceneFile};
+use super::file::{self, ImportedCamera, SceneFile};
 use super::{
     gltf, groups, object, usd, within_limits, LightGroups, LightSource, Scene, SceneError, MAX_COORDINATE,
     MAX_EMITTER_SAMPLES,
@@ -234,7 +234,7 @@ impl Scene {
         let mut incomplete = Vec::new();
         let mut instances = Vec::new();
         let mut animation = None;
-        let gltf_camera = match &spec.gltf {
+        let imported_camera = match &spec.gltf {
             None => None,
             Some(g) => {
                 let mut light_names = Vec::new();
@@ -278,7 +278,7 @@ impl Scene {
                     incomplete: &mut incomplete,
                     environment: &mut usd_environment,
                 };
-                let camera = import_usd(path, base, &spec, u, gltf_camera.is_none(), parts)?;
+                let camera = import_usd(path, base, &spec, u, imported_camera.is_none(), parts)?;
                 requested_groups
                     .extend(groups.into_iter().map(|(g, prim)| (g, format!("usd.file ({prim}.lightcuts:group)"))));
                 camera
@@ -296,7 +296,7 @@ impl Scene {
         let (camera_spec, film) = settings::camera_and_film(
             &v,
             &spec,
-            gltf_camera.or(usd_camera),
+            imported_camera.or(usd_camera),
             object::world_bounds(&meshes, &objects),
             &incomplete,
             &mut warnings,
@@ -451,14 +451,14 @@ fn import_usd(
     base: &Path,
     spec: &SceneFile,
     u: &file::UsdSpec,
-    no_gltf_camera: bool,
+    no_imported_camera: bool,
     parts: usd::Parts<'_>,
-) -> Result<Option<gltf::GltfCamera>, SceneError> {
+) -> Result<Option<ImportedCamera>, SceneError> {
     let mut u = u.clone();
     if let Some(camera) = spec.camera.as_ref().filter(|c| c.shutter_open()) {
         u.shutter = Some(camera.shutter);
     }
-    usd::import(path, base, &u, spec.camera.is_none() && no_gltf_camera, parts)
+    usd::import(path, base, &u, spec.camera.is_none() && no_imported_camera, parts)
 }
 
 /// The scene's `[gltf]` import, for the command-line `flag` that `does`

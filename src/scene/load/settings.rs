@@ -7,8 +7,8 @@ use glam::Vec3;
 
 use super::lights::MAX_EMISSION;
 use super::Validator;
+use crate::scene::file::ImportedCamera;
 use crate::scene::file::{self, SceneFile};
-use crate::scene::gltf::GltfCamera;
 use crate::scene::{
     check_resolution, Environment, EnvironmentMap, Film, Indirect, PathSettings, SceneError, VplSettings,
     DEFAULT_GLTF_WIDTH, DEFAULT_MAX_DEPTH, MAX_SPP, MAX_VPL_PATHS, MOST_PATH_DEPTH,
@@ -91,12 +91,12 @@ pub const FRAMING_FOV_Y: f32 = 45.0;
 pub(super) fn camera_and_film(
     v: &Validator<'_>,
     spec: &SceneFile,
-    gltf_camera: Option<GltfCamera>,
+    imported_camera: Option<ImportedCamera>,
     bounds: (Vec3, Vec3),
     incomplete: &[String],
     warnings: &mut Vec<String>,
 ) -> Result<(file::CameraSpec, Film), SceneError> {
-    let (camera_spec, aspect_ratio) = match (&spec.camera, gltf_camera) {
+    let (camera_spec, aspect_ratio) = match (&spec.camera, imported_camera) {
         (Some(c), _) => (c.clone(), None),
         (None, Some(c)) => {
             let field = match (&spec.gltf, &spec.usd) {

@@ -26,18 +26,15 @@ use glam::{Affine3A, DMat4, DQuat, DVec3, DVec4, Mat4, Vec3};
 use self::geometry::Located;
 use self::stage::Stage;
 use super::environment::{Environment, EnvironmentMap};
+use super::file::ImportedCamera;
 use super::file::{CameraSpec, UsdSpec};
-use super::gltf::GltfCamera;
 use super::material::Material;
 use super::mesh::Mesh;
 use super::object::{Motion, Object};
 use super::texture::Texture;
 use super::{within_limits, LightSource, SceneError, MAX_COORDINATE};
+use super::{MAX_IMPORT_INSTANCES as MAX_INSTANCES, MAX_IMPORT_TRIANGLES as MAX_TRIANGLES};
 
-/// Most triangles an import may store (2^28), an instanced mesh once.
-const MAX_TRIANGLES: usize = 1 << 28;
-/// Most instances an import may make (2^24).
-const MAX_INSTANCES: usize = 1 << 24;
 /// Deepest prim hierarchy followed (instances and point instancers count
 /// their prototypes' depth too).
 const MAX_DEPTH: usize = 256;
@@ -81,7 +78,7 @@ pub fn import(
     spec: &UsdSpec,
     want_camera: bool,
     parts: Parts<'_>,
-) -> Result<Option<GltfCamera>, SceneError> {
+) -> Result<Option<ImportedCamera>, SceneError> {
     let path = base.join(&spec.file);
     let _ = scene_file;
     parts.inputs.push(path.clone());
@@ -106,7 +103,7 @@ fn import_stage(
     spec: &UsdSpec,
     want_camera: bool,
     parts: Parts<'_>,
-) -> Result<Option<GltfCamera>, SceneError> {
+) -> Result<Option<ImportedCamera>, SceneError> {
     let error = |(location, message): Located| SceneError::new(path, location, message);
     let size = crate::util::file::open_regular(path)
         .and_then(|file| file.metadata())
@@ -162,7 +159,7 @@ fn import_stage(
         parts,
         cameras: Vec::new(),
         triangles: 0,
-        emitters: 0,
+        emitters: super::EmissiveMeshes::USD,
         still_moving: 0,
         cages: std::collections::BTreeMap::new(),
         skipped: std::collections::BTreeMap::new(),
@@ -276,7 +273,7 @@ struct Walker<'a, 'p> {
     /// Cameras found: (prim path, world matrices at the times, stage read time).
     cameras: Vec<(String, Vec<DMat4>)>,
     triangles: usize,
-    emitters: u64,
+    emitters: super::EmissiveMeshes,
     still_moving: usize,
     /// Subdivision meshes drawn as their control polygons: why, how many, and the first one's path.
     cages: std::collections::BTreeMap<&'static str, (usize, String)>,
@@ -764,14 +761,9 @@ impl Walker<'_, '_> {
         let has_area = mesh.has_area();
         self.parts.meshes.push(mesh);
         if emission != Vec3::ZERO && has_area {
-            self.emitters += 1;
-            self.parts.lights.push(LightSource::Area {
-                mesh: self.parts.meshes.len() - 1,
-                radiance: emission,
-                samples: self.spec.emitter_samples,
-                seed: 0x05d0_0000 + self.emitters,
-                both_sides: double_sided,
-            });
+            let mesh = self.parts.meshes.len() - 1;
+            let light = self.emitters.light(mesh, emission, self.spec.emitter_samples, double_sided);
+            self.parts.lights.push(light);
             self.parts.materials[material].emits_both_sides = double_sided;
             self.parts.groups.push((here.group.clone(), prim.to_string()));
         }
@@ -802,7 +794,6 @@ impl Walker<'_, '_> {
                     let LightSource::Area { radiance, .. } = source else {
                         unreachable!("only area lights have meshes")
                     };
-                    self.emitters += 1;
                     let mut mesh = mesh;
                     mesh.name = prim.to_string();
                     // Black, emitting from the side its winding faces.
@@ -812,13 +803,8 @@ impl Walker<'_, '_> {
                     });
                     mesh.material = self.parts.materials.len() - 1;
                     self.parts.meshes.push(mesh);
-                    source = LightSource::Area {
-                        mesh: self.parts.meshes.len() - 1,
-                        radiance,
-                        samples: self.spec.emitter_samples,
-                        seed: 0x05d0_0000 + self.emitters,
-                        both_sides: false,
-                    };
+                    source =
+                        self.emitters.light(self.parts.meshes.len() - 1, radiance, self.spec.emitter_samples, false);
                 }
                 if let LightSource::Sun { seed, .. } = &mut source {
                     *seed = 0x05d1_0000 + self.parts.lights.len() as u64;
@@ -1028,7 +1014,7 @@ impl Walker<'_, '_> {
 
     /// The camera asked for (a prim path), else the first found under the
     /// default prim, else the first found.
-    fn camera(&self, asked: Option<&str>, default_prim: Option<&str>) -> Result<Option<GltfCamera>, Located> {
+    fn camera(&self, asked: Option<&str>, default_prim: Option<&str>) -> Result<Option<ImportedCamera>, Located> {
         let chosen = match asked {
             Some(path) => match self.cameras.iter().find(|(p, _)| p == path) {
                 Some(c) => Some(c),
@@ -1109,7 +1095,7 @@ impl Walker<'_, '_> {
                 spec.look_at_end = Some(CameraSpec::aim(eye_end, forward_end, distance));
             }
         }
-        Ok(Some(GltfCamera { spec, aspect_ratio: Some((horizontal / vertical) as f32) }))
+        Ok(Some(ImportedCamera { spec, aspect_ratio: Some((horizontal / vertical) as f32) }))
     }
 
     /// Notes a prim of a type this renderer does not draw.
