@@ -32,6 +32,7 @@ import mitsuba as mi
 import numpy as np
 
 HERE = os.path.dirname(os.path.abspath(__file__))
+PASS_SPP = 65536
 spec = importlib.util.spec_from_file_location('pbrt_v4_peer', os.path.join(HERE, 'pbrt-v4-peer.py'))
 peer = importlib.util.module_from_spec(spec)
 spec.loader.exec_module(peer)
@@ -83,11 +84,19 @@ def main():
     width, height = map(int, (sys.argv[4] if len(sys.argv) > 4 else '160x120').split('x'))
     seed = int(sys.argv[5]) if len(sys.argv) > 5 else 0
     mi.set_variant('llvm_ad_rgb')
-    scene = mi.load_dict(scene_dict(tomllib.load(open(twin, 'rb')), spp, width, height))
+    # One pass holds at most 2^32 samples in Dr.Jit's llvm variant: more
+    # samples are passes of PASS_SPP with seeds seed, seed + 1, ...,
+    # averaged.
+    passes = max(1, -(-spp // PASS_SPP))
+    per_pass = spp // passes
+    scene = mi.load_dict(scene_dict(tomllib.load(open(twin, 'rb')), per_pass, width, height))
     start = time.time()
-    image = mi.render(scene, seed=seed)
-    mi.Bitmap(image).write(out)
-    print(f'{spp} spp: {time.time() - start:.2f} s')
+    total = None
+    for k in range(passes):
+        image = np.array(mi.render(scene, seed=seed + k), dtype=np.float64)
+        total = image if total is None else total + image
+    mi.Bitmap((total / passes).astype(np.float32)).write(out)
+    print(f'{passes * per_pass} spp: {time.time() - start:.2f} s')
 
 
 if __name__ == '__main__':
