@@ -77,7 +77,7 @@ ROWS = {
                  '--max-depth', '7'],
                 lambda spp, out: ['scenes/cornell/mitsuba_reference.py', MITSUBA, '8', str(spp), out],
                 (16, 64, 256, 1024, 4096), 'scenes/cornell/mitsuba-depth8.exr'),
-    'atrium': ('the atrium: sky, sun, six panels, two bounces',
+    'atrium': ('a courtyard under a sky, the sun and six panels, two bounces',
                ['scenes/atrium.toml', '--resolution', '160x120', '--spp', '16', '--indirect', 'path',
                 '--max-depth', '3'],
                lambda spp, out: ['scenes/atrium/mitsuba_reference.py', MITSUBA, str(spp), out],
@@ -154,7 +154,8 @@ def run_row(name, args, out):
     peer_time, how = time_at([(t, e) for _, t, e in points], ours_row[2])
     return {'name': name, 'what': what, 'lights': lights, 'rays': per_pixel / our_spp, 'ours': ours_row, 'peer': points,
             'peer_time': peer_time, 'how': how,
-            'reference': ' and '.join(sorted({r.replace(out + '/', 'out/benchmarks/') for r in (reference, peer_reference)}))}
+            'reference': ' and '.join(f'`{r}`' for r in sorted({p.replace(out + '/', 'out/benchmarks/')
+                                                                for p in (reference, peer_reference)}))}
 
 
 def time_at(points, target):
@@ -192,7 +193,7 @@ def tables(rows, stamp_line):
                       f'{100 * row["ours"][2]:.3f}% |')
         for spp, seconds, err in row['peer']:
             detail.append(f'| {row["name"]} | Mitsuba 3 | {spp} spp | {seconds:.2f} | {100 * err:.3f}% |')
-    references = [f'- {row["name"]}: `{row["reference"]}`; the peer\'s time at our error '
+    references = [f'- {row["name"]}: {row["reference"]}; the peer\'s time at our error '
                   f'{row["how"]}' for row in rows]
     return '\n'.join(summary), '\n'.join(detail), '\n'.join(references), stamp_line
 
@@ -251,6 +252,8 @@ def main():
         if name not in ROWS:
             sys.exit(f'benchmarks: no row {name!r} (rows: {", ".join(ROWS)})')
     rows = [run_row(name, args, args.out) for name in names]
+    with open(os.path.join(args.out, 'rows.json'), 'w') as f:
+        json.dump(rows, f, indent=1)
     summary, detail, references, stamp_line = tables(rows, stamp(args.lightcuts, args.repeat))
     print(stamp_line, summary, detail, references, sep='\n\n')
     if args.write:
