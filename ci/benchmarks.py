@@ -45,13 +45,12 @@ import platform
 import re
 import subprocess
 import sys
-import time
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 spec = importlib.util.spec_from_file_location('pbrt_v4_peer', os.path.join(ROOT, 'ci', 'pbrt-v4-peer.py'))
 peer_tools = importlib.util.module_from_spec(spec)
 spec.loader.exec_module(peer_tools)
-timed = peer_tools.timed
+timed, timed_with_output = peer_tools.timed, peer_tools.timed_with_output
 
 
 LLVM = '/usr/lib/x86_64-linux-gnu/libLLVM.so.19.1'
@@ -83,19 +82,6 @@ ROWS = {
                lambda spp, out: ['scenes/atrium/mitsuba_reference.py', MITSUBA, str(spp), out],
                (32, 128, 512, 2048), 'scenes/atrium/mitsuba-depth4-16384.exr'),
 }
-
-
-def timed_with_output(command, repeat):
-    """timed()'s median wall time, and the standard output of the last run."""
-    times, stdout = [], ''
-    for _ in range(repeat):
-        start = time.monotonic()
-        result = subprocess.run(command, capture_output=True, text=True)
-        times.append(time.monotonic() - start)
-        if result.returncode != 0:
-            sys.exit(f'{" ".join(command)} failed:\n{result.stdout}\n{result.stderr}')
-        stdout = result.stdout
-    return sorted(times)[len(times) // 2], stdout
 
 
 def block_error(lightcuts, image, reference):

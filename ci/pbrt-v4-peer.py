@@ -275,17 +275,24 @@ def smooth_pixels(reference):
     return (lo > 0) & (hi <= 1.05 * lo)
 
 
-def timed(command, repeat=1):
+def timed_with_output(command, repeat=1):
     """The whole process's wall time: the median of `repeat` runs (one
-    slow or lucky run of a 0.1 s render must not decide a ratio)."""
-    times = []
+    slow or lucky run of a 0.1 s render must not decide a ratio); and the
+    standard output of the last run."""
+    times, stdout = [], ''
     for _ in range(repeat):
         start = time.monotonic()
         result = subprocess.run(command, capture_output=True, text=True)
         times.append(time.monotonic() - start)
         if result.returncode != 0:
             sys.exit(f'{" ".join(command)} failed:\n{result.stdout}\n{result.stderr}')
-    return sorted(times)[len(times) // 2]
+        stdout = result.stdout
+    return sorted(times)[len(times) // 2], stdout
+
+
+def timed(command, repeat=1):
+    """timed_with_output's median wall time alone."""
+    return timed_with_output(command, repeat)[0]
 
 
 def time_for(points, target, unbiased):

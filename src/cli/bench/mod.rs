@@ -160,8 +160,8 @@ fn rays(args: &RaysArgs) -> Result<(), CliError> {
     let mode = args.mode.mode(settings.spp, &args.knobs)?;
     if mode.cut().is_none() {
         return Err(CliError::Usage {
-            flag: "--exact",
-            message: "bench rays measures a lightcut mode against the exact pass".into(),
+            flag: "--method",
+            message: "bench rays measures a lightcut method against the exact pass: not --method exact".into(),
         });
     }
     let session = crate::render::session::Session::try_new(&scene, args.pass.threads)?;
