@@ -1,10 +1,13 @@
 #!/usr/bin/env bash
 # Renders the measuring scenes (ci/measure.sh's set, plus cornell, atrium,
-# the light groups' scene and the glTF lobby) in every mode with one binary,
+# the light groups' scene and the glTF lobby) by every method with one binary,
 # or checks that two such sets are bit-identical.
 #
-#   ci/same-images.sh render BIN OUTDIR    renders every scene, exact, bounded
-#                                          and stochastic
+#   ci/same-images.sh render BIN OUTDIR    renders every scene by every method
+#                                          (exact, bounded, bounded with
+#                                          reconstruction cuts, stochastic,
+#                                          stochastic with reuse,
+#                                          multidimensional)
 #   ci/same-images.sh compare DIR_A DIR_B  exits non-zero unless every channel
 #                                          of every pair is identical (idiff -fail 0)
 #
@@ -23,7 +26,16 @@ declare -A WINDOWS=(
     [lobby]="40,120,30,90"
 )
 SCENES=${SCENES:-few4 grid100 grid10k grid100k cornell atrium groups lobby}
-MODES="exact bounded stochastic"
+MODES=${MODES:-exact bounded reconstruct stochastic reuse multidimensional}
+
+# The command-line flags of each mode.
+flags() {
+    case $1 in
+    reconstruct) echo "--method bounded --reconstruct 4" ;;
+    reuse) echo "--method stochastic --reuse 2" ;;
+    *) echo "--method $1" ;;
+    esac
+}
 
 case "${1:-}" in
 render)
@@ -33,7 +45,7 @@ render)
         window=()
         if [ -n "${WINDOWS[$scene]:-}" ]; then window=(--pixel-bounds "${WINDOWS[$scene]}"); fi
         for mode in $MODES; do
-            "$bin" render "scenes/$scene.toml" -o "$out/$scene-$mode.exr" "--$mode" --quiet "${window[@]}" >/dev/null
+            "$bin" render "scenes/$scene.toml" -o "$out/$scene-$mode.exr" $(flags "$mode") --quiet "${window[@]}" >/dev/null
         done
         echo "rendered $scene" >&2
     done

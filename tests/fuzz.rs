@@ -40,8 +40,11 @@ use lightcuts::light::Lights;
 use lightcuts::lightcut::multidimensional::MULTIDIMENSIONAL_DEFAULTS;
 use lightcuts::lightcut::stochastic::STOCHASTIC_DEFAULTS;
 use lightcuts::lightcut::{self, CutSettings};
+use lightcuts::render::direct::{bounded::Bounded, exact::Exact, multidimensional::Multidimensional};
+use lightcuts::render::direct::{stochastic::Stochastic, DirectLight};
 use lightcuts::render::integrator::Integrator;
-use lightcuts::render::{self, Aovs, DirectLighting, PassSettings, PixelBounds, TextureFilter};
+use lightcuts::render::tracer::Tracer;
+use lightcuts::render::{self, Aovs, PassSettings, PixelBounds, TextureFilter};
 use lightcuts::scene::mesh::Mesh;
 use lightcuts::scene::Scene;
 use lightcuts::shading::Geometry;
@@ -300,24 +303,26 @@ fn render_lit(scene: &Scene, lights: &[Lights]) -> Outcome {
         lightcut::build_trees_with(lights, 1, &CutSettings { exhaustive_lights: 0, ..MULTIDIMENSIONAL_DEFAULTS });
     let emission_group = scene.emission_groups();
     let emitters = lightcuts::render::emitter_sampling::EmitterSampling::of(scene, settings.spp);
-    let modes = [
-        DirectLighting::Exact,
-        DirectLighting::Lightcuts { trees: &trees, settings: CutSettings::default() },
-        DirectLighting::StochasticLightcuts { trees: &trees, settings: STOCHASTIC_DEFAULTS },
-        DirectLighting::Multidimensional { trees: &whole_trees, settings: MULTIDIMENSIONAL_DEFAULTS },
+    let methods: [Box<dyn for<'a> DirectLight<'a> + '_>; 4] = [
+        Box::new(Exact),
+        Box::new(Bounded { trees: &trees, settings: CutSettings::default() }),
+        Box::new(Stochastic { trees: &trees, settings: STOCHASTIC_DEFAULTS }),
+        Box::new(Multidimensional { trees: &whole_trees, settings: MULTIDIMENSIONAL_DEFAULTS }),
     ];
-    for (direct, path_depth) in modes.into_iter().flat_map(|m| [(m, None), (m, Some(4))]) {
+    for (direct, path_depth) in methods.iter().flat_map(|m| [(m, None), (m, Some(4))]) {
         let integrator = Integrator {
-            geometry: &geometry,
-            lights,
-            direct,
+            tracer: Tracer {
+                geometry: &geometry,
+                lights,
+                split_groups: scene.groups.named(),
+                emitters: emitters.as_ref(),
+                spp: settings.spp,
+                footprint: Some(camera.pixel_footprint(settings.spp)),
+            },
+            direct: &**direct,
             max_mirror_depth: scene.max_mirror_depth,
-            split_groups: scene.groups.named(),
             emission_group: &emission_group,
-            emitters: emitters.as_ref(),
-            spp: settings.spp,
             path_depth,
-            footprint: Some(camera.pixel_footprint(settings.spp)),
         };
         let (film, _) = render::render(&integrator, &camera, &settings, &|_| {}).unwrap();
         assert!(film.non_finite().is_empty(), "NaN or Inf reached the film: {:?}", film.non_finite());

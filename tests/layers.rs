@@ -316,6 +316,38 @@ fn a_circle_of_siblings_is_found_and_parents_and_children_are_not_one() {
     assert_eq!(circle, ["cli::a", "cli::b"]);
 }
 
+/// The modules `file` (a module path of `files`) names.
+fn named_by(files: &[(Vec<String>, String)], file: &str) -> BTreeSet<String> {
+    let modules: BTreeSet<Vec<String>> = files.iter().map(|(m, _)| m.clone()).collect();
+    let (from, code) = files.iter().find(|(m, _)| m.join("::") == file).unwrap_or_else(|| panic!("no file {file}"));
+    referenced_modules(from, code, &modules).into_iter().map(|m| m.join("::")).collect()
+}
+
+/// Direct light is behind one interface (docs/design.md §2.1): the path
+/// loop, next-event estimation and the tiles name no method and no cut
+/// (only `render::direct`, the interface, and `lightcut`'s shared result),
+/// and no method names another.
+#[test]
+fn the_path_loop_names_no_direct_light_method_and_no_method_another() {
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
+    let files = files_of(&src);
+    let methods: Vec<String> =
+        files.iter().map(|(m, _)| m.join("::")).filter(|m| m.starts_with("render::direct::")).collect();
+    assert!(methods.len() >= 4, "the methods' modules: {methods:?}");
+    for loop_file in ["render", "render::integrator", "render::next_event", "render::tracer"] {
+        let named = named_by(&files, loop_file);
+        let wrong: Vec<&String> =
+            named.iter().filter(|m| m.starts_with("render::direct::") || m.starts_with("lightcut::")).collect();
+        assert!(wrong.is_empty(), "{loop_file} names a direct-light method or a cut: {wrong:?}");
+    }
+    assert!(named_by(&files, "render::integrator").contains("render::direct"), "the loop calls the interface");
+    for method in &methods {
+        let named = named_by(&files, method);
+        let others: Vec<&String> = named.iter().filter(|m| methods.contains(m) && *m != method).collect();
+        assert!(others.is_empty(), "{method} names another method: {others:?}");
+    }
+}
+
 /// Every function outside the tests with its length in lines, from its
 /// `fn` line to the `}` at the same indentation.
 fn function_lengths(src: &Path) -> Vec<(usize, String)> {

@@ -24,7 +24,8 @@ use crate::light_tree::layout::{Child, CutTree};
 use crate::light_tree::{LightTrees, TreeIndex};
 use crate::shading::{evaluate_into, trace_evaluations, Choices, Evaluations, LightEvaluator, SurfacePoint};
 use crate::util::color::luminance64;
-use crate::util::sampling::{mix64, Rng};
+use crate::util::sampling::mix64;
+use crate::util::streams::Stream;
 
 /// Pairs refined per batch of shadow rays.
 const REFINE_BATCH: usize = 32;
@@ -168,9 +169,6 @@ pub struct PixelCut {
     pub gather_nodes: u64,
 }
 
-/// Keeps the gather representatives' stream apart from the pixel's others.
-const GATHER_STREAM: u64 = 0x6a7b_e412_0d05_c3e1;
-
 /// The direct light of a pixel's gather points, summed with their
 /// strengths (Σ S_g L_g), by a multidimensional lightcut per light group
 /// as `settings.group_error` says; each group's share is added to
@@ -188,7 +186,7 @@ pub fn evaluate(
     if points.is_empty() {
         return PixelCut::default();
     }
-    let salt = Rng::from_key(&[key[0], key[1], key[2], GATHER_STREAM]).next_u64();
+    let salt = Stream::Gather.rng(&key).next_u64();
     let root = build_gather_tree(points, trees.scale, scratch);
     let cut = by_group_at_best(
         trees,

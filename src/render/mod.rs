@@ -7,10 +7,14 @@
 //! thread count, tile order and pixel window.
 
 pub mod cryptomatte;
+pub mod direct;
 pub mod emitter_sampling;
 pub mod film;
 pub mod integrator;
+pub mod next_event;
 pub mod session;
+pub mod stats;
+pub mod tracer;
 pub mod vpl;
 
 use std::time::{Duration, Instant};
@@ -20,12 +24,14 @@ use rayon::prelude::*;
 
 use crate::embree::{EmbreeError, Ray};
 use crate::scene::{Camera, Scene};
-use crate::util::sampling::{self, Rng};
+use crate::util::sampling;
+use crate::util::streams::Stream;
 use cryptomatte::{Coverage, CryptoType};
+use direct::Frame;
 use film::film_value;
 pub use film::{Aovs, Film, FilmChannel, PixelBounds, BACKGROUND_DEPTH, BEAUTY};
-pub use integrator::{DirectLighting, ShadingStats};
 use integrator::{Integrator, Scratch};
+pub use stats::ShadingStats;
 
 /// Tile edge in pixels: small enough to balance load across threads.
 pub const TILE: u32 = 16;
@@ -128,7 +134,7 @@ struct Layout {
 
 impl Layout {
     fn new(integrator: &Integrator<'_>, aovs: Aovs) -> Self {
-        let scene = integrator.geometry.scene;
+        let scene = integrator.tracer.geometry.scene;
         let mut names: Vec<String> = BEAUTY.iter().map(|c| (*c).to_string()).collect();
         let mut add = |wanted: bool, channels: &[&str]| {
             wanted.then(|| {
@@ -184,15 +190,18 @@ pub fn render(
     let layout = Layout::new(integrator, settings.aovs);
     let tile_list = tiles(settings.bounds, TILE);
     progress(PassProgress::Started { tiles: tile_list.len() as u64 });
-    let embree = &integrator.geometry.embree;
+    let embree = &integrator.tracer.geometry.embree;
     let rendered: Vec<(Vec<f32>, Vec<u64>, PassStats)> = tile_list
         .par_iter()
-        .map_init(Scratch::default, |scratch, tile| {
-            let result = render_tile(integrator, camera, settings, &layout, *tile, scratch);
-            embree.take_error("tracing a tile's rays")?;
-            progress(PassProgress::TileDone);
-            Ok(result)
-        })
+        .map_init(
+            || integrator.scratch(),
+            |scratch, tile| {
+                let result = render_tile(integrator, camera, settings, &layout, *tile, scratch);
+                embree.take_error("tracing a tile's rays")?;
+                progress(PassProgress::TileDone);
+                Ok(result)
+            },
+        )
         .collect::<Result<_, EmbreeError>>()?;
     progress(PassProgress::Finished);
 
@@ -207,7 +216,7 @@ pub fn render(
             .iter()
             .map(|name| FilmChannel { name: name.clone(), values: vec![0.0; b.area()], non_finite: 0 })
             .collect(),
-        attributes: layout.attributes(integrator.geometry.scene),
+        attributes: layout.attributes(integrator.tracer.geometry.scene),
     };
     let mut stats = PassStats::default();
     for (tile, (values, non_finite, tile_stats)) in tile_list.iter().zip(rendered) {
@@ -232,13 +241,13 @@ pub fn render(
 /// A tile's values (pixel by pixel, each pixel's channels in `layout`'s
 /// order), how many values of each channel were NaN or infinite before
 /// they were stored (see [`film_value`]), and its counters.
-fn render_tile(
-    integrator: &Integrator<'_>,
+fn render_tile<'a>(
+    integrator: &Integrator<'a>,
     camera: &Camera,
     settings: &PassSettings,
     layout: &Layout,
     tile: PixelBounds,
-    scratch: &mut Scratch,
+    scratch: &mut Scratch<'_, 'a>,
 ) -> (Vec<f32>, Vec<u64>, PassStats) {
     let count = layout.names.len();
     let mut values = vec![0.0f32; tile.area() * count];
@@ -247,19 +256,8 @@ fn render_tile(
     let inv_spp = 1.0 / f64::from(settings.spp);
     let mut groups = vec![DVec3::ZERO; layout.group_count];
     let (mut objects, mut materials) = (Coverage::default(), Coverage::default());
-    // The multidimensional mode's gather points of the pixel being shaded.
-    let mut gathered = Vec::new();
-    scratch.start_tile();
-    let block = integrator.reconstruction_block();
-    // An anchor's camera ray: through its corner's point of the film, the
-    // lens's centre, at the middle of the shutter.
-    let anchor_camera = match block {
-        Some(_) if camera.shutter_open() => std::borrow::Cow::Owned(camera.at(0.5)),
-        _ => std::borrow::Cow::Borrowed(camera),
-    };
-    if let Some(b) = integrator.reuse_block() {
-        stats.camera_rays += reuse_blocks(integrator, camera, settings, tile, b, scratch, &mut stats.shading);
-    }
+    let frame = Frame { camera, settings };
+    stats.camera_rays += scratch.direct.start_tile(&integrator.tracer, frame, tile, &mut stats.shading);
     for (i, pixel) in values.chunks_exact_mut(count).enumerate() {
         let (x, y) = (tile.x0 + i as u32 % tile.width(), tile.y0 + i as u32 / tile.width());
         let mut radiance = DVec3::ZERO;
@@ -272,17 +270,14 @@ fn render_tile(
         groups.fill(DVec3::ZERO);
         objects.clear();
         materials.clear();
-        if let Some(b) = block {
-            stats.camera_rays +=
-                pixel_anchors(integrator, &anchor_camera, b, (x, y), settings.seed, scratch, &mut stats.shading);
-        }
+        stats.camera_rays += scratch.direct.start_pixel(&integrator.tracer, frame, (x, y), &mut stats.shading);
         let pixel_ray = PixelRays::new(camera, settings, x, y);
         for s in 0..settings.spp {
             let ray = pixel_ray.sample(s);
             let key = [settings.seed, u64::from(x), u64::from(y), u64::from(s)];
-            let sample = integrator.trace(ray, key, settings.transparent, scratch, &mut groups, &mut gathered);
-            // With reuse, the block traced this camera ray and counted it.
-            stats.camera_rays += u64::from(integrator.reuse_block().is_none());
+            let sample = integrator.trace(ray, key, settings.transparent, scratch, &mut groups);
+            // A camera ray the method traced (reuse) it counted.
+            stats.camera_rays += sample.camera_rays;
             radiance += sample.radiance;
             opaque += u32::from(sample.opaque);
             pixel_stats.add(&sample.stats);
@@ -300,10 +295,10 @@ fn render_tile(
             }
         }
         let pixel_key = [settings.seed, u64::from(x), u64::from(y)];
-        if let Some(direct) = integrator.gathered_light(&gathered, pixel_key, scratch, &mut groups, &mut pixel_stats) {
+        let tracer = &integrator.tracer;
+        if let Some(direct) = scratch.direct.finish_pixel(tracer, pixel_key, &mut groups, &mut pixel_stats) {
             radiance += direct;
         }
-        gathered.clear();
         stats.shading.add(&pixel_stats);
         // Every value the integrator summed in f64 reaches the film
         // through here: a non-finite one is counted for its channel.
@@ -345,29 +340,28 @@ fn render_tile(
 
 /// The camera rays of one pixel's samples: through the pixel's jittered
 /// points, the lens and the shutter stratified per pixel.
-struct PixelRays<'c> {
+pub(crate) struct PixelRays<'c> {
     camera: &'c Camera,
     settings: &'c PassSettings,
-    x: u32,
-    y: u32,
+    pub(crate) x: u32,
+    pub(crate) y: u32,
     lens_shift: Option<[f32; 2]>,
     time_shift: Option<f32>,
 }
 
 impl<'c> PixelRays<'c> {
-    fn new(camera: &'c Camera, settings: &'c PassSettings, x: u32, y: u32) -> Self {
+    pub(crate) fn new(camera: &'c Camera, settings: &'c PassSettings, x: u32, y: u32) -> Self {
         let lens_shift = camera.has_lens().then(|| {
-            let mut rng = Rng::from_key(&[settings.seed, u64::from(x), u64::from(y), LENS_STREAM]);
+            let mut rng = Stream::Lens.rng(&[settings.seed, u64::from(x), u64::from(y)]);
             [rng.next_f32(), rng.next_f32()]
         });
-        let time_shift = camera
-            .shutter_open()
-            .then(|| Rng::from_key(&[settings.seed, u64::from(x), u64::from(y), SHUTTER_STREAM]).next_f32());
+        let time_shift =
+            camera.shutter_open().then(|| Stream::Shutter.rng(&[settings.seed, u64::from(x), u64::from(y)]).next_f32());
         Self { camera, settings, x, y, lens_shift, time_shift }
     }
 
     /// Sample `s`'s camera ray.
-    fn sample(&self, s: u32) -> Ray {
+    pub(crate) fn sample(&self, s: u32) -> Ray {
         let Self { camera, settings, x, y, lens_shift, .. } = *self;
         match self.time_shift {
             None => camera_ray(camera, settings, x, y, s, lens_shift),
@@ -378,83 +372,13 @@ impl<'c> PixelRays<'c> {
     }
 }
 
-/// Reuse between pixels (docs/design.md §10.11): every camera sample of
-/// `tile` traced and its hit lit by its `block` x `block` pixel block at
-/// its sample index, into `scratch` for [`Integrator::trace`] to take (so
-/// the pixel loop traces no camera ray again). Blocks are fixed by the
-/// film (their corners at multiples of `block`, cut by its edges), not by
-/// the tile: a tile that holds part of a block casts the whole block's
-/// rays, so each pixel's light is the same in any tile split. What the
-/// other pixels' rays cost counts in the pass's totals (`stats`), not in a
-/// pixel's AOVs. Returns the camera rays cast.
-fn reuse_blocks(
-    integrator: &Integrator<'_>,
-    camera: &Camera,
-    settings: &PassSettings,
-    tile: PixelBounds,
-    block: u32,
-    scratch: &mut Scratch,
-    stats: &mut ShadingStats,
-) -> u64 {
-    let mut camera_rays = 0;
-    let mut pixels = Vec::new();
-    scratch.reused.start(tile, settings.spp);
-    for by in (tile.y0 / block * block..tile.y1).step_by(block as usize) {
-        for bx in (tile.x0 / block * block..tile.x1).step_by(block as usize) {
-            pixels.clear();
-            for y in by..(by + block).min(settings.height) {
-                for x in bx..(bx + block).min(settings.width) {
-                    pixels.push(PixelRays::new(camera, settings, x, y));
-                }
-            }
-            for s in 0..settings.spp {
-                let mut rays: Vec<Ray> = pixels.iter().map(|p| p.sample(s)).collect();
-                let keys: Vec<_> =
-                    pixels.iter().map(|p| [settings.seed, u64::from(p.x), u64::from(p.y), u64::from(s)]).collect();
-                camera_rays += rays.len() as u64;
-                let found = integrator.reuse_block_light(&mut rays, &keys, scratch, stats);
-                for (key, found) in keys.into_iter().zip(found) {
-                    scratch.reused.insert(key, found);
-                }
-            }
-        }
-    }
-    camera_rays
-}
-
-/// Makes pixel (x, y)'s anchors, the corners of its `block` x `block`
-/// pixel block, current in `scratch` (reconstruction cuts, docs/design.md
-/// §9.6), their camera rays from `camera`. What an anchor costs counts in
-/// the pass's totals (`stats`), not in the pixel's AOVs: which pixel of a
-/// tile first needs an anchor depends on the tile, and the AOVs must not.
-/// Returns the camera rays cast.
-fn pixel_anchors(
-    integrator: &Integrator<'_>,
-    camera: &Camera,
-    block: u32,
-    (x, y): (u32, u32),
-    seed: u64,
-    scratch: &mut Scratch,
-    stats: &mut ShadingStats,
-) -> u64 {
-    let (x0, y0) = (x / block * block, y / block * block);
-    let corners = [(x0, y0), (x0 + block, y0), (x0, y0 + block), (x0 + block, y0 + block)];
-    let ray_at = |cx: u32, cy: u32| camera.ray(cx as f32, cy as f32);
-    integrator.set_anchors(corners, ray_at, seed, scratch, stats)
-}
-
-/// Keeps a pixel's lens rotation apart from its samples' streams.
-const LENS_STREAM: u64 = 0x1e45_0ff0_c5a3;
-/// Keeps a pixel's shutter-time shift apart from the lens's and the samples'.
-const SHUTTER_STREAM: u64 = 0x5407_7e55;
-
 /// Camera sample `s` of pixel (x, y): a point of the pixel drawn from the
 /// sample's own stream (the same in every mode), and on a thin lens the
 /// sample's point of the pixel's rotated Hammersley set mapped onto the
 /// disc (`lens_shift`, the pixel's rotation): the lens is stratified per
 /// pixel, and deterministic per seed (docs/design.md §13.1).
 fn camera_ray(camera: &Camera, settings: &PassSettings, x: u32, y: u32, s: u32, lens_shift: Option<[f32; 2]>) -> Ray {
-    let mut rng = Rng::from_key(&[settings.seed, u64::from(x), u64::from(y), u64::from(s)]);
+    let mut rng = Stream::CameraJitter.rng(&[settings.seed, u64::from(x), u64::from(y), u64::from(s)]);
     let (fx, fy) = (x as f32 + rng.next_f32(), y as f32 + rng.next_f32());
     match lens_shift {
         None => camera.ray(fx, fy),

@@ -4,10 +4,14 @@
 
 use std::time::{Duration, Instant};
 
-use super::integrator::{DirectLighting, Integrator};
+use super::direct::DirectLight;
+use super::direct::{bounded::Bounded, exact::Exact, multidimensional::Multidimensional, stochastic::Stochastic};
+use super::integrator::Integrator;
+use super::tracer::Tracer;
 use super::{render, thread_pool, vpl, Film, PassProgress, PassSettings, PassStats, TextureFilter};
 use crate::embree::{Device, EmbreeError};
 use crate::light::{LightKind, Lights};
+use crate::light_tree::LightTrees;
 use crate::lightcut::CutSettings;
 use crate::scene::{Indirect, Scene};
 use crate::shading::{Geometry, GeometryError};
@@ -58,6 +62,18 @@ impl Mode {
             text += &format!(" reuse_block={}", c.reuse_block);
         }
         text
+    }
+
+    /// The method as a [`DirectLight`] over `trees` (the scene's light
+    /// trees, which the cut methods need): the one list of the methods.
+    #[must_use]
+    pub fn method<'t>(&self, trees: Option<&'t LightTrees>) -> Box<dyn for<'a> DirectLight<'a> + 't> {
+        match (*self, trees) {
+            (Self::Bounded(settings), Some(trees)) => Box::new(Bounded { trees, settings }),
+            (Self::Stochastic(settings), Some(trees)) => Box::new(Stochastic { trees, settings }),
+            (Self::Multidimensional(settings), Some(trees)) => Box::new(Multidimensional { trees, settings }),
+            _ => Box::new(Exact),
+        }
     }
 
     /// The mode as the EXR header and the reports name it.
@@ -220,29 +236,27 @@ impl<'s> Session<'s> {
             }
             self.pool.install(|| crate::lightcut::build_trees_with(&lights, settings.seed, &cut))
         });
-        let direct = match (&trees, mode) {
-            (Some(trees), Mode::Bounded(settings)) => DirectLighting::Lightcuts { trees, settings },
-            (Some(trees), Mode::Stochastic(settings)) => DirectLighting::StochasticLightcuts { trees, settings },
-            (Some(trees), Mode::Multidimensional(settings)) => DirectLighting::Multidimensional { trees, settings },
-            _ => DirectLighting::Exact,
-        };
+        let direct = mode.method(trees.as_ref());
         let emission_group = self.scene.emission_groups();
         let emitters = super::emitter_sampling::EmitterSampling::of(self.scene, settings.spp);
         let camera = self.scene.camera(settings.width, settings.height);
         let integrator = Integrator {
-            geometry: &self.geometry,
-            lights: &lights,
-            direct,
+            tracer: Tracer {
+                geometry: &self.geometry,
+                lights: &lights,
+                split_groups,
+                emitters: emitters.as_ref(),
+                spp: settings.spp,
+                footprint: (settings.texture_filter == TextureFilter::Mip)
+                    .then(|| camera.pixel_footprint(settings.spp)),
+            },
+            direct: &*direct,
             max_mirror_depth: self.scene.max_mirror_depth,
-            split_groups,
             emission_group: &emission_group,
-            emitters: emitters.as_ref(),
-            spp: settings.spp,
             path_depth: match self.scene.indirect {
                 Some(Indirect::Path(path)) => Some(path.max_depth),
                 _ => None,
             },
-            footprint: (settings.texture_filter == TextureFilter::Mip).then(|| camera.pixel_footprint(settings.spp)),
         };
         let (film, stats) = self.pool.install(|| render(&integrator, &camera, settings, progress))?;
         let seconds = start.elapsed().as_secs_f64();
@@ -308,7 +322,7 @@ count = [16, 16]
 intensity = [1, 1, 1]
 "#;
 
-    fn pass(scene: &Scene, mode: Mode) -> crate::render::integrator::ShadingStats {
+    fn pass(scene: &Scene, mode: Mode) -> crate::render::stats::ShadingStats {
         let session = Session::try_new(scene, 1).unwrap();
         let settings = PassSettings {
             width: 2,
@@ -335,7 +349,7 @@ intensity = [1, 1, 1]
         assert_eq!(stats.cut_nodes, 4 * 257, "each point's cut is every light, once");
         assert_eq!(stats.max_cut, 257);
         assert_eq!(stats.shadow_rays, 4 * 256, "no ray for the light under the floor");
-        let mut histogram = [0; crate::render::integrator::CUT_HISTOGRAM_BUCKETS];
+        let mut histogram = [0; crate::render::stats::CUT_HISTOGRAM_BUCKETS];
         histogram[8] = 4; // 256 <= 257 < 512
         assert_eq!(stats.cut_histogram, histogram);
     }
@@ -348,7 +362,7 @@ intensity = [1, 1, 1]
         assert_eq!(stats.cut_nodes, 4);
         assert_eq!(stats.max_cut, 1);
         assert_eq!(stats.shadow_rays, 4);
-        let mut histogram = [0; crate::render::integrator::CUT_HISTOGRAM_BUCKETS];
+        let mut histogram = [0; crate::render::stats::CUT_HISTOGRAM_BUCKETS];
         histogram[0] = 4;
         assert_eq!(stats.cut_histogram, histogram);
     }

@@ -24,7 +24,7 @@ use crate::light::{AreaLight, Light, Lights, OrientedLight, SpotLight};
 use crate::scene::VplSettings;
 use crate::shading::Geometry;
 use crate::util::color::luminance;
-use crate::util::sampling::Rng;
+use crate::util::streams::Stream;
 
 /// Where a light path starts.
 #[derive(Debug, Clone, Copy)]
@@ -137,7 +137,7 @@ pub fn trace(geometry: &Geometry<'_>, groups: &[Lights], settings: VplSettings, 
     let paths: Vec<(usize, Vec<OrientedLight>)> = (0..settings.paths)
         .into_par_iter()
         .map(|k| {
-            let mut rng = Rng::from_key(&[seed, 0x1b5a, k as u64]);
+            let mut rng = Stream::Vpl.rng(&[seed, k as u64]);
             let u = rng.next_f64();
             let index = cdf.partition_point(|&c| c < u).min(sources.len() - 1);
             let p_source = f64::from(luminance(sources[index].1)) / total;

@@ -8,4 +8,5 @@ pub mod hash;
 pub mod panic;
 pub mod sampling;
 pub mod simd;
+pub mod streams;
 pub mod triangle;

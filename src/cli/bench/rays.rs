@@ -18,7 +18,7 @@ use crate::render::session::{Mode, Session, SessionError};
 use crate::render::PassSettings;
 use crate::shading::direct::light_intensity;
 use crate::shading::{light_sample, SHADOW_BATCH};
-use crate::util::sampling::Rng;
+use crate::util::streams::Stream;
 
 /// Largest number of rays recorded for (a): enough for a stable figure,
 /// small enough to keep in memory (32 bytes each).
@@ -74,7 +74,7 @@ fn record(session: &Session<'_>, settings: &PassSettings, stride: usize) -> Vec<
         pixels
             .par_iter()
             .flat_map_iter(|&(x, y)| {
-                let mut rng = Rng::from_key(&[settings.seed, u64::from(x), u64::from(y), 0]);
+                let mut rng = Stream::CameraJitter.rng(&[settings.seed, u64::from(x), u64::from(y), 0]);
                 let ray = camera.ray(x as f32 + rng.next_f32(), y as f32 + rng.next_f32());
                 let mut rays = Vec::new();
                 if let Some(hit) = session.geometry.embree.intersect(&ray) {
