@@ -315,7 +315,8 @@ mod tests {
     }
 
     /// At the cosine `lobe_turn_cos` returns, a light at one point's peak
-    /// keeps exactly 1 / ratio of the other's peak value for Phong, and
+    /// keeps exactly 1 / ratio of the other's peak value for Phong (by
+    /// the material term the lights are evaluated with), and
     /// between cos^4(theta_h) / ratio and 1 / ratio of it for GGX (the
     /// renderer's own D); a surface with no lobe that takes lights (a
     /// diffuse one, a perfect mirror) allows any turn.
@@ -325,11 +326,20 @@ mod tests {
         use wide::f32x4;
         let mut phong = Material::diffuse("phong", Albedo::Constant(Vec3::splat(0.5)));
         phong.specular = Vec3::splat(0.3);
+        // The glossy lobe's f (its f cos over cos theta) as the lights are
+        // evaluated with it (`MaterialLanes::term`).
+        let glossy_f = |sp: &SurfacePoint<'_>, wi: Vec3| {
+            let lanes = crate::shading::direct::MaterialLanes::new(sp);
+            let wi4 = [f32x4::splat(wi.x), f32x4::splat(wi.y), f32x4::splat(wi.z)];
+            f64::from(lanes.term(&wi4, crate::shading::Lobes::GLOSSY)[0].to_array()[0] / wi.dot(sp.n))
+        };
         for (exponent, ratio) in [(40.0f32, 4.0f32), (500.0, 2.0), (3.0, 16.0)] {
             phong.exponent = exponent;
-            let c = point(&phong, Vec3::Z, Vec3::Z).lobe_turn_cos(ratio);
-            let kept = f64::from(c).powf(f64::from(exponent));
-            assert!((kept * f64::from(ratio) - 1.0).abs() < 1e-5, "Phong {exponent}: cos^n = {kept} at {c}");
+            let sp = point(&phong, Vec3::Z, Vec3::Z);
+            let c = sp.lobe_turn_cos(ratio);
+            let turned = Vec3::new((1.0 - c * c).max(0.0).sqrt(), 0.0, c);
+            let kept = glossy_f(&sp, turned) / glossy_f(&sp, sp.r);
+            assert!((kept * f64::from(ratio) - 1.0).abs() < 1e-4, "Phong {exponent}: keeps {kept} at {c}");
         }
         let diffuse = Material::diffuse("diffuse", Albedo::Constant(Vec3::splat(0.5)));
         assert_eq!(point(&diffuse, Vec3::Z, Vec3::Z).lobe_turn_cos(4.0), -1.0);
