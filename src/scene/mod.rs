@@ -69,6 +69,25 @@ pub struct Film {
     pub spp: u32,
 }
 
+/// Where an importer (glTF or USD) puts what it reads: the scene's own
+/// lists, which the TOML's parts and an earlier import may already fill
+/// (indices are into these lists). Each importer adds what only it has.
+pub struct ImportParts<'a> {
+    pub meshes: &'a mut Vec<Mesh>,
+    /// The objects that place the meshes an import keeps in their own
+    /// space (instances, moving prims); every other mesh it adds is in
+    /// world space, drawn as itself.
+    pub instances: &'a mut Vec<Object>,
+    pub materials: &'a mut Vec<Material>,
+    pub textures: &'a mut Vec<Texture>,
+    pub lights: &'a mut Vec<LightSource>,
+    /// The files read, for the scene's inputs.
+    pub inputs: &'a mut Vec<PathBuf>,
+    pub warnings: &'a mut Vec<String>,
+    /// What the file lacks or holds that is not drawn: `Scene::incomplete`.
+    pub incomplete: &'a mut Vec<String>,
+}
+
 /// An importer's emissive meshes becoming area lights (docs/design.md
 /// §6.1), the step the glTF and the USD importers share: each counts its
 /// emitters and seeds the n-th one's drawn points from its own base, so

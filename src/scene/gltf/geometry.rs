@@ -94,7 +94,8 @@ impl Importer<'_, '_> {
         let uvs1 = self.texture_coordinates(primitive, &location, count, 1)?;
         let colors = self.vertex_colors(primitive, &location, count)?;
         let material = self.material(primitive.material())?;
-        let normal_set = self.parts.materials[material].pbr.as_ref().and_then(|p| p.normal_map.as_ref()).map(|m| m.set);
+        let normal_set =
+            self.parts.scene.materials[material].pbr.as_ref().and_then(|p| p.normal_map.as_ref()).map(|m| m.set);
         let tangents = if let Some(set) = normal_set {
             // MikkTSpace works in the normal map's own texture coordinates.
             let uvs = if set == 1 { uvs1.as_deref() } else { uvs.as_deref() };
@@ -103,8 +104,8 @@ impl Importer<'_, '_> {
         } else {
             None
         };
-        let emission = self.parts.materials[material].emission;
-        let both_sides = self.parts.materials[material].emits_both_sides;
+        let emission = self.parts.scene.materials[material].emission;
+        let both_sides = self.parts.scene.materials[material].emits_both_sides;
         let mut mesh = Mesh {
             positions: world_positions,
             normals,
@@ -123,18 +124,18 @@ impl Importer<'_, '_> {
             Some(Tangents::PerCorner(corners)) => mesh.set_corner_tangents(&corners),
         }
         let has_area = mesh.has_area();
-        self.parts.meshes.push(mesh);
+        self.parts.scene.meshes.push(mesh);
         if emission != Vec3::ZERO && has_area {
-            let mesh = self.parts.meshes.len() - 1;
+            let mesh = self.parts.scene.meshes.len() - 1;
             let light = self.emitters.light(mesh, emission, self.spec.emitter_samples, both_sides);
-            self.parts.lights.push(light);
+            self.parts.scene.lights.push(light);
             self.parts.light_names.push(GltfLightNames {
                 light: None,
                 node: Some(node_name.to_string()),
-                material: Some(self.parts.materials[material].name.clone()),
+                material: Some(self.parts.scene.materials[material].name.clone()),
             });
         }
-        Ok(Some(self.parts.meshes.len() - 1))
+        Ok(Some(self.parts.scene.meshes.len() - 1))
     }
 
     /// A primitive's POSITIONs (in its mesh's space) and its triangles,

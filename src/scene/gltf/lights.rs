@@ -84,7 +84,7 @@ impl Importer<'_, '_> {
                 seed: 0x6c7f_0000 + index as u64,
             },
         };
-        self.parts.lights.push(source);
+        self.parts.scene.lights.push(source);
         self.punctual += 1;
         self.parts.light_names.push(GltfLightNames {
             light: light.name.clone(),

@@ -118,9 +118,9 @@ impl Importer<'_, '_> {
             })
         });
         let (emission, emissive_texture) = self.emission(&m, &location)?;
-        let index = self.parts.materials.len();
+        let index = self.parts.scene.materials.len();
         let name = m.name().map_or_else(|| location.clone(), str::to_string);
-        self.parts.materials.push(Material {
+        self.parts.scene.materials.push(Material {
             emission,
             emissive_texture,
             emits_both_sides: m.double_sided(),
@@ -245,7 +245,7 @@ impl Importer<'_, '_> {
         let image = match self.data.image(&texture.source(), at, encoding) {
             Ok(image) => image,
             Err(e) => {
-                self.parts.incomplete.push(format!("{e}: the factor alone is used"));
+                self.parts.scene.incomplete.push(format!("{e}: the factor alone is used"));
                 return Ok(None);
             }
         };
@@ -267,8 +267,8 @@ impl Importer<'_, '_> {
         });
         let texture = Texture::from_compact(image.width, image.height, texels)
             .with_sampler([wrap(sampler.wrap_s()), wrap(sampler.wrap_t())], filter);
-        self.parts.textures.push(texture);
-        Ok(Some((TextureRef { texture: self.parts.textures.len() - 1, transform, set }, image)))
+        self.parts.scene.textures.push(texture);
+        Ok(Some((TextureRef { texture: self.parts.scene.textures.len() - 1, transform, set }, image)))
     }
 }
 

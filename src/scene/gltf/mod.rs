@@ -21,15 +21,11 @@ mod nodes;
 use std::collections::HashMap;
 
 pub(crate) use geometry::{mikktspace_tangents, Tangents};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use super::file::{GltfSpec, ImportedCamera};
 use super::groups::GltfLightNames;
-use super::material::Material;
-use super::mesh::Mesh;
-use super::object::Object;
-use super::texture::Texture;
-use super::{LightSource, SceneError, MAX_EMITTER_SAMPLES};
+use super::{ImportParts, SceneError, MAX_EMITTER_SAMPLES};
 use super::{MAX_IMPORT_INSTANCES as MAX_INSTANCES, MAX_IMPORT_TRIANGLES as MAX_TRIANGLES};
 
 /// Extensions whose absence from the renderer changes nothing it draws
@@ -71,23 +67,13 @@ const MAX_DEPTH: usize = 1024;
 /// Most joints a skin may have.
 const MAX_JOINTS: usize = 1 << 16;
 
-/// Where the imported parts go: the scene's own lists, which the TOML's
-/// parts may already fill (indices are into these lists).
+/// Where the imported parts go (`ImportParts`), and what only a glTF
+/// import reports.
 pub struct Parts<'a> {
-    pub meshes: &'a mut Vec<Mesh>,
-    /// The objects that place the meshes it keeps in their own space
-    /// (every other mesh it adds is in world space, drawn as itself).
-    pub instances: &'a mut Vec<Object>,
-    pub materials: &'a mut Vec<Material>,
-    pub textures: &'a mut Vec<Texture>,
-    pub lights: &'a mut Vec<LightSource>,
+    pub scene: ImportParts<'a>,
     /// The names each of the lights this import adds is known by (for the
     /// `[[gltf.groups]]` rules), one per light, in order.
     pub light_names: &'a mut Vec<GltfLightNames>,
-    pub inputs: &'a mut Vec<PathBuf>,
-    pub warnings: &'a mut Vec<String>,
-    /// What the file lacks (an image that cannot be read): `Scene::incomplete`.
-    pub incomplete: &'a mut Vec<String>,
     /// The animation played, and over which shutter, when one is.
     pub played: &'a mut Option<PlayedAnimation>,
 }
@@ -117,7 +103,7 @@ pub fn import(
     parts: Parts<'_>,
 ) -> Result<Option<ImportedCamera>, SceneError> {
     let path = base.join(&spec.file);
-    parts.inputs.push(path.clone());
+    parts.scene.inputs.push(path.clone());
     let check = |ok: bool, field: &str, message: String| {
         if ok {
             Ok(())
@@ -145,7 +131,7 @@ pub fn import(
         _ => animation::Animation::read(&path, &gltf.document, &data, spec.animation.as_deref())?,
     };
     let warn = |parts: &mut Parts<'_>, location: &str, message: String| {
-        parts.warnings.push(format!("{}: {location}: {message}", path.display()));
+        parts.scene.warnings.push(format!("{}: {location}: {message}", path.display()));
     };
     let mut parts = parts;
     if let (Some(animation), None) = (&animation, shutter) {
@@ -186,7 +172,7 @@ pub fn import(
     };
     let camera = importer.import_scene(want_camera)?;
     // The buffer and image files, after the glTF file, in the order read.
-    importer.parts.inputs.append(&mut importer.data.inputs);
+    importer.parts.scene.inputs.append(&mut importer.data.inputs);
     Ok(camera)
 }
 
@@ -224,7 +210,7 @@ impl Importer<'_, '_> {
     }
 
     fn warn(&mut self, location: &str, message: &str) {
-        self.parts.warnings.push(format!("{}: {location}: {message}", self.file.display()));
+        self.parts.scene.warnings.push(format!("{}: {location}: {message}", self.file.display()));
     }
 
     /// Names, once each, the extensions the file uses but the renderer does

@@ -269,11 +269,11 @@ impl Importer<'_, '_> {
         node_name: &str,
         steps: Option<&[Mat4]>,
     ) -> Result<(), SceneError> {
-        let before = self.parts.lights.len();
+        let before = self.parts.scene.lights.len();
         self.import_light(index, world, node_name)?;
         let Some(steps) = steps else { return Ok(()) };
         // The light this node added, if it added one.
-        let added = self.parts.lights.get_mut(before..).and_then(<[LightSource]>::first_mut);
+        let added = self.parts.scene.lights.get_mut(before..).and_then(<[LightSource]>::first_mut);
         if let Some(light) = added {
             if let LightSource::Point { position, intensity } = *light {
                 let end = steps[steps.len() - 1].w_axis.truncate();
@@ -337,7 +337,7 @@ impl Importer<'_, '_> {
                 Some(&p) => p,
                 None => {
                     let material = self.material(primitive.material())?;
-                    let p = if self.parts.materials[material].emission == Vec3::ZERO {
+                    let p = if self.parts.scene.materials[material].emission == Vec3::ZERO {
                         let name = mesh.name().map_or_else(|| format!("meshes[{}]", mesh.index()), str::to_string);
                         self.import_primitive(
                             &primitive,
@@ -364,17 +364,17 @@ impl Importer<'_, '_> {
                 steps: steps.iter().map(|w| Affine3A::from_mat4(*w) * transform.inverse()).collect(),
             });
             let object = Object { mesh: prototype, transform: Some(transform), name: node_name.to_string(), motion };
-            let (lo, hi) = crate::scene::object::world_bounds(self.parts.meshes, std::slice::from_ref(&object));
+            let (lo, hi) = crate::scene::object::world_bounds(self.parts.scene.meshes, std::slice::from_ref(&object));
             if !(within_limits(lo) && within_limits(hi)) {
                 return Err(self.error(
                     location,
                     format!("places meshes[{}] at {lo} to {hi} in the world: coordinates must be finite and within +/-{MAX_COORDINATE:e} m", mesh.index()),
                 ));
             }
-            if self.parts.instances.len() >= MAX_INSTANCES {
+            if self.parts.scene.instances.len() >= MAX_INSTANCES {
                 return Err(self.error(location, format!("the scene has more than {MAX_INSTANCES} instances")));
             }
-            self.parts.instances.push(object);
+            self.parts.scene.instances.push(object);
         }
         Ok(())
     }

@@ -17,7 +17,7 @@ use glam::Vec3;
 
 use super::file::{self, ImportedCamera, SceneFile};
 use super::{
-    gltf, groups, object, usd, within_limits, LightGroups, LightSource, Scene, SceneError, MAX_COORDINATE,
+    gltf, groups, object, usd, within_limits, ImportParts, LightGroups, LightSource, Scene, SceneError, MAX_COORDINATE,
     MAX_EMITTER_SAMPLES,
 };
 
@@ -239,15 +239,17 @@ impl Scene {
             Some(g) => {
                 let mut light_names = Vec::new();
                 let parts = gltf::Parts {
-                    meshes: &mut meshes,
-                    instances: &mut instances,
-                    materials: &mut materials,
-                    textures: &mut textures,
-                    lights: &mut lights,
+                    scene: ImportParts {
+                        meshes: &mut meshes,
+                        instances: &mut instances,
+                        materials: &mut materials,
+                        textures: &mut textures,
+                        lights: &mut lights,
+                        inputs: &mut inputs,
+                        warnings: &mut warnings,
+                        incomplete: &mut incomplete,
+                    },
                     light_names: &mut light_names,
-                    inputs: &mut inputs,
-                    warnings: &mut warnings,
-                    incomplete: &mut incomplete,
                     played: &mut animation,
                 };
                 // A TOML camera's open shutter, else --shutter's (an
@@ -267,15 +269,17 @@ impl Scene {
             Some(u) => {
                 let mut groups = Vec::new();
                 let parts = usd::Parts {
-                    meshes: &mut meshes,
-                    instances: &mut instances,
-                    materials: &mut materials,
-                    textures: &mut textures,
-                    lights: &mut lights,
+                    scene: ImportParts {
+                        meshes: &mut meshes,
+                        instances: &mut instances,
+                        materials: &mut materials,
+                        textures: &mut textures,
+                        lights: &mut lights,
+                        inputs: &mut inputs,
+                        warnings: &mut warnings,
+                        incomplete: &mut incomplete,
+                    },
                     groups: &mut groups,
-                    inputs: &mut inputs,
-                    warnings: &mut warnings,
-                    incomplete: &mut incomplete,
                     environment: &mut usd_environment,
                 };
                 let camera = import_usd(path, base, &spec, u, imported_camera.is_none(), parts)?;

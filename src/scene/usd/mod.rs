@@ -30,8 +30,7 @@ use super::file::{CameraSpec, ImportedCamera, UsdSpec};
 use super::material::Material;
 use super::mesh::Mesh;
 use super::object::{Motion, Object};
-use super::texture::Texture;
-use super::{within_limits, LightSource, SceneError, MAX_COORDINATE};
+use super::{within_limits, ImportParts, LightSource, SceneError, MAX_COORDINATE};
 use super::{MAX_IMPORT_INSTANCES as MAX_INSTANCES, MAX_IMPORT_TRIANGLES as MAX_TRIANGLES};
 
 /// Deepest prim hierarchy followed (instances and point instancers count
@@ -47,21 +46,13 @@ const MAX_DOME_BYTES: u64 = 1 << 30;
 /// USD's fallback for an unauthored `metersPerUnit`: centimetres.
 const FALLBACK_METERS_PER_UNIT: f64 = 0.01;
 
-/// Where the import's parts go: the scene's own lists (indices are into them).
+/// Where the import's parts go (`ImportParts`), and what only a USD
+/// import reports.
 pub struct Parts<'a> {
-    pub meshes: &'a mut Vec<Mesh>,
-    /// Objects placing meshes kept in their own space (instances, moving prims).
-    pub instances: &'a mut Vec<Object>,
-    pub materials: &'a mut Vec<Material>,
-    pub textures: &'a mut Vec<Texture>,
-    pub lights: &'a mut Vec<LightSource>,
+    pub scene: ImportParts<'a>,
     /// Each light's `lightcuts:group` (its own, or its nearest ancestor's)
     /// and the prim it came from, one per light added.
     pub groups: &'a mut Vec<(Option<String>, String)>,
-    pub inputs: &'a mut Vec<PathBuf>,
-    pub warnings: &'a mut Vec<String>,
-    /// What the stage lacks or holds that is not drawn: `Scene::incomplete`.
-    pub incomplete: &'a mut Vec<String>,
     /// The stage's dome light, as the scene's environment (with its group).
     pub environment: &'a mut Option<(Environment, Option<String>)>,
 }
@@ -80,7 +71,7 @@ pub fn import(
 ) -> Result<Option<ImportedCamera>, SceneError> {
     let path = base.join(&spec.file);
     let _ = scene_file;
-    parts.inputs.push(path.clone());
+    parts.scene.inputs.push(path.clone());
     let search_paths: Vec<PathBuf> =
         spec.asset_paths.iter().map(|d| base.join(d)).chain(spec.search_paths.iter().cloned()).collect();
     // The reader is a young library: should it panic on a hostile file,
@@ -183,8 +174,8 @@ fn import_stage(
     // Every layer read is an input (the root was pushed as given).
     let root = path.canonicalize().unwrap_or_else(|_| path.to_path_buf());
     for layer in stage.layer_files() {
-        if layer != root && !walker.parts.inputs.contains(&layer) {
-            walker.parts.inputs.push(layer);
+        if layer != root && !walker.parts.scene.inputs.contains(&layer) {
+            walker.parts.scene.inputs.push(layer);
         }
     }
     walker.summarise();
@@ -348,15 +339,15 @@ impl Walker<'_, '_> {
     }
 
     fn warn(&mut self, message: String) {
-        self.parts.warnings.push(format!("{}: {message}", self.file.display()));
+        self.parts.scene.warnings.push(format!("{}: {message}", self.file.display()));
     }
 
     /// Notes what the stage lacks or holds that is not drawn
     /// (`Scene::incomplete`).
     fn lacks(&mut self, message: String) {
         let line = format!("{}: {message}", self.file.display());
-        if !self.parts.incomplete.contains(&line) {
-            self.parts.incomplete.push(line);
+        if !self.parts.scene.incomplete.contains(&line) {
+            self.parts.scene.incomplete.push(line);
         }
     }
 
@@ -471,8 +462,8 @@ impl Walker<'_, '_> {
             }
         };
         material.culls_back_faces = culls;
-        self.parts.materials.push(material);
-        let found = Bound { material: self.parts.materials.len() - 1, st, colour, primvars };
+        self.parts.scene.materials.push(material);
+        let found = Bound { material: self.parts.scene.materials.len() - 1, st, colour, primvars };
         self.material_index.insert((key, culls), found.clone());
         Ok(found)
     }
@@ -486,7 +477,8 @@ impl Walker<'_, '_> {
         constants: HashMap<String, DVec4>,
     ) -> Result<materials::Imported, Located> {
         let mut warnings = Vec::new();
-        let imported = self.materials.import(path, constants, self.parts.textures, self.parts.inputs, &mut warnings);
+        let imported =
+            self.materials.import(path, constants, self.parts.scene.textures, self.parts.scene.inputs, &mut warnings);
         for w in warnings {
             self.warn(w);
         }
@@ -532,8 +524,8 @@ impl Walker<'_, '_> {
         let mut material = self.import_material(path, constants)?.material;
         material.culls_back_faces = culls;
         material.name = format!("{} ({})", material.name, values.join(", "));
-        self.parts.materials.push(material);
-        let found = Bound { material: self.parts.materials.len() - 1, ..shared };
+        self.parts.scene.materials.push(material);
+        let found = Bound { material: self.parts.scene.materials.len() - 1, ..shared };
         self.material_index.insert(key, found.clone());
         Ok(found.material)
     }
@@ -648,7 +640,7 @@ impl Walker<'_, '_> {
         let colour = match here.binding.as_deref() {
             Some(b) => {
                 let bound = self.material(Some(b), None, false)?;
-                if self.parts.materials[bound.material].emission != Vec3::ZERO {
+                if self.parts.scene.materials[bound.material].emission != Vec3::ZERO {
                     self.warn(format!(
                         "{prim}: curves and points do not emit light: its material's emission is left out"
                     ));
@@ -701,14 +693,16 @@ impl Walker<'_, '_> {
         };
         let material = self.material_for(prim, binding, display, !double_sided)?;
         mesh.material = material;
-        if self.parts.materials[material].pbr.as_ref().is_some_and(|p| p.normal_map.is_some()) && mesh.uvs.is_some() {
+        if self.parts.scene.materials[material].pbr.as_ref().is_some_and(|p| p.normal_map.is_some())
+            && mesh.uvs.is_some()
+        {
             geometry::add_tangents(&mut mesh);
         }
         self.triangles += mesh.triangles.len();
         if self.triangles > MAX_TRIANGLES {
             return Err((prim.to_string(), format!("the stage has more than {MAX_TRIANGLES} triangles")));
         }
-        let emission = self.parts.materials[material].emission;
+        let emission = self.parts.scene.materials[material].emission;
         let world = here.worlds[0];
         let moving = here.worlds.windows(2).any(|w| w[0] != w[1]);
         let rigid = world.determinant() > 0.0 && here.worlds.iter().all(|w| w.determinant() > 0.0);
@@ -727,8 +721,8 @@ impl Walker<'_, '_> {
             let index = match self.prototypes.get(&key).and_then(|v| v.first()) {
                 Some(&(index, _)) if here.instance.is_some() => index,
                 _ => {
-                    self.parts.meshes.push(mesh);
-                    let index = self.parts.meshes.len() - 1;
+                    self.parts.scene.meshes.push(mesh);
+                    let index = self.parts.scene.meshes.len() - 1;
                     if here.instance.is_some() {
                         self.prototypes.insert(key, vec![(index, DMat4::IDENTITY)]);
                     }
@@ -736,17 +730,17 @@ impl Walker<'_, '_> {
                 }
             };
             let object = Object { mesh: index, transform: Some(transform), name, motion };
-            let (lo, hi) = super::object::world_bounds(self.parts.meshes, std::slice::from_ref(&object));
+            let (lo, hi) = super::object::world_bounds(self.parts.scene.meshes, std::slice::from_ref(&object));
             if !(within_limits(lo) && within_limits(hi)) {
                 return Err((
                     prim.to_string(),
                     format!("is placed at {lo} to {hi}: coordinates must be finite and within +/-{MAX_COORDINATE:e} m"),
                 ));
             }
-            if self.parts.instances.len() >= MAX_INSTANCES {
+            if self.parts.scene.instances.len() >= MAX_INSTANCES {
                 return Err((prim.to_string(), format!("the stage has more than {MAX_INSTANCES} instances")));
             }
-            self.parts.instances.push(object);
+            self.parts.scene.instances.push(object);
             return Ok(());
         }
         self.still_moving += usize::from(moving);
@@ -758,12 +752,12 @@ impl Walker<'_, '_> {
             ));
         }
         let has_area = mesh.has_area();
-        self.parts.meshes.push(mesh);
+        self.parts.scene.meshes.push(mesh);
         if emission != Vec3::ZERO && has_area {
-            let mesh = self.parts.meshes.len() - 1;
+            let mesh = self.parts.scene.meshes.len() - 1;
             let light = self.emitters.light(mesh, emission, self.spec.emitter_samples, double_sided);
-            self.parts.lights.push(light);
-            self.parts.materials[material].emits_both_sides = double_sided;
+            self.parts.scene.lights.push(light);
+            self.parts.scene.materials[material].emits_both_sides = double_sided;
             self.parts.groups.push((here.group.clone(), prim.to_string()));
         }
         Ok(())
@@ -796,17 +790,21 @@ impl Walker<'_, '_> {
                     let mut mesh = mesh;
                     mesh.name = prim.to_string();
                     // Black, emitting from the side its winding faces.
-                    self.parts.materials.push(Material {
+                    self.parts.scene.materials.push(Material {
                         emission: radiance,
                         ..Material::diffuse(prim, super::material::Albedo::Constant(Vec3::ZERO))
                     });
-                    mesh.material = self.parts.materials.len() - 1;
-                    self.parts.meshes.push(mesh);
-                    source =
-                        self.emitters.light(self.parts.meshes.len() - 1, radiance, self.spec.emitter_samples, false);
+                    mesh.material = self.parts.scene.materials.len() - 1;
+                    self.parts.scene.meshes.push(mesh);
+                    source = self.emitters.light(
+                        self.parts.scene.meshes.len() - 1,
+                        radiance,
+                        self.spec.emitter_samples,
+                        false,
+                    );
                 }
                 if let LightSource::Sun { seed, .. } = &mut source {
-                    *seed = 0x05d1_0000 + self.parts.lights.len() as u64;
+                    *seed = 0x05d1_0000 + self.parts.scene.lights.len() as u64;
                 }
                 for p in source.positions() {
                     if !within_limits(p) {
@@ -818,7 +816,7 @@ impl Walker<'_, '_> {
                         ));
                     }
                 }
-                self.parts.lights.push(source);
+                self.parts.scene.lights.push(source);
                 self.parts.groups.push((here.group.clone(), prim.to_string()));
             }
             Some(lights::Made::Dome { radiance, texture, rotation }) => {
@@ -856,8 +854,8 @@ impl Walker<'_, '_> {
     ) -> Result<EnvironmentMap, Located> {
         let at = format!("{prim}.inputs:texture:file");
         let (read, bytes) = self.stage.asset_bytes(file, MAX_DOME_BYTES).map_err(|e| (at.clone(), e))?;
-        if !self.parts.inputs.contains(&read) {
-            self.parts.inputs.push(read);
+        if !self.parts.scene.inputs.contains(&read) {
+            self.parts.scene.inputs.push(read);
         }
         let image = if bytes.starts_with(&[0x76, 0x2f, 0x31, 0x01]) {
             super::image::decode_radiance_exr(&bytes)
@@ -923,7 +921,7 @@ impl Walker<'_, '_> {
         if scales.as_ref().is_some_and(|s| s.len() != n) {
             return Err((at("scales"), format!("has {} entries for {n} protoIndices", scales.map_or(0, |s| s.len()))));
         }
-        if self.parts.instances.len() + n > MAX_INSTANCES {
+        if self.parts.scene.instances.len() + n > MAX_INSTANCES {
             return Err((at("protoIndices"), format!("{n} instances: the stage would have more than {MAX_INSTANCES}")));
         }
         if here.worlds.windows(2).any(|w| w[0] != w[1]) {
@@ -965,25 +963,25 @@ impl Walker<'_, '_> {
         let instance = inside.instance.as_ref().expect("an instance's walk");
         let root = affine(&inside.worlds[0], &instance.root)?;
         if let Some(Some(template)) = self.templates.get(key) {
-            if self.parts.instances.len() + template.len() > MAX_INSTANCES {
+            if self.parts.scene.instances.len() + template.len() > MAX_INSTANCES {
                 return Err((instance.root.clone(), format!("the stage has more than {MAX_INSTANCES} instances")));
             }
             for placed in template {
                 let name = format!("{}{}", instance.name, placed.suffix);
                 let object = Object { mesh: placed.mesh, transform: Some(root * placed.relative), name, motion: None };
-                let (lo, hi) = super::object::world_bounds(self.parts.meshes, std::slice::from_ref(&object));
+                let (lo, hi) = super::object::world_bounds(self.parts.scene.meshes, std::slice::from_ref(&object));
                 if !(within_limits(lo) && within_limits(hi)) {
                     return Err((
                         instance.root.clone(),
                         format!("places a mesh at {lo} to {hi}: beyond +/-{MAX_COORDINATE:e} m"),
                     ));
                 }
-                self.triangles += self.parts.meshes[placed.mesh].triangles.len();
-                self.parts.instances.push(object);
+                self.triangles += self.parts.scene.meshes[placed.mesh].triangles.len();
+                self.parts.scene.instances.push(object);
             }
             return Ok(());
         }
-        let before = (self.parts.instances.len(), self.parts.meshes.len(), self.parts.lights.len());
+        let before = (self.parts.scene.instances.len(), self.parts.scene.meshes.len(), self.parts.scene.lights.len());
         let dome = self.parts.environment.is_some();
         for prim in prims {
             self.walk(prim, inside)?;
@@ -991,12 +989,12 @@ impl Walker<'_, '_> {
         if self.templates.contains_key(key) {
             return Ok(());
         }
-        let made = &self.parts.instances[before.0..];
+        let made = &self.parts.scene.instances[before.0..];
         let only_instances = self.times.len() == 1
-            && self.parts.lights.len() == before.2
+            && self.parts.scene.lights.len() == before.2
             && self.parts.environment.is_some() == dome
             && made.iter().all(|o| o.transform.is_some() && o.motion.is_none())
-            && (before.1..self.parts.meshes.len()).all(|m| made.iter().any(|o| o.mesh == m));
+            && (before.1..self.parts.scene.meshes.len()).all(|m| made.iter().any(|o| o.mesh == m));
         let template = only_instances.then(|| {
             let inverse = root.inverse();
             made.iter()
