@@ -230,9 +230,8 @@ impl Scene {
             shapes::shapes(&v, base, &spec, &material_index, &mut inputs)?.into_iter().unzip();
         let (mut lights, mut requested_groups) =
             lights::lights(&v, base, &spec, &mut meshes, &mut materials, &mut inputs)?;
-        let mut warnings = Vec::new();
-        let mut incomplete = Vec::new();
-        let mut instances = Vec::new();
+        // What the glTF and USD imports add to (`ImportParts`) besides the TOML's lists.
+        let (mut warnings, mut incomplete, mut instances) = (Vec::new(), Vec::new(), Vec::new());
         let mut animation = None;
         let imported_camera = match &spec.gltf {
             None => None,
