@@ -8,8 +8,9 @@
 //! integrator's, the same for every method.
 //!
 //! Adding a method is a module here that implements the two traits, and a
-//! line in `session::Mode::method` (or none, for a method only a test uses: the uniform
-//! light sampling of this module's tests is 33 lines of code).
+//! line in `session::Mode::method` (or none, for a method only a test
+//! uses: the uniform light sampling of this module's tests is 33 lines of
+//! code).
 
 pub mod bounded;
 pub mod exact;
