@@ -23,13 +23,21 @@ use crate::util::streams::Stream;
 /// (pbrt-v4 starts it after its second bounce too).
 const RUSSIAN_ROULETTE_DEPTH: u32 = 3;
 
+/// The delta transmissions a camera path follows without the path
+/// method beyond its mirror depth: Cycles' default transmission bounces
+/// (docs/design.md §5.8). A pane of glass takes 2 and a glass with a
+/// drink in it 4 or more, which the 4 mirror bounces would cut short.
+const MAX_TRANSMISSIONS: u32 = 12;
+
 /// Where a path goes from a vertex: the ray, what the path's throughput is
-/// multiplied by, and whether it is a mirror's (a delta bounce, whose
-/// emission the next vertex counts).
+/// multiplied by, and whether it is a delta bounce (a mirror's or a
+/// transmission's, whose emission the next vertex counts) and a
+/// transmission.
 struct Bounce {
     ray: crate::embree::Ray,
     weight: DVec3,
-    mirror: bool,
+    delta: bool,
+    transmitted: bool,
 }
 
 /// What the first hit of a camera sample reports to the AOVs.
@@ -125,7 +133,9 @@ impl<'a> Integrator<'a> {
         // vertex before lit itself by every emitter already (next-event
         // estimation, design.md §6.7).
         let mut sees_emitters = true;
-        for depth in 0..vertices {
+        // Delta transmissions followed past the mirror depth.
+        let mut passes = 0;
+        for depth in 0.. {
             // A camera ray the method traced already (reuse between
             // pixels, design §10.11).
             let traced = if depth == 0 { scratch.direct.traced(sample) } else { None };
@@ -156,6 +166,8 @@ impl<'a> Integrator<'a> {
             };
             let (sp, sharp) = tracer.vertex(&ray, &hit, sample, depth);
             result.stats.path_vertices += 1;
+            // Absorbed on the way through a solid (docs/design.md §5.8).
+            throughput *= sp.interior_transmittance.as_dvec3();
             let mesh = tracer.geometry.mesh_of(&hit);
             let material = scene.meshes[mesh].material;
             if depth == 0 {
@@ -187,26 +199,32 @@ impl<'a> Integrator<'a> {
                 radiance,
                 stats,
             );
-            if depth + 1 == vertices {
+            if depth + 1 >= vertices + passes {
                 break;
             }
             let bsdf = sharp.map(|(_, bsdf)| bsdf);
             let Some(bounce) = self.bounce(&sp, bsdf, sample, depth, throughput) else { break };
+            if bounce.transmitted && self.path_depth.is_none() {
+                if passes == MAX_TRANSMISSIONS {
+                    break;
+                }
+                passes += 1;
+            }
             result.stats.bounce_rays += 1;
             throughput *= bounce.weight;
-            sees_emitters = bounce.mirror;
+            sees_emitters = bounce.delta;
             ray = bounce.ray;
         }
         result
     }
 
     /// Where the path goes from `sp`, its `depth`-th vertex: without the
-    /// path method, along the mirror (if any); with it, along the mirror
-    /// or a direction the BSDF draws (all its lobes), chosen in proportion
-    /// to their reflectance, then, past the first vertices, through Russian
-    /// roulette on the path's `throughput` so far (docs/design.md §6.7).
-    /// `bsdf` is the point's BSDF when the caller built it already. None:
-    /// the path ends.
+    /// path method, along the mirror or the transmitted ray (if any;
+    /// `delta_bounce`); with it, along either or a direction the BSDF
+    /// draws (all its lobes), chosen in proportion to their reflectance,
+    /// then, past the first vertices, through Russian roulette on the
+    /// path's `throughput` so far (docs/design.md §6.7). `bsdf` is the
+    /// point's BSDF when the caller built it already. None: the path ends.
     fn bounce(
         &self,
         sp: &SurfacePoint<'_>,
@@ -215,26 +233,26 @@ impl<'a> Integrator<'a> {
         depth: u32,
         throughput: DVec3,
     ) -> Option<Bounce> {
-        let mirror = sp.mirror.as_dvec3();
         if self.path_depth.is_none() {
-            return (mirror != DVec3::ZERO).then(|| Bounce { ray: sp.mirror_ray(), weight: mirror, mirror: true });
+            return delta_bounce(sp, sample, depth);
         }
-        let [seed, x, y, s] = sample;
-        let mut rng = Stream::Path.rng(&[seed, x, y, s, u64::from(depth)]);
-        let u: [f32; 5] = std::array::from_fn(|_| rng.next_f32());
+        let u = path_numbers(sample, depth);
         let bsdf = bsdf.unwrap_or_else(|| Bsdf::new(sp));
         let (mirror_weight, bsdf_weight) = (luminance(sp.mirror), bsdf.reflectance_weight());
-        let total = mirror_weight + bsdf_weight;
+        let transmission_weight = luminance(sp.transmission);
+        let total = mirror_weight + bsdf_weight + transmission_weight;
         if !(total > 0.0 && total.is_finite()) {
             return None;
         }
-        let p_mirror = mirror_weight / total;
+        let (p_mirror, p_transmission) = (mirror_weight / total, transmission_weight / total);
         let mut bounce = if u[0] < p_mirror {
-            Bounce { ray: sp.mirror_ray(), weight: mirror / f64::from(p_mirror), mirror: true }
+            mirrored(sp, p_mirror)
+        } else if u[0] < p_mirror + p_transmission {
+            transmitted(sp, p_transmission)
         } else {
             let s = bsdf.sample([u[1], u[2], u[3]], Lobes::ALL)?;
-            let weight = s.f_cos.as_dvec3() / (f64::from(s.pdf) * f64::from(1.0 - p_mirror));
-            Bounce { ray: sp.ray_towards(s.wi), weight, mirror: false }
+            let weight = s.f_cos.as_dvec3() / (f64::from(s.pdf) * f64::from(1.0 - p_mirror - p_transmission));
+            Bounce { ray: sp.ray_towards(s.wi), weight, delta: false, transmitted: false }
         };
         if !(bounce.weight.max_element() > 0.0 && bounce.weight.is_finite()) {
             return None;
@@ -252,4 +270,45 @@ impl<'a> Integrator<'a> {
         }
         Some(bounce)
     }
+}
+
+/// The path stream's numbers at a sample's `depth`-th vertex: which
+/// bounce (u[0]), the BSDF's direction (u[1..4]) and Russian roulette
+/// (u[4]).
+fn path_numbers(sample: SampleKey, depth: u32) -> [f32; 5] {
+    let [seed, x, y, s] = sample;
+    let mut rng = Stream::Path.rng(&[seed, x, y, s, u64::from(depth)]);
+    std::array::from_fn(|_| rng.next_f32())
+}
+
+/// The mirror bounce, chosen with probability `p`.
+fn mirrored(sp: &SurfacePoint<'_>, p: f32) -> Bounce {
+    Bounce { ray: sp.mirror_ray(), weight: sp.mirror.as_dvec3() / f64::from(p), delta: true, transmitted: false }
+}
+
+/// The transmitted bounce, chosen with probability `p`.
+fn transmitted(sp: &SurfacePoint<'_>, p: f32) -> Bounce {
+    let weight = sp.transmission.as_dvec3() / f64::from(p);
+    Bounce { ray: sp.transmitted_ray(), weight, delta: true, transmitted: true }
+}
+
+/// Without the path method, a camera path follows a vertex's delta lobes
+/// alone: its mirror, or its transmission, or, where it has both (glass),
+/// one of them chosen in proportion to their reflectance by the path
+/// stream's first number (docs/design.md §5.8). None: the path ends.
+fn delta_bounce(sp: &SurfacePoint<'_>, sample: SampleKey, depth: u32) -> Option<Bounce> {
+    let (mirror, transmission) = (luminance(sp.mirror), luminance(sp.transmission));
+    if transmission <= 0.0 {
+        // No numbers drawn: a mirror's path is what it always was.
+        return (sp.mirror != Vec3::ZERO).then(|| mirrored(sp, 1.0));
+    }
+    let p_mirror = mirror / (mirror + transmission);
+    if !p_mirror.is_finite() {
+        return None;
+    }
+    Some(if path_numbers(sample, depth)[0] < p_mirror {
+        mirrored(sp, p_mirror)
+    } else {
+        transmitted(sp, 1.0 - p_mirror)
+    })
 }

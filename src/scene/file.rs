@@ -315,6 +315,19 @@ pub struct MaterialSpec {
     /// `pbr`: a PNG of linear data, G roughness and B metallic (glTF's
     /// convention), multiplying `roughness` and `metallic`.
     pub metallic_roughness_texture: Option<String>,
+    /// `pbr`: the fraction of the base transmitted, 0..1 (glTF's
+    /// KHR_materials_transmission; 0, opaque, unless given).
+    pub transmission: Option<f32>,
+    /// `pbr`: the index of refraction, 1 or more (1.5 unless given).
+    pub ior: Option<f32>,
+    /// `pbr` with `transmission`: a thin wall, which rays pass straight
+    /// through, instead of the boundary of a solid, which bends them.
+    #[serde(default)]
+    pub thin_walled: bool,
+    /// `pbr` with `transmission`, a solid: the colour white light keeps
+    /// after `attenuation_distance` metres inside it (Beer-Lambert).
+    pub attenuation_colour: Option<[f32; 3]>,
+    pub attenuation_distance: Option<f32>,
 }
 
 /// The BRDF of a `[materials.NAME]`.

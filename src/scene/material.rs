@@ -124,7 +124,87 @@ pub struct PbrMaterial {
     /// glTF's `normalTexture`: tangent-space normals perturbing the
     /// shading normal, where the mesh has tangents.
     pub normal_map: Option<NormalMap>,
+    /// KHR_materials_ior's index of refraction of the dielectric (1.5
+    /// without it): its reflectance at normal incidence, and how a
+    /// transmitted ray bends.
+    pub ior: f32,
+    /// KHR_materials_transmission (with KHR_materials_volume): None for an
+    /// opaque surface.
+    pub transmission: Option<Transmission>,
 }
+
+/// How a metallic-roughness dielectric lets light through
+/// (KHR_materials_transmission and KHR_materials_volume; docs/design.md
+/// §5.8): the transmitted fraction of its base takes the place of that
+/// fraction of its diffuse lobe, and is traced as a delta bounce.
+#[derive(Debug, Clone)]
+pub struct Transmission {
+    /// `transmissionFactor`, 0 to 1.
+    pub factor: f32,
+    /// `transmissionTexture` (linear), its red channel multiplying the
+    /// factor; the texture holds it in all three channels.
+    pub texture: Option<TextureRef>,
+    /// A thin wall (KHR_materials_volume absent, or its thickness 0): a
+    /// ray passes straight through, as the extension defines. Otherwise
+    /// the mesh bounds a solid: rays refract entering and leaving it, by
+    /// `PbrMaterial::ior`.
+    pub thin_walled: bool,
+    /// Beer-Lambert absorption inside a solid: white light keeps
+    /// `attenuation_colour` after `attenuation_distance` metres
+    /// (infinite: none).
+    pub attenuation_colour: Vec3,
+    pub attenuation_distance: f32,
+}
+
+impl Transmission {
+    /// A thin wall that transmits `factor` of the base, untextured.
+    #[must_use]
+    pub fn thin(factor: f32) -> Self {
+        Self {
+            factor,
+            texture: None,
+            thin_walled: true,
+            attenuation_colour: Vec3::ONE,
+            attenuation_distance: f32::INFINITY,
+        }
+    }
+
+    /// The fraction of light that keeps going after `distance` metres
+    /// inside the solid, per channel: attenuation_colour ^ (distance /
+    /// attenuation_distance) (KHR_materials_volume's Beer-Lambert law).
+    #[must_use]
+    pub fn interior_transmittance(&self, distance: f32) -> Vec3 {
+        if self.thin_walled || !self.attenuation_distance.is_finite() {
+            return Vec3::ONE;
+        }
+        let exponent = distance / self.attenuation_distance;
+        Vec3::from_array(self.attenuation_colour.to_array().map(|c| if c > 0.0 { c.powf(exponent) } else { 0.0 }))
+    }
+}
+
+impl PbrMaterial {
+    /// glTF's defaults: metallic and roughness `metallic`, `roughness`,
+    /// no texture, KHR_materials_specular's factor and colour 1 and white,
+    /// IOR 1.5, opaque.
+    #[must_use]
+    pub fn untextured(metallic: f32, roughness: f32) -> Self {
+        Self {
+            metallic,
+            roughness,
+            specular: 1.0,
+            specular_colour: Vec3::ONE,
+            metallic_roughness: None,
+            specular_texture: None,
+            specular_colour_texture: None,
+            normal_map: None,
+            ior: DEFAULT_IOR,
+            transmission: None,
+        }
+    }
+}
+
+/// glTF's index of refraction without KHR_materials_ior.
+pub const DEFAULT_IOR: f32 = 1.5;
 
 /// A tangent-space normal texture (linear; x, y, z = 2 texel - 1, +X along
 /// increasing u, +Y up the image, +Z out of the surface), its x and y
@@ -203,6 +283,13 @@ impl Material {
     #[must_use]
     pub fn has_mirror(&self) -> bool {
         self.mirror != Vec3::ZERO
+    }
+
+    /// Whether the surface bounds a transmitting solid (not a thin wall):
+    /// rays refract into it and meet its surface again from inside.
+    #[must_use]
+    pub fn bounds_a_solid(&self) -> bool {
+        self.pbr.as_ref().and_then(|p| p.transmission.as_ref()).is_some_and(|t| !t.thin_walled)
     }
 }
 

@@ -124,7 +124,9 @@ impl<'s> Geometry<'s> {
     #[must_use]
     pub fn culls(&self, ray: &Ray, hit: &Hit) -> bool {
         let mesh = &self.scene.meshes[self.mesh_of(hit)];
-        if !self.scene.materials[mesh.material].culls_back_faces || mesh.strands.is_some() {
+        let material = &self.scene.materials[mesh.material];
+        // A transmitting solid's inside is where its refracted rays go.
+        if !material.culls_back_faces || mesh.strands.is_some() || material.bounds_a_solid() {
             return false;
         }
         let ([p0, p1, p2], _) = self.triangle(hit, ray.time);
@@ -202,7 +204,7 @@ impl<'s> Geometry<'s> {
             w * c0 + u * c1 + v * c2
         });
         let emits = front || material.emits_both_sides;
-        self.shaded(ray, hit, Frame { p, n, ng, wo, uvs, colour, emits }, material)
+        self.shaded(ray, hit, Frame { p, n, ng, wo, uvs, colour, emits, back: !front }, material)
     }
 
     /// The surface point of a hit on curves or spheres (docs/design.md
@@ -230,7 +232,7 @@ impl<'s> Geometry<'s> {
         }
         let uv = Vec2::new(hit.u, hit.v);
         let colour = mesh.colors.as_ref().map(|colors| strands.interpolate(colors, hit.primitive as usize, hit.u));
-        let frame = Frame { p, n: ng, ng, wo, uvs: TexCoords::at([uv, uv]), colour, emits: false };
+        let frame = Frame { p, n: ng, ng, wo, uvs: TexCoords::at([uv, uv]), colour, emits: false, back: false };
         let mut sp = self.shaded(ray, hit, frame, &self.scene.materials[mesh.material]);
         if matches!(strands.kind, StrandKind::Curves { ribbon: false, .. }) && !sp.material.unlit {
             let primitive = hit.primitive as usize;
@@ -246,7 +248,7 @@ impl<'s> Geometry<'s> {
 
     /// The surface point of `frame`, shaded with `material`.
     fn shaded(&self, ray: &Ray, hit: &Hit, frame: Frame, material: &'s Material) -> SurfacePoint<'s> {
-        let Frame { p, n, ng, wo, uvs, colour, emits } = frame;
+        let Frame { p, n, ng, wo, uvs, colour, emits, back } = frame;
         let mut base = material.albedo_at(&uvs, &self.scene.textures);
         if let Some(colour) = colour {
             base *= colour;
@@ -255,6 +257,13 @@ impl<'s> Geometry<'s> {
         let pbr =
             material.pbr.as_ref().filter(|_| !material.unlit).map(|m| Pbr::of(m, base, &uvs, &self.scene.textures));
         let kd = if material.unlit { Vec3::ZERO } else { pbr.map_or(base, |p| p.diffuse_albedo()) };
+        let distance = hit.t * ray.direction.length();
+        // A transmitting dielectric's delta lobes, and what the ray kept
+        // crossing its solid from the inside (docs/design.md §5.8).
+        let transmitting = material.pbr.as_ref().and_then(|m| m.transmission.as_ref()).zip(pbr);
+        let delta = transmitting.map(|(t, p)| p.delta_lobes(n, wo, back, t.thin_walled));
+        let interior_transmittance =
+            transmitting.filter(|_| back).map_or(Vec3::ONE, |(t, _)| t.interior_transmittance(distance));
         SurfacePoint {
             p,
             n,
@@ -266,7 +275,7 @@ impl<'s> Geometry<'s> {
             pbr,
             fibre: None,
             fibre_radius: 0.0,
-            distance: hit.t * ray.direction.length(),
+            distance,
             time: ray.time,
             emitted: if material.unlit {
                 base
@@ -279,10 +288,14 @@ impl<'s> Geometry<'s> {
             min_distance: self.ray_epsilon.max(self.distance_clamp),
             emitter_lobes: super::Lobes::ALL,
             sample: None,
-            mirror: match pbr {
-                Some(p) if p.is_smooth() => p.mirror_reflectance(n.dot(wo)),
+            mirror: match (delta, pbr) {
+                (Some(delta), _) => delta.mirror,
+                (None, Some(p)) if p.is_smooth() => p.mirror_reflectance(n.dot(wo)),
                 _ => material.mirror,
             },
+            transmission: delta.map_or(Vec3::ZERO, |d| d.transmission),
+            transmitted: delta.map_or(-wo, |d| d.transmitted),
+            interior_transmittance,
         }
     }
 }
@@ -299,6 +312,8 @@ fn make_fibre(sp: &mut SurfacePoint<'_>, tangent: Option<Vec3>, radius: f32) {
     sp.fibre_radius = if radius.is_finite() { radius.max(0.0) } else { 0.0 };
     sp.pbr = None;
     sp.mirror = Vec3::ZERO;
+    sp.transmission = Vec3::ZERO;
+    sp.interior_transmittance = Vec3::ONE;
 }
 
 /// How texture coordinates change from one pixel to the next along the
@@ -341,6 +356,9 @@ struct Frame {
     colour: Option<Vec3>,
     /// Whether the side seen is one that emits.
     emits: bool,
+    /// Whether the side seen is the back of the winding (the inside of
+    /// a closed mesh whose triangles wind outwards).
+    back: bool,
 }
 
 /// How an object's hits are placed in the world.

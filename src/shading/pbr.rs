@@ -16,7 +16,7 @@ use glam::Vec3;
 use wide::{f32x4, CmpGt};
 
 use super::lobes::Lobes;
-use crate::scene::material::{PbrMaterial, TexCoords};
+use crate::scene::material::{PbrMaterial, TexCoords, DEFAULT_IOR};
 use crate::scene::texture::Texture;
 use crate::util::simd::{dot3, splat3, V3};
 
@@ -50,6 +50,35 @@ pub struct Pbr {
     pub f0: Vec3,
     /// The dielectric's reflectance at grazing incidence: the specular factor.
     pub f90: f32,
+    /// The dielectric's index of refraction (KHR_materials_ior).
+    pub ior: f32,
+    /// The fraction of the dielectric's base transmitted instead of
+    /// diffused (KHR_materials_transmission, texture looked up): traced as
+    /// a delta bounce (`Pbr::delta_lobes`), and taken out of the diffuse
+    /// lobe the lights see.
+    pub transmission: f32,
+}
+
+/// A transmitting dielectric's delta lobes towards one view
+/// (`Pbr::delta_lobes`): the mirror's reflectance, the transmitted
+/// weight and the transmitted ray's unit direction.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct DeltaLobes {
+    pub mirror: Vec3,
+    pub transmission: Vec3,
+    pub transmitted: Vec3,
+}
+
+/// A dielectric's reflectance at normal incidence from air for an index
+/// of refraction `ior`: ((ior - 1) / (ior + 1))^2, and glTF's constant 0.04
+/// exactly at its default 1.5 (f32's (0.5 / 2.5)^2 is 0.040000003).
+#[must_use]
+pub fn f0_of_ior(ior: f32) -> f32 {
+    if ior == DEFAULT_IOR {
+        return 0.04;
+    }
+    let r = (ior - 1.0) / (ior + 1.0);
+    r * r
 }
 
 impl Pbr {
@@ -61,13 +90,24 @@ impl Pbr {
     /// (the importers clamp them there already, with a warning).
     #[must_use]
     pub fn new(base: Vec3, metallic: f32, roughness: f32, specular: f32, specular_colour: Vec3) -> Self {
+        Self::with_ior(base, metallic, roughness, specular, specular_colour, DEFAULT_IOR)
+    }
+
+    /// The same parameters for a dielectric of index of refraction `ior`
+    /// (KHR_materials_ior: its reflectance at normal incidence is
+    /// `f0_of_ior`, times KHR_materials_specular's colour and factor),
+    /// opaque.
+    #[must_use]
+    pub fn with_ior(base: Vec3, metallic: f32, roughness: f32, specular: f32, specular_colour: Vec3, ior: f32) -> Self {
         let (base, specular) = (base.clamp(Vec3::ZERO, Vec3::ONE), specular.clamp(0.0, 1.0));
         Self {
             base,
             metallic,
             alpha: roughness * roughness,
-            f0: (0.04 * specular_colour).min(Vec3::ONE) * specular,
+            f0: (f0_of_ior(ior) * specular_colour).min(Vec3::ONE) * specular,
             f90: specular,
+            ior,
+            transmission: 0.0,
         }
     }
 
@@ -90,7 +130,12 @@ impl Pbr {
         if let Some(t) = &material.specular_colour_texture {
             specular_colour *= t.lookup(uvs, textures);
         }
-        Self::new(base, metallic, roughness, specular, specular_colour)
+        let mut pbr = Self::with_ior(base, metallic, roughness, specular, specular_colour, material.ior);
+        if let Some(transmission) = &material.transmission {
+            let texel = transmission.texture.map_or(1.0, |t| t.lookup(uvs, textures).x);
+            pbr.transmission = (transmission.factor * texel).clamp(0.0, 1.0);
+        }
+        pbr
     }
 
     /// Whether the specular lobe is a perfect mirror (alpha below
@@ -117,7 +162,61 @@ impl Pbr {
     /// albedo AOV take.
     #[must_use]
     pub fn diffuse_albedo(&self) -> Vec3 {
-        self.base * (1.0 - self.metallic) * (1.0 - self.f0.max_element())
+        self.base * (1.0 - self.metallic) * (1.0 - self.transmission) * (1.0 - self.f0.max_element())
+    }
+
+    /// The delta lobes of a transmitting dielectric seen from unit `wo`
+    /// through the unit shading normal `n` on the viewer's side, from
+    /// `inside` the solid the surface bounds or from outside, through a
+    /// `thin_walled` surface or a solid's (docs/design.md §5.8):
+    ///
+    /// - a thin wall passes the ray straight on; a solid's boundary bends
+    ///   it by Snell's law, eta = ior entering and 1 / ior leaving, and
+    ///   reflects all of it past the critical angle (total internal
+    ///   reflection: no transmission, the dielectric's mirror 1);
+    /// - the Fresnel term is the specification's Schlick form at the
+    ///   cosine on the air's side (the view's entering, the transmitted
+    ///   ray's leaving), as Fresnel's reflectance is the same both ways;
+    /// - the transmitted weight is base x transmission x (1 - metallic) x
+    ///   (1 - max F_d), what the diffuse lobe would have had under the
+    ///   specular layer, and the mirror is the smooth surface's
+    ///   reflectance (0 for a rough one, whose reflection is its lobe).
+    ///
+    /// A white, smooth, fully transmitting dielectric's mirror and
+    /// transmission sum to 1: it keeps all the light (the glass furnace,
+    /// tests/transmission.rs).
+    #[must_use]
+    pub fn delta_lobes(&self, n: Vec3, wo: Vec3, inside: bool, thin_walled: bool) -> DeltaLobes {
+        let cos_i = n.dot(wo).clamp(0.0, 1.0);
+        let (transmitted, cos_air) = if thin_walled {
+            (-wo, cos_i)
+        } else {
+            let eta = if inside { 1.0 / self.ior } else { self.ior };
+            let sin2_t = (1.0 - cos_i * cos_i).max(0.0) / (eta * eta);
+            if sin2_t >= 1.0 {
+                // The metal's share as it was; the dielectric's is all.
+                let mirror = self.mirror_reflectance(cos_i) - self.dielectric_part(cos_i) + (1.0 - self.metallic);
+                let mirror = if self.is_smooth() { mirror.min(Vec3::ONE) } else { Vec3::ZERO };
+                return DeltaLobes { mirror, transmission: Vec3::ZERO, transmitted: -wo };
+            }
+            let cos_t = (1.0 - sin2_t).sqrt();
+            let d = (-wo / eta + (cos_i / eta - cos_t) * n).normalize_or(-n);
+            (d, if inside { cos_t } else { cos_i })
+        };
+        let x = 1.0 - cos_air;
+        let w = x * x * x * x * x;
+        let f_d = self.f0 + (Vec3::splat(self.f90) - self.f0) * w;
+        let transmission = self.base * (self.transmission * (1.0 - self.metallic) * (1.0 - f_d.max_element()));
+        let mirror = if self.is_smooth() { self.mirror_reflectance(cos_air) } else { Vec3::ZERO };
+        DeltaLobes { mirror, transmission, transmitted }
+    }
+
+    /// The dielectric's share of `mirror_reflectance` at `n_dot_v`: (1 -
+    /// metallic) F_d.
+    fn dielectric_part(&self, n_dot_v: f32) -> Vec3 {
+        let x = (1.0 - n_dot_v.clamp(0.0, 1.0)).max(0.0);
+        let w = x * x * x * x * x;
+        (self.f0 + (Vec3::splat(self.f90) - self.f0) * w) * (1.0 - self.metallic)
     }
 }
 
@@ -201,7 +300,7 @@ impl PbrLanes {
             alpha2: f32x4::splat(pbr.alpha.max(MIN_ALPHA) * pbr.alpha.max(MIN_ALPHA)),
             f0: splat3(pbr.f0),
             f90: f32x4::splat(pbr.f90),
-            diffuse: splat3(pbr.base * ((1.0 - pbr.metallic) / PI)),
+            diffuse: splat3(pbr.base * ((1.0 - pbr.metallic) * (1.0 - pbr.transmission) / PI)),
             n_dot_v: n_dot_v.max(MIN_COS_VIEW),
             glossy: !pbr.is_smooth(),
         }

@@ -48,6 +48,16 @@ pub struct SurfacePoint<'s> {
     /// roughness surface's Fresnel term at n . wo (`Pbr::is_smooth`); 0
     /// for none.
     pub mirror: Vec3,
+    /// The weight of its transmitted delta lobe towards `transmitted`
+    /// (traced as a delta bounce, as the mirror is): a transmitting
+    /// dielectric's (`Pbr::delta_lobes`); 0 for none.
+    pub transmission: Vec3,
+    /// The transmitted ray's unit direction, on the far side of the surface.
+    pub transmitted: Vec3,
+    /// What the ray that found the point kept of its light through the
+    /// solid it crossed to get here (Beer-Lambert inside a transmitting
+    /// material's volume, docs/design.md §5.8): 1 outside any.
+    pub interior_transmittance: Vec3,
     /// The ray offset, metres (see `Geometry::ray_epsilon`).
     pub(crate) epsilon: f32,
     /// The distance below which 1/d^2 is clamped: the ray offset, or the
@@ -88,6 +98,9 @@ impl<'m> SurfacePoint<'m> {
             time: 0.0,
             emitted: Vec3::ZERO,
             mirror: Vec3::ZERO,
+            transmission: Vec3::ZERO,
+            transmitted: -wo,
+            interior_transmittance: Vec3::ONE,
             epsilon: 1e-4,
             min_distance: 1e-4,
             emitter_lobes: Lobes::ALL,
@@ -216,6 +229,20 @@ impl SurfacePoint<'_> {
         let height = self.r.dot(ng);
         let direction = if height < lowest { (self.r + (lowest - height) * ng).normalize_or(self.r) } else { self.r };
         self.ray_towards(direction)
+    }
+
+    /// The transmitted ray, leaving from the far side of the surface. A
+    /// shading normal tilted far from the geometric one can bend it back
+    /// to the viewer's side, where it would meet the surface again from
+    /// the wrong side: it is then lowered just below the surface, as the
+    /// mirror ray is lifted (`mirror_ray`).
+    #[must_use]
+    pub fn transmitted_ray(&self) -> Ray {
+        let ng = if self.ng.dot(self.wo) < 0.0 { -self.ng } else { self.ng };
+        let d = self.transmitted;
+        let depth = -d.dot(ng);
+        let direction = if depth < 0.01 { (d - (0.01 - depth) * ng).normalize_or(-ng) } else { d };
+        Ray { origin: self.p - ng * self.epsilon, direction, t_near: 0.0, t_far: f32::INFINITY, time: self.time }
     }
 
     /// An unbounded ray leaving the surface on the viewer's side towards

@@ -64,7 +64,9 @@ pub enum Stream {
     /// draws over the pixel's samples, six floats.
     Emitter,
     /// (seed, x, y, sample, bounce): the path's choice of lobe, its
-    /// direction and Russian roulette, five floats.
+    /// direction and Russian roulette, five floats; without the path
+    /// method, the first of them alone, at glass: its mirror or its
+    /// transmission (docs/design.md §5.8).
     Path,
     /// (seed, x, y): the multidimensional cut's salt for its gather
     /// clusters' representatives, one integer.

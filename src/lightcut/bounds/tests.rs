@@ -102,14 +102,9 @@ fn pbr_material(rng: &mut Rng) -> Material {
     let albedo = Albedo::Constant(Vec3::new(edge(rng, 1.0), edge(rng, 1.0), edge(rng, 1.0)));
     Material {
         pbr: Some(crate::scene::material::PbrMaterial {
-            metallic,
-            roughness,
             specular,
             specular_colour,
-            metallic_roughness: None,
-            specular_texture: None,
-            specular_colour_texture: None,
-            normal_map: None,
+            ..crate::scene::material::PbrMaterial::untextured(metallic, roughness)
         }),
         ..Material::diffuse("pbr", albedo)
     }

@@ -9,7 +9,7 @@ use gltf::texture::{MagFilter, WrappingMode};
 
 use super::Importer;
 use crate::scene::image::{Encoding, RgbImage};
-use crate::scene::material::{Albedo, Cutout, Material, NormalMap, PbrMaterial, TextureRef};
+use crate::scene::material::{Albedo, Cutout, Material, NormalMap, PbrMaterial, TextureRef, Transmission, DEFAULT_IOR};
 use crate::scene::texels::Texels;
 use crate::scene::texture::{Filter, Texture, Wrap};
 use crate::scene::SceneError;
@@ -87,37 +87,12 @@ impl Importer<'_, '_> {
                 })
             }
         };
-        let cutoff = match m.alpha_mode() {
-            gltf::material::AlphaMode::Opaque => None,
-            gltf::material::AlphaMode::Mask => Some(m.alpha_cutoff().unwrap_or(0.5)),
-            gltf::material::AlphaMode::Blend => {
-                self.warn(&location, "alphaMode BLEND rendered as MASK with a cutoff of 0.5 (no partial transparency)");
-                Some(0.5)
-            }
-        };
-        if cutoff.is_some_and(|c| !c.is_finite()) {
-            return Err(self.error(format!("{location}.alphaCutoff"), "must be finite"));
-        }
-        // Only a mask that removes something costs Embree a filter call.
-        let cutout = cutoff.and_then(|cutoff| {
-            // The image's alpha times the factor's, made only for a mask.
-            let (alpha, width, height, transform) = match coverage {
-                Some((image, transform)) => {
-                    let a = image.alpha.as_ref().expect("an image with alpha");
-                    let texels = image.width * image.height;
-                    ((0..texels).map(|k| a.get(k) * base.w).collect(), image.width, image.height, transform)
-                }
-                None => (vec![base.w], 1, 1, Affine2::IDENTITY),
-            };
-            alpha.iter().any(|&a| a < cutoff).then_some(Cutout {
-                alpha,
-                width: width as u32,
-                height: height as u32,
-                transform,
-                cutoff,
-            })
-        });
+        let cutout = self.cutout(&m, &location, coverage, base.w)?;
         let (emission, emissive_texture) = self.emission(&m, &location)?;
+        let (ior, transmission) = self.transmission(&m, &location, roughness)?;
+        // KHR_materials_volume: "doubleSided has no effect on volume
+        // boundaries": a refracted ray meets the solid's inside.
+        let solid = transmission.as_ref().is_some_and(|t| !t.thin_walled);
         let index = self.parts.scene.materials.len();
         let name = m.name().map_or_else(|| location.clone(), str::to_string);
         self.parts.scene.materials.push(Material {
@@ -134,9 +109,11 @@ impl Importer<'_, '_> {
                 specular_texture,
                 specular_colour_texture,
                 normal_map,
+                ior,
+                transmission,
             }),
             unlit: m.unlit(),
-            culls_back_faces: !m.double_sided(),
+            culls_back_faces: !m.double_sided() && !solid,
             ..Material::diffuse(name, albedo)
         });
         self.materials.insert(m.index(), index);
@@ -187,6 +164,115 @@ impl Importer<'_, '_> {
             texture: specular_texture,
             colour_texture: specular_colour_texture,
         })
+    }
+
+    /// The cut-out of glTF's alphaMode (MASK at its cutoff; BLEND read as
+    /// MASK at 0.5, with a warning): the base colour texture's alpha (if
+    /// it has one, `coverage`, with its transform) times the base colour
+    /// factor's `alpha_factor`; None where nothing is cut out.
+    fn cutout(
+        &mut self,
+        m: &gltf::Material<'_>,
+        location: &str,
+        coverage: Option<(std::rc::Rc<RgbImage>, Affine2)>,
+        alpha_factor: f32,
+    ) -> Result<Option<Cutout>, SceneError> {
+        let cutoff = match m.alpha_mode() {
+            gltf::material::AlphaMode::Opaque => None,
+            gltf::material::AlphaMode::Mask => Some(m.alpha_cutoff().unwrap_or(0.5)),
+            gltf::material::AlphaMode::Blend => {
+                self.warn(location, "alphaMode BLEND rendered as MASK with a cutoff of 0.5 (no partial transparency)");
+                Some(0.5)
+            }
+        };
+        if cutoff.is_some_and(|c| !c.is_finite()) {
+            return Err(self.error(format!("{location}.alphaCutoff"), "must be finite"));
+        }
+        // Only a mask that removes something costs Embree a filter call.
+        Ok(cutoff.and_then(|cutoff| {
+            // The image's alpha times the factor's, made only for a mask.
+            let (alpha, width, height, transform) = match coverage {
+                Some((image, transform)) => {
+                    let a = image.alpha.as_ref().expect("an image with alpha");
+                    let texels = image.width * image.height;
+                    ((0..texels).map(|k| a.get(k) * alpha_factor).collect(), image.width, image.height, transform)
+                }
+                None => (vec![alpha_factor], 1, 1, Affine2::IDENTITY),
+            };
+            alpha.iter().any(|&a| a < cutoff).then_some(Cutout {
+                alpha,
+                width: width as u32,
+                height: height as u32,
+                transform,
+                cutoff,
+            })
+        }))
+    }
+
+    /// KHR_materials_ior's index of refraction (1.5 without it), and
+    /// KHR_materials_transmission's factor and texture with
+    /// KHR_materials_volume's thickness and attenuation (docs/design.md
+    /// §5.8). A rough transmitting surface is transmitted as a smooth one
+    /// (its reflection keeps its roughness), with a warning; the thickness
+    /// texture is not read: the geometry is the volume, as in a path
+    /// tracer, and only whether the thickness factor is 0 (thin-walled)
+    /// matters.
+    fn transmission(
+        &mut self,
+        m: &gltf::Material<'_>,
+        location: &str,
+        roughness: f32,
+    ) -> Result<(f32, Option<Transmission>), SceneError> {
+        let ior = m.ior().unwrap_or(DEFAULT_IOR);
+        let at = format!("{location}.extensions.KHR_materials_ior.ior");
+        // The extension allows 0 besides [1, inf) (reflectance 1, for
+        // specular-glossiness materials).
+        if !(ior.is_finite() && (ior == 0.0 || ior >= 1.0)) {
+            return Err(self.error(at, format!("must be 0 or at least 1, got {ior}")));
+        }
+        let Some(t) = m.transmission() else { return Ok((ior, None)) };
+        let at = format!("{location}.extensions.KHR_materials_transmission");
+        let factor = t.transmission_factor();
+        if !(factor.is_finite() && (0.0..=1.0).contains(&factor)) {
+            return Err(
+                self.error(format!("{at}.transmissionFactor"), format!("must be between 0 and 1, got {factor}"))
+            );
+        }
+        let texture = match t.transmission_texture() {
+            None => None,
+            // The factor is the texture's red channel (linear).
+            Some(info) => self
+                .texture(Slot::of(&info), &format!("{at}.transmissionTexture"), Encoding::Linear, |t, _| {
+                    Vec3::splat(t.x)
+                })?
+                .map(|(t, _)| t),
+        };
+        if factor == 0.0 && texture.is_none() {
+            return Ok((ior, None));
+        }
+        if roughness > 0.0 {
+            self.warn(&at, &format!("roughness {roughness}: transmitted as smooth glass (its reflection stays rough)"));
+        }
+        let mut transmission = Transmission { factor, texture, ..Transmission::thin(factor) };
+        if let Some(volume) = m.volume() {
+            let at = format!("{location}.extensions.KHR_materials_volume");
+            let (thickness, distance) = (volume.thickness_factor(), volume.attenuation_distance());
+            let colour = Vec3::from_array(volume.attenuation_color());
+            if !(thickness.is_finite() && thickness >= 0.0) {
+                return Err(self.error(format!("{at}.thicknessFactor"), format!("must be >= 0, got {thickness}")));
+            }
+            if distance.is_nan() || distance <= 0.0 {
+                return Err(self.error(format!("{at}.attenuationDistance"), format!("must be > 0, got {distance}")));
+            }
+            if !(colour.is_finite() && colour.min_element() >= 0.0 && colour.max_element() <= 1.0) {
+                return Err(self.error(format!("{at}.attenuationColor"), "must be between 0 and 1"));
+            }
+            // ior 0 bends nothing: its solid is drawn as a thin wall.
+            transmission.thin_walled = thickness == 0.0 || ior < 1.0;
+            transmission.attenuation_colour = colour;
+            transmission.attenuation_distance = distance;
+        }
+        Ok((ior, Some(transmission)))
     }
 
     /// The emitted radiance (emissiveFactor x KHR_materials_emissive_strength,

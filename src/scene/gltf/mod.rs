@@ -31,11 +31,14 @@ use super::{MAX_IMPORT_INSTANCES as MAX_INSTANCES, MAX_IMPORT_TRIANGLES as MAX_T
 /// Extensions whose absence from the renderer changes nothing it draws
 /// (when merely used) and which it implements; anything else listed in
 /// `extensionsRequired` is refused by name.
-const IMPLEMENTED: [&str; 7] = [
+const IMPLEMENTED: [&str; 10] = [
     "KHR_lights_punctual",
     "KHR_materials_emissive_strength",
+    "KHR_materials_ior",
     "KHR_materials_specular",
+    "KHR_materials_transmission",
     "KHR_materials_unlit",
+    "KHR_materials_volume",
     "KHR_mesh_quantization",
     "KHR_texture_transform",
     "EXT_mesh_gpu_instancing",
@@ -43,10 +46,7 @@ const IMPLEMENTED: [&str; 7] = [
 
 /// Extensions the renderer knows but does not implement, with what a
 /// render of a file that uses them does instead (named once on stderr).
-const IGNORED: [(&str, &str); 15] = [
-    ("KHR_materials_transmission", "surfaces are opaque"),
-    ("KHR_materials_volume", "surfaces only, no volume absorption"),
-    ("KHR_materials_ior", "the dielectric's IOR is 1.5 (reflectance 0.04)"),
+const IGNORED: [(&str, &str); 12] = [
     ("KHR_materials_clearcoat", "the base layer alone, no clear coat"),
     ("KHR_materials_sheen", "no sheen"),
     ("KHR_materials_iridescence", "no thin-film iridescence"),

@@ -10,7 +10,7 @@ use glam::{Affine2, Vec2, Vec3};
 use super::Validator;
 use crate::scene::file::{MaterialKind, MaterialSpec, SceneFile};
 use crate::scene::image::{self, Encoding};
-use crate::scene::material::{PbrMaterial, TextureRef};
+use crate::scene::material::{PbrMaterial, TextureRef, Transmission, DEFAULT_IOR};
 use crate::scene::texture::Texture;
 use crate::scene::{Albedo, Material, SceneError};
 
@@ -59,6 +59,11 @@ pub(super) fn materials(
             ("metallic", m.metallic.is_some()),
             ("roughness", m.roughness.is_some()),
             ("metallic_roughness_texture", m.metallic_roughness_texture.is_some()),
+            ("transmission", m.transmission.is_some()),
+            ("ior", m.ior.is_some()),
+            ("thin_walled", m.thin_walled),
+            ("attenuation_colour", m.attenuation_colour.is_some()),
+            ("attenuation_distance", m.attenuation_distance.is_some()),
         ] {
             v.check(!given, &field(name), || "only a type = \"pbr\" material has it".to_string())?;
         }
@@ -112,14 +117,44 @@ fn pbr(
             })
         }
     };
-    Ok(PbrMaterial {
-        metallic,
-        roughness,
-        specular: 1.0,
-        specular_colour: Vec3::ONE,
-        metallic_roughness,
-        specular_texture: None,
-        specular_colour_texture: None,
-        normal_map: None,
-    })
+    let ior = m.ior.unwrap_or(DEFAULT_IOR);
+    v.check(ior.is_finite() && ior >= 1.0, &field("ior"), || format!("must be at least 1, got {ior}"))?;
+    let transmission = transmission(v, m, field)?;
+    Ok(PbrMaterial { metallic_roughness, ior, transmission, ..PbrMaterial::untextured(metallic, roughness) })
+}
+
+/// A `type = "pbr"` material's transmission (docs/design.md §5.8): None
+/// unless `transmission` is given and above 0; the thin wall's and the
+/// solid's attenuation fields checked.
+fn transmission(
+    v: &Validator<'_>,
+    m: &MaterialSpec,
+    field: &impl Fn(&str) -> String,
+) -> Result<Option<Transmission>, SceneError> {
+    let factor = m.transmission.unwrap_or(0.0);
+    v.check(factor.is_finite() && (0.0..=1.0).contains(&factor), &field("transmission"), || {
+        format!("must be between 0 and 1, got {factor}")
+    })?;
+    let attenuation = m.attenuation_colour.is_some() || m.attenuation_distance.is_some();
+    for (name, given) in [("thin_walled", m.thin_walled), ("attenuation_colour", attenuation)] {
+        v.check(factor > 0.0 || !given, &field(name), || "only a material with transmission above 0 has it".into())?;
+    }
+    if factor == 0.0 {
+        return Ok(None);
+    }
+    v.check(!(m.thin_walled && attenuation), &field("attenuation_colour"), || {
+        "a thin wall has no inside to absorb in".into()
+    })?;
+    let colour = match m.attenuation_colour {
+        Some(c) => v.unit_rgb(c, &field("attenuation_colour"))?,
+        None => Vec3::ONE,
+    };
+    let distance = m.attenuation_distance.unwrap_or(f32::INFINITY);
+    v.check(distance > 0.0, &field("attenuation_distance"), || format!("must be > 0, got {distance}"))?;
+    Ok(Some(Transmission {
+        thin_walled: m.thin_walled,
+        attenuation_colour: colour,
+        attenuation_distance: distance,
+        ..Transmission::thin(factor)
+    }))
 }

@@ -936,16 +936,7 @@ pub(super) fn default_material(name: &str) -> Material {
 /// UsdPreviewSurface's fallbacks as metallic-roughness parameters: a
 /// dielectric (ior 1.5: F0 0.04) of roughness 0.5.
 fn preview_defaults() -> PbrMaterial {
-    PbrMaterial {
-        metallic: 0.0,
-        roughness: 0.5,
-        specular: 1.0,
-        specular_colour: Vec3::ONE,
-        metallic_roughness: None,
-        specular_texture: None,
-        specular_colour_texture: None,
-        normal_map: None,
-    }
+    PbrMaterial::untextured(0.0, 0.5)
 }
 
 /// A surface's display colour as its material's base colour (what

@@ -35,16 +35,7 @@ fn phong(kd: f32, ks: f32, exponent: f32) -> Material {
 
 fn gltf(base: Vec3, metallic: f32, roughness: f32) -> Material {
     Material {
-        pbr: Some(PbrMaterial {
-            metallic,
-            roughness,
-            specular: 1.0,
-            specular_colour: Vec3::ONE,
-            metallic_roughness: None,
-            specular_texture: None,
-            specular_colour_texture: None,
-            normal_map: None,
-        }),
+        pbr: Some(PbrMaterial::untextured(metallic, roughness)),
         ..Material::diffuse("gltf", Albedo::Constant(base))
     }
 }

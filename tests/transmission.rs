@@ -1,0 +1,200 @@
+//! Glass (docs/design.md §5.8), through the real binary, against answers
+//! this file knows: a glass sphere under a uniform sky is invisible (the
+//! furnace), a slab's Fresnel and Beer-Lambert terms against their closed
+//! form, glTF's transmission extensions read as the specification says,
+//! and bit-identical images for any threads and window.
+
+mod common;
+
+use common::gltf::GltfBuilder;
+use common::{
+    assert_same_bits_for_any_threads_and_window, channel, lightcuts_fails, read_exr, render, ExrImage, TempDir,
+};
+use serde_json::json;
+
+/// The mean of each of R, G, B over the image.
+fn means(image: &ExrImage) -> [f64; 3] {
+    ["R", "G", "B"].map(|c| {
+        let values = channel(image, c);
+        values.iter().map(|&v| f64::from(v)).sum::<f64>() / values.len() as f64
+    })
+}
+
+/// A sphere of `material`'s fields (a TOML `pbr` material) filling most
+/// of the view under a uniform sky of radiance 1, paths of up to 64
+/// vertices (mirror paths and, if asked for, sampled ones): near its
+/// silhouette, where Fresnel's reflectance nears 1, a ray may reflect
+/// inside many times before it leaves.
+fn sphere_under_a_white_sky(material: &str) -> String {
+    format!(
+        "[film]\nwidth = 24\nheight = 24\nspp = 32\n\
+         [camera]\neye = [0, 0, 3]\nlook_at = [0, 0, 0]\nfov_y = 30\n\
+         [materials.glass]\ntype = \"pbr\"\nalbedo = [1, 1, 1]\nmetallic = 0\nroughness = 0\n{material}\n\
+         [[shapes]]\ntype = \"sphere\"\ncenter = [0, 0, 0]\nradius = 0.6\nsegments = 256\nmaterial = \"glass\"\n\
+         [environment]\nradiance = [1, 1, 1]\nsamples = 1024\n\
+         [indirect]\nmax_depth = 64\n[render]\nmax_mirror_depth = 64\n"
+    )
+}
+
+#[test]
+fn a_glass_sphere_under_a_white_sky_is_invisible() {
+    // Whatever a smooth, white, lossless dielectric reflects it does not
+    // transmit: at every interface the mirror and the transmission sum to
+    // 1, and every path ends in the sky of radiance 1, so every pixel is 1.
+    let dir = TempDir::new("glass-furnace");
+    for (material, what) in [
+        ("transmission = 1", "a solid"),
+        ("transmission = 1\nior = 2.4", "a diamond"),
+        ("transmission = 1\nthin_walled = true", "a thin wall"),
+    ] {
+        for indirect in ["none", "path"] {
+            for mode in ["--stochastic", "--exact", "--multidimensional"] {
+                let scene = dir.write("furnace.toml", &sphere_under_a_white_sky(material));
+                let image = render(&scene, &dir.path("furnace.exr"), &[mode, "--indirect", indirect]);
+                let green = channel(&image, "G");
+                let worst = green.iter().map(|&v| (f64::from(v) - 1.0).abs()).fold(0.0, f64::max);
+                let mean = means(&image)[1];
+                eprintln!("{what}, indirect {indirect}, {mode}: mean {mean:.6}, worst pixel {worst:.5}");
+                assert!((mean - 1.0).abs() < 1e-3, "{what}, {indirect}, {mode}: mean {mean}");
+                assert!(worst < 1e-3, "{what}, {indirect}, {mode}: a pixel is {worst} from 1");
+            }
+        }
+    }
+    // Absorbing 10% over a metre inside, the same sphere is seen: the
+    // test can tell.
+    let grey = "transmission = 1\nattenuation_colour = [0.9, 0.9, 0.9]\nattenuation_distance = 1";
+    let scene = dir.write("grey.toml", &sphere_under_a_white_sky(grey));
+    let mean = means(&render(&scene, &dir.path("grey.exr"), &["--stochastic", "--indirect", "none"]))[1];
+    eprintln!("grey glass: mean {mean:.5}");
+    assert!(mean < 0.98, "absorbing glass: {mean}");
+}
+
+/// A glass slab 1 m thick (z from -0.5 to 0.5) filling a narrow view
+/// straight on, under a uniform sky of radiance 1, absorbing to `colour`
+/// over 1 m.
+fn slab(colour: [f64; 3], spp: u32) -> String {
+    format!(
+        "[film]\nwidth = 4\nheight = 4\nspp = {spp}\n\
+         [camera]\neye = [0, 0, 5]\nlook_at = [0, 0, 0]\nfov_y = 2\n\
+         [materials.glass]\ntype = \"pbr\"\nalbedo = [1, 1, 1]\nmetallic = 0\nroughness = 0\ntransmission = 1\n\
+         attenuation_colour = {colour:?}\nattenuation_distance = 1\n\
+         [[shapes]]\ntype = \"box\"\nmin = [-1, -1, -0.5]\nmax = [1, 1, 0.5]\nmaterial = \"glass\"\n\
+         [environment]\nradiance = [1, 1, 1]\nsamples = 1024\n"
+    )
+}
+
+#[test]
+fn a_slab_reflects_and_transmits_as_fresnel_and_beer_lambert_say() {
+    // Straight on, each face reflects R = 0.04 (IOR 1.5) and a pass
+    // through the slab keeps a = colour (its thickness is the attenuation
+    // distance). The light back from the sky is R from the front face,
+    // plus what enters, crosses, and leaves by either face after any
+    // number of inner reflections: (1 - R)^2 a (1 + R a + (R a)^2 + ...)
+    // = (1 - R)^2 a / (1 - R a).
+    let dir = TempDir::new("glass-slab");
+    let colour = [0.2, 0.8, 0.5];
+    let scene = dir.write("slab.toml", &slab(colour, 8192));
+    let image = render(&scene, &dir.path("slab.exr"), &["--stochastic"]);
+    let r = 0.04;
+    for (c, (got, a)) in means(&image).into_iter().zip(colour).enumerate() {
+        let want = r + (1.0 - r) * (1.0 - r) * a / (1.0 - r * a);
+        eprintln!("channel {c}: {got:.5} vs {want:.5}");
+        // 131,072 samples whose values differ by up to 1 - a: a standard
+        // error below 1e-3.
+        assert!((got - want).abs() < 4e-3, "channel {c}: {got} vs {want}");
+    }
+}
+
+#[test]
+fn glass_is_the_same_bits_for_any_threads_and_window() {
+    // Clear and absorbing solids and a thin wall, under a sky.
+    let dir = TempDir::new("glass-bits");
+    let scene = common::scenes().join("environment/glass.toml");
+    for indirect in ["none", "path"] {
+        let args = ["--stochastic", "--indirect", indirect, "--resolution", "80x60", "--spp", "2"];
+        assert_same_bits_for_any_threads_and_window(&dir, &scene, 80, &args);
+    }
+}
+
+/// A glTF pane facing the camera, of a base colour of white and the
+/// material's `extensions`, in front of a red emitter (radiance 1) that
+/// fills the view, in the dark.
+fn gltf_pane(extensions: serde_json::Value) -> GltfBuilder {
+    let mut b = GltfBuilder::new();
+    let material = b.material(json!({
+        "pbrMetallicRoughness": { "baseColorFactor": [1, 1, 1, 1], "metallicFactor": 0, "roughnessFactor": 0 },
+        "extensions": extensions,
+    }));
+    let mesh = b.quad([-1.0, -1.0, 0.0], [2.0, 0.0, 0.0], [0.0, 2.0, 0.0], Some(material));
+    b.node(json!({ "mesh": mesh }), true);
+    let red = b.material(json!({
+        "pbrMetallicRoughness": { "baseColorFactor": [0, 0, 0, 1] },
+        "emissiveFactor": [1, 0, 0],
+    }));
+    let mesh = b.quad([-3.0, -3.0, -1.0], [6.0, 0.0, 0.0], [0.0, 6.0, 0.0], Some(red));
+    b.node(json!({ "mesh": mesh }), true);
+    let camera = b.camera(json!({ "type": "perspective", "perspective": { "yfov": 0.5, "znear": 0.01 } }));
+    b.node(json!({ "camera": camera, "translation": [0.0, 0.0, 3.0] }), true);
+    b
+}
+
+#[test]
+fn gltf_transmission_is_read_as_its_extensions_define_it() {
+    let dir = TempDir::new("glass-gltf");
+    let render_pane = |extensions: serde_json::Value, used: &[&str]| {
+        let mut b = gltf_pane(extensions);
+        for name in used {
+            b.use_extension(name);
+        }
+        let path = b.write_separate(&dir.path(""), "pane");
+        let out = dir.path("pane.exr");
+        let stdout = common::lightcuts_ok(&[
+            "render",
+            common::s(&path),
+            "-o",
+            common::s(&out),
+            "--spp",
+            "64",
+            "--resolution",
+            "16x16",
+        ]);
+        (read_exr(&out).unwrap(), stdout)
+    };
+    // A thin pane (no KHR_materials_volume) passes 1 - F = 0.96 of the
+    // emitter straight through (views within 14 degrees of the normal:
+    // Schlick's weight is below 3e-8); the rest is a reflection of the
+    // dark.
+    let (image, _) = render_pane(
+        json!({ "KHR_materials_transmission": { "transmissionFactor": 1.0 } }),
+        &["KHR_materials_transmission"],
+    );
+    let red = means(&image)[0];
+    assert!((red - 0.96).abs() < 0.01, "a clear pane: {red}");
+    // Half transmitting: half of that.
+    let (image, _) = render_pane(
+        json!({ "KHR_materials_transmission": { "transmissionFactor": 0.5 } }),
+        &["KHR_materials_transmission"],
+    );
+    let red = means(&image)[0];
+    assert!((red - 0.48).abs() < 0.01, "a half-clear pane: {red}");
+    // Without the extension the pane hides the emitter.
+    let (image, _) = render_pane(json!({}), &[]);
+    assert_eq!(means(&image)[0], 0.0, "an opaque pane");
+    // IOR 1 reflects nothing: every path passes.
+    let (image, _) = render_pane(
+        json!({ "KHR_materials_transmission": { "transmissionFactor": 1.0 }, "KHR_materials_ior": { "ior": 1.0 } }),
+        &["KHR_materials_transmission", "KHR_materials_ior"],
+    );
+    assert_eq!(means(&image)[0], 1.0, "IOR 1");
+    // Out of range: the file and the field are named.
+    let mut b = gltf_pane(json!({ "KHR_materials_transmission": { "transmissionFactor": 2.0 } }));
+    b.use_extension("KHR_materials_transmission");
+    let path = b.write_separate(&dir.path(""), "bad");
+    let out = dir.path("bad.exr");
+    let stderr = lightcuts_fails(&["render", common::s(&path), "-o", common::s(&out)]);
+    assert!(
+        stderr.contains("bad.gltf") && stderr.contains("KHR_materials_transmission.transmissionFactor"),
+        "{stderr}"
+    );
+    assert!(!out.exists());
+}
