@@ -198,3 +198,61 @@ fn gltf_transmission_is_read_as_its_extensions_define_it() {
     );
     assert!(!out.exists());
 }
+
+#[test]
+fn alpha_blending_is_a_partial_coverage_for_camera_and_shadow_rays() {
+    // A pane of alpha 0.3 (BLEND) in front of the red emitter: camera rays
+    // pass with probability 0.7, and the pane, lit by nothing, is black.
+    let dir = TempDir::new("glass-blend");
+    let mut b = GltfBuilder::new();
+    let pane = b.material(json!({
+        "pbrMetallicRoughness": { "baseColorFactor": [1, 1, 1, 0.3], "metallicFactor": 0 },
+        "alphaMode": "BLEND",
+    }));
+    let mesh = b.quad([-1.0, -1.0, 0.0], [2.0, 0.0, 0.0], [0.0, 2.0, 0.0], Some(pane));
+    b.node(json!({ "mesh": mesh }), true);
+    let red =
+        b.material(json!({ "pbrMetallicRoughness": { "baseColorFactor": [0, 0, 0, 1] }, "emissiveFactor": [1, 0, 0] }));
+    let mesh = b.quad([-3.0, -3.0, -1.0], [6.0, 0.0, 0.0], [0.0, 6.0, 0.0], Some(red));
+    b.node(json!({ "mesh": mesh }), true);
+    let camera = b.camera(json!({ "type": "perspective", "perspective": { "yfov": 0.5, "znear": 0.01 } }));
+    b.node(json!({ "camera": camera, "translation": [0.0, 0.0, 3.0] }), true);
+    let path = b.write_separate(&dir.path(""), "blend");
+    let image = render(&path, &dir.path("blend.exr"), &["--spp", "64", "--resolution", "16x16"]);
+    let red = means(&image)[0];
+    eprintln!("through alpha 0.3: {red:.4}");
+    // 16,384 samples of 0 or 1: a standard error of 0.0036.
+    assert!((red - 0.7).abs() < 0.015, "{red}");
+    // The same pane between a point light and a white floor, seen from
+    // above past the pane's edge: the floor in its shadow keeps 0.7 of its
+    // light on average, the floor beside it all.
+    let mut b = GltfBuilder::new();
+    let white = b.material(json!({ "pbrMetallicRoughness": { "baseColorFactor": [1, 1, 1, 1], "metallicFactor": 0, "roughnessFactor": 1 } }));
+    let floor = b.quad([-4.0, 0.0, 4.0], [8.0, 0.0, 0.0], [0.0, 0.0, -8.0], Some(white));
+    b.node(json!({ "mesh": floor }), true);
+    let pane = b.material(json!({
+        "pbrMetallicRoughness": { "baseColorFactor": [1, 1, 1, 0.3], "metallicFactor": 0 },
+        "alphaMode": "BLEND",
+        "doubleSided": true,
+    }));
+    // Above the floor's left half (x < 0) and above the camera, which
+    // looks down: out of its view.
+    let occluder = b.quad([-20.0, 5.0, 20.0], [20.0, 0.0, 0.0], [0.0, 0.0, -40.0], Some(pane));
+    b.node(json!({ "mesh": occluder }), true);
+    let down = [-std::f32::consts::FRAC_1_SQRT_2, 0.0, 0.0, std::f32::consts::FRAC_1_SQRT_2];
+    let light = b.light(json!({ "type": "directional", "intensity": 683.0 }));
+    b.node(json!({ "extensions": { "KHR_lights_punctual": { "light": light } }, "rotation": down }), true);
+    let camera = b.camera(json!({ "type": "perspective", "perspective": { "yfov": 0.5, "znear": 0.01 } }));
+    b.node(json!({ "camera": camera, "translation": [0.0, 3.0, 0.0], "rotation": down }), true);
+    let path = b.write_separate(&dir.path(""), "shadow");
+    let image = render(&path, &dir.path("shadow.exr"), &["--spp", "64", "--resolution", "16x16", "--exact"]);
+    let r = channel(&image, "R");
+    let half = |left: bool| {
+        let values: Vec<f64> = (0..256).filter(|i| (i % 16 < 8) == left).map(|i| f64::from(r[i])).collect();
+        values.iter().sum::<f64>() / values.len() as f64
+    };
+    let (shadowed, lit) = (half(true), half(false));
+    eprintln!("floor under alpha 0.3: {shadowed:.4} of {lit:.4}");
+    assert!(lit > 0.0);
+    assert!((shadowed / lit - 0.7).abs() < 0.02, "{shadowed} / {lit}");
+}

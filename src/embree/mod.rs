@@ -243,7 +243,10 @@ unsafe impl Send for MaskBuffers {}
 unsafe impl Sync for MaskBuffers {}
 
 /// A cut-out (glTF's alphaMode MASK): hits where the alpha, looked up at the
-/// hit's texture coordinate, is below `cutoff` are skipped by every query.
+/// hit's texture coordinate, is below `cutoff` are skipped by every query;
+/// without a cutoff, partial coverage (glTF's BLEND): a hit is kept with
+/// probability alpha, drawn from a hash of the ray and the primitive (the
+/// same ray meets the same surfaces on any thread).
 #[derive(Debug, Clone)]
 pub struct AlphaMask {
     /// Texture coordinates, one per vertex.
@@ -255,7 +258,7 @@ pub struct AlphaMask {
     /// From the mesh's uv to the lookup's (v = 0 at the image's bottom row),
     /// as the colour texture's (see `scene::Albedo::Texture`).
     pub transform: glam::Affine2,
-    pub cutoff: f32,
+    pub cutoff: Option<f32>,
 }
 
 struct SceneHandle {
@@ -391,7 +394,8 @@ impl SceneBuilder {
                     a.translation.x,
                     a.translation.y,
                 ],
-                cutoff: m.cutoff,
+                // The shim's mark of partial coverage.
+                cutoff: m.cutoff.unwrap_or(-1.0),
             });
             // SAFETY: the geometry was attached above and the scene is not
             // yet committed; `raw` and the buffers it points into (the index

@@ -221,9 +221,37 @@ static float mask_alpha(const LcAlphaMask* m, unsigned prim, float u, float v) {
 static float hitn_u(const struct RTCHitN* hit, unsigned n, unsigned i) { return ((const float*)hit)[3 * n + i]; }
 static float hitn_v(const struct RTCHitN* hit, unsigned n, unsigned i) { return ((const float*)hit)[4 * n + i]; }
 static unsigned hitn_prim(const struct RTCHitN* hit, unsigned n, unsigned i) { return ((const unsigned*)hit)[5 * n + i]; }
+static unsigned hitn_geom(const struct RTCHitN* hit, unsigned n, unsigned i) { return ((const unsigned*)hit)[6 * n + i]; }
+
+/* Word k of lane i of an N-wide RTCRayN: Embree's SoA layout (org_x, org_y,
+ * org_z, tnear, dir_x, dir_y, dir_z, time, ... each N wide, the same in
+ * Embree 3 and 4). */
+static uint32_t rayn_word(const struct RTCRayN* ray, unsigned n, unsigned i, unsigned k) {
+    return ((const uint32_t*)ray)[k * n + i];
+}
+
+/* SplitMix64's finaliser: every input bit reaches every output bit. */
+static uint64_t mix64(uint64_t z) {
+    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
+    z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
+    return z ^ (z >> 31);
+}
+
+/* A uniform number in [0, 1) that is a function of lane i's ray (origin,
+ * direction, time) and the primitive it hit: partial coverage's draw. A
+ * camera sample's ray, a bounce's and a shadow ray's each carry their own
+ * sample's jitter, so their draws are independent of each other, and the
+ * same ray draws the same number on any thread. */
+static float coverage_draw(const struct RTCFilterFunctionNArguments* args, unsigned i, unsigned prim) {
+    uint64_t h = 0x6c62272e07bb0142ULL ^ prim ^ ((uint64_t)hitn_geom(args->hit, args->N, i) << 32);
+    static const unsigned words[7] = {0, 1, 2, 4, 5, 6, 7};
+    for (unsigned k = 0; k < 7; ++k) h = mix64(h ^ ((uint64_t)rayn_word(args->ray, args->N, i, words[k]) << 17) ^ k);
+    return (float)(h >> 40) * (1.0f / 16777216.0f);
+}
 
 /* Embree's filter callback (both majors, any packet width N): rejects the
- * hits where the mask is below its cutoff, so traversal goes on past them. */
+ * hits where the mask is below its cutoff (or, for partial coverage, where
+ * the draw is not below the alpha), so traversal goes on past them. */
 static void alpha_filter(const struct RTCFilterFunctionNArguments* args) {
     const LcAlphaMask* m = (const LcAlphaMask*)args->geometryUserPtr;
     for (unsigned i = 0; i < args->N; ++i) {
@@ -231,7 +259,9 @@ static void alpha_filter(const struct RTCFilterFunctionNArguments* args) {
         unsigned prim = hitn_prim(args->hit, args->N, i);
         float u = hitn_u(args->hit, args->N, i);
         float v = hitn_v(args->hit, args->N, i);
-        if (mask_alpha(m, prim, u, v) < m->cutoff) args->valid[i] = 0;
+        float alpha = mask_alpha(m, prim, u, v);
+        float threshold = m->cutoff < 0.0f ? coverage_draw(args, i, prim) : m->cutoff;
+        if (m->cutoff < 0.0f ? !(threshold < alpha) : alpha < threshold) args->valid[i] = 0;
     }
 }
 

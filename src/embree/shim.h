@@ -112,8 +112,11 @@ uint32_t lc_scene_attach_spheres(LcScene* scene, const float* spheres, size_t co
 /* A cut-out (glTF's alphaMode MASK): a hit on the mesh whose alpha, looked up
  * bilinearly (repeating) at the hit's texture coordinate, is below `cutoff`
  * is ignored by every query (closest hit, occlusion, packets), through
- * Embree's intersection and occlusion filter functions. All pointers are
- * owned by the caller and must outlive the scene. */
+ * Embree's intersection and occlusion filter functions. A negative `cutoff`
+ * makes the alpha a partial coverage instead (glTF's BLEND): a hit is kept
+ * with probability alpha, decided by a hash of the ray and the hit, so that
+ * the same ray always meets the same surfaces. All pointers are owned by
+ * the caller and must outlive the scene. */
 typedef struct LcAlphaMask {
     const uint32_t* indices; /* the mesh's triangles, 3 per triangle */
     const float* uvs;        /* 2 per vertex */

@@ -88,7 +88,8 @@ pub struct Material {
     /// emissive materials, as Cycles renders them).
     pub emits_both_sides: bool,
     /// Where the surface is cut out (glTF's alphaMode MASK): rays pass
-    /// through where the coverage is below the cutoff.
+    /// through where the coverage is below the cutoff; or partially there
+    /// (BLEND): rays pass with probability 1 - coverage.
     pub cutout: Option<Cutout>,
     /// glTF's metallic-roughness BRDF instead of diffuse + Phong: `albedo`
     /// is its base colour, and `specular`, `exponent` and `mirror` are 0.
@@ -220,7 +221,8 @@ pub struct NormalMap {
     pub set: usize,
 }
 
-/// Coverage texels and the cutoff below which a surface is absent.
+/// Coverage texels and the cutoff below which a surface is absent, or none:
+/// partial coverage (docs/design.md §5.9).
 #[derive(Debug, Clone)]
 pub struct Cutout {
     /// `width * height` coverages, row 0 at the top.
@@ -229,7 +231,7 @@ pub struct Cutout {
     pub height: u32,
     /// From the mesh's uv to the lookup's, as [`Albedo::Texture`]'s.
     pub transform: Affine2,
-    pub cutoff: f32,
+    pub cutoff: Option<f32>,
 }
 
 impl Material {

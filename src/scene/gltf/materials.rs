@@ -166,8 +166,8 @@ impl Importer<'_, '_> {
         })
     }
 
-    /// The cut-out of glTF's alphaMode (MASK at its cutoff; BLEND read as
-    /// MASK at 0.5, with a warning): the base colour texture's alpha (if
+    /// The cut-out of glTF's alphaMode (MASK at its cutoff; BLEND a partial
+    /// coverage, docs/design.md §5.9): the base colour texture's alpha (if
     /// it has one, `coverage`, with its transform) times the base colour
     /// factor's `alpha_factor`; None where nothing is cut out.
     fn cutout(
@@ -177,35 +177,32 @@ impl Importer<'_, '_> {
         coverage: Option<(std::rc::Rc<RgbImage>, Affine2)>,
         alpha_factor: f32,
     ) -> Result<Option<Cutout>, SceneError> {
+        // Some(cutoff) for a mask, Some(None) for partial coverage.
         let cutoff = match m.alpha_mode() {
-            gltf::material::AlphaMode::Opaque => None,
+            gltf::material::AlphaMode::Opaque => return Ok(None),
             gltf::material::AlphaMode::Mask => Some(m.alpha_cutoff().unwrap_or(0.5)),
-            gltf::material::AlphaMode::Blend => {
-                self.warn(location, "alphaMode BLEND rendered as MASK with a cutoff of 0.5 (no partial transparency)");
-                Some(0.5)
-            }
+            gltf::material::AlphaMode::Blend => None,
         };
         if cutoff.is_some_and(|c| !c.is_finite()) {
             return Err(self.error(format!("{location}.alphaCutoff"), "must be finite"));
         }
+        // The image's alpha times the factor's, made only for a mask.
+        let (alpha, width, height, transform) = match coverage {
+            Some((image, transform)) => {
+                let a = image.alpha.as_ref().expect("an image with alpha");
+                let texels = image.width * image.height;
+                ((0..texels).map(|k| a.get(k) * alpha_factor).collect(), image.width, image.height, transform)
+            }
+            None => (vec![alpha_factor], 1, 1, Affine2::IDENTITY),
+        };
         // Only a mask that removes something costs Embree a filter call.
-        Ok(cutoff.and_then(|cutoff| {
-            // The image's alpha times the factor's, made only for a mask.
-            let (alpha, width, height, transform) = match coverage {
-                Some((image, transform)) => {
-                    let a = image.alpha.as_ref().expect("an image with alpha");
-                    let texels = image.width * image.height;
-                    ((0..texels).map(|k| a.get(k) * alpha_factor).collect(), image.width, image.height, transform)
-                }
-                None => (vec![alpha_factor], 1, 1, Affine2::IDENTITY),
-            };
-            alpha.iter().any(|&a| a < cutoff).then_some(Cutout {
-                alpha,
-                width: width as u32,
-                height: height as u32,
-                transform,
-                cutoff,
-            })
+        let removes = |a: f32| cutoff.map_or(a < 1.0, |cutoff| a < cutoff);
+        Ok(alpha.iter().any(|&a| removes(a)).then_some(Cutout {
+            alpha,
+            width: width as u32,
+            height: height as u32,
+            transform,
+            cutoff,
         }))
     }
 

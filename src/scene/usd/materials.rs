@@ -621,8 +621,8 @@ impl<'s> Materials<'s> {
     }
 
     /// A cut-out from opacity below opacityThreshold (UsdPreviewSurface's
-    /// "presence"); transparency, which has no threshold, is named as not
-    /// implemented.
+    /// "presence"); without a threshold, opacity is a partial coverage
+    /// (docs/design.md §5.9), as Blender's importer and Storm read it.
     fn cutout(
         &mut self,
         shader: &str,
@@ -640,7 +640,7 @@ impl<'s> Materials<'s> {
             }
         };
         match (&opacity, threshold > 0.0) {
-            (Source::Texture(t), true) => {
+            (Source::Texture(t), mask) => {
                 let r = self.texture(&[t], false, false, textures)?;
                 let texture = &textures[r.texture];
                 let (width, height) = texture.size();
@@ -650,7 +650,7 @@ impl<'s> Materials<'s> {
                     width: width as u32,
                     height: height as u32,
                     transform: r.transform,
-                    cutoff: threshold,
+                    cutoff: mask.then_some(threshold),
                 });
             }
             (Source::Value(v), true) if (v.x as f32) < threshold => {
@@ -660,16 +660,8 @@ impl<'s> Materials<'s> {
                 ));
             }
             (Source::Value(v), false) if v.x < 1.0 => {
-                warnings.push(format!(
-                    "{shader}: opacity {} (transparency) is not implemented: the surface is opaque",
-                    v.x
-                ));
-            }
-            (Source::Texture(t), false) => {
-                warnings.push(format!(
-                    "{}: a textured opacity without a threshold (transparency) is not implemented: opaque",
-                    t.shader
-                ));
+                let alpha = vec![(v.x as f32).max(0.0)];
+                cutout = Some(Cutout { alpha, width: 1, height: 1, transform: Affine2::IDENTITY, cutoff: None });
             }
             _ => {}
         }
