@@ -223,6 +223,8 @@ fn alpha_blending_is_a_partial_coverage_for_camera_and_shadow_rays() {
     eprintln!("through alpha 0.3: {red:.4}");
     // 16,384 samples of 0 or 1: a standard error of 0.0036.
     assert!((red - 0.7).abs() < 0.015, "{red}");
+    // Each ray's draw is its own: the same bits for any threads and window.
+    assert_same_bits_for_any_threads_and_window(&dir, &path, 64, &["--resolution", "64x56", "--spp", "4"]);
     // The same pane between a point light and a white floor, seen from
     // above past the pane's edge: the floor in its shadow keeps 0.7 of its
     // light on average, the floor beside it all.
