@@ -8,16 +8,8 @@ mod common;
 use std::f64::consts::PI;
 
 use common::gltf::GltfBuilder;
-use common::{channel, lightcuts_fails, lightcuts_ok, read_exr, render, s, ExrImage, TempDir};
+use common::{channel, lightcuts_fails, lightcuts_ok, means, read_exr, render, s, ExrImage, TempDir};
 use serde_json::json;
-
-/// The mean of each of R, G, B over the image.
-fn means(image: &ExrImage) -> [f64; 3] {
-    ["R", "G", "B"].map(|c| {
-        let values = channel(image, c);
-        values.iter().map(|&v| f64::from(v)).sum::<f64>() / values.len() as f64
-    })
-}
 
 /// The diffuse sphere of radius 2 seen from inside, of albedo `albedo`,
 /// with a point light of 1 W/sr at its centre and paths of up to

@@ -7,18 +7,8 @@
 mod common;
 
 use common::gltf::GltfBuilder;
-use common::{
-    assert_same_bits_for_any_threads_and_window, channel, lightcuts_fails, read_exr, render, ExrImage, TempDir,
-};
+use common::{assert_same_bits_for_any_threads_and_window, channel, lightcuts_fails, means, read_exr, render, TempDir};
 use serde_json::json;
-
-/// The mean of each of R, G, B over the image.
-fn means(image: &ExrImage) -> [f64; 3] {
-    ["R", "G", "B"].map(|c| {
-        let values = channel(image, c);
-        values.iter().map(|&v| f64::from(v)).sum::<f64>() / values.len() as f64
-    })
-}
 
 /// A sphere of `material`'s fields (a TOML `pbr` material) filling most
 /// of the view under a uniform sky of radiance 1, paths of up to 64

@@ -7,15 +7,7 @@
 
 mod common;
 
-use common::{channel, lightcuts, lightcuts_fails, lightcuts_ok, render, s, scenes, TempDir};
-
-/// The mean R, G, B over an image.
-fn mean_rgb(image: &common::ExrImage) -> [f64; 3] {
-    ["R", "G", "B"].map(|c| {
-        let values = channel(image, c);
-        values.iter().map(|&v| f64::from(v)).sum::<f64>() / values.len() as f64
-    })
-}
+use common::{channel, lightcuts, lightcuts_fails, lightcuts_ok, means, render, s, scenes, TempDir};
 
 /// Each UsdLux light (and an emissive mesh) over a Lambertian floor of
 /// albedo rho, in Y-up metres and Z-up centimetres, normalised or not: the
@@ -50,7 +42,7 @@ fn every_usdlux_light_matches_its_closed_form_in_the_schema_s_units() {
                 let mut flags = vec!["--camera", camera.as_str(), "--resolution", "8x8", "--aovs", "none"];
                 flags.extend_from_slice(mode);
                 let image = render(&path, &dir.path("out.exr"), &flags);
-                let got = mean_rgb(&image).map(|l| std::f64::consts::PI * l / albedo);
+                let got = means(&image).map(|l| std::f64::consts::PI * l / albedo);
                 let error = (0..3).map(|k| (got[k] - want[k]).abs() / want[k]).fold(0.0, f64::max);
                 eprintln!("{stage} {camera} {mode:?}: E {got:.5?}, closed form {want:.5?}, {:.3}%", 100.0 * error);
                 if error > tolerance {
@@ -99,7 +91,7 @@ fn a_composed_usdz_package_has_usd_core_s_objects_where_usd_core_puts_them() {
     // And it renders: the texture is read from inside the package.
     let dir = TempDir::new("usd-composition");
     let image = render(&folder.join("composition.usdz"), &dir.path("out.exr"), &["--resolution", "48x32"]);
-    assert!(mean_rgb(&image).iter().all(|&c| c > 0.0));
+    assert!(means(&image).iter().all(|&c| c > 0.0));
 }
 
 /// The lobby (scenes/lobby/) exported by Blender 5.0's own USD exporter
@@ -428,7 +420,7 @@ def Xform "World"
 "#,
     );
     let image = render(&stage, &dir.path("out.exr"), &["--resolution", "32x24", "--exact"]);
-    assert!(mean_rgb(&image)[1] > 0.0, "the camera sees the lit floor");
+    assert!(means(&image)[1] > 0.0, "the camera sees the lit floor");
     let mean = |name: &str| channel(&image, name).iter().map(|&v| f64::from(v)).sum::<f64>();
     for c in ["R", "G", "B"] {
         let sum = mean(&format!("Combined_key.{c}")) + mean(&format!("Combined_fill.{c}"));
@@ -1036,7 +1028,7 @@ fn the_usd_working_group_s_assets_render_in_every_texture_format_they_carry() {
     for stage in ["RoughnessTest/RoughnessTest.usdz", "SubdivisionSurfaces/Creases_SpinningPyramids.usda"] {
         let image =
             render(&folder.join(stage), &dir.path("out.exr"), &[&light[..], &["--resolution", "32x24"]].concat());
-        assert!(mean_rgb(&image).iter().all(|&m| m > 0.05), "{stage}: {:?}", mean_rgb(&image));
+        assert!(means(&image).iter().all(|&m| m > 0.05), "{stage}: {:?}", means(&image));
     }
     let cube = folder.join("subdiv_catmullClark/subdiv_catmullClark.usda");
     let report: serde_json::Value = serde_json::from_str(&lightcuts_ok(&["inspect", s(&cube), "--json"])).unwrap();
@@ -1044,7 +1036,7 @@ fn the_usd_working_group_s_assets_render_in_every_texture_format_they_carry() {
     assert!(triangles > 12 * 16, "the cube is drawn as its cage: {triangles} triangles");
     let mean = |name: &str| -> [f64; 3] {
         let stage = folder.join(format!("TextureFileFormatTests/{name}.usda"));
-        mean_rgb(&render(&stage, &dir.path(&format!("{name}.exr")), &[&light[..], &["--resolution", "64x64"]].concat()))
+        means(&render(&stage, &dir.path(&format!("{name}.exr")), &[&light[..], &["--resolution", "64x64"]].concat()))
     };
     let close = |a: [f64; 3], b: [f64; 3]| (0..3).all(|k| (a[k] - b[k]).abs() <= 0.01 * b[k]);
     let colour = mean("png_rgb_8-bit");

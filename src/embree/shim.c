@@ -260,8 +260,8 @@ static void alpha_filter(const struct RTCFilterFunctionNArguments* args) {
         float u = hitn_u(args->hit, args->N, i);
         float v = hitn_v(args->hit, args->N, i);
         float alpha = mask_alpha(m, prim, u, v);
-        float threshold = m->cutoff < 0.0f ? coverage_draw(args, i, prim) : m->cutoff;
-        if (m->cutoff < 0.0f ? !(threshold < alpha) : alpha < threshold) args->valid[i] = 0;
+        int absent = m->cutoff < 0.0f ? !(coverage_draw(args, i, prim) < alpha) : alpha < m->cutoff;
+        if (absent) args->valid[i] = 0;
     }
 }
 

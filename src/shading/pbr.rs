@@ -151,10 +151,22 @@ impl Pbr {
     /// BRDF as the half-vector meets the normal). A smooth surface's mirror.
     #[must_use]
     pub fn mirror_reflectance(&self, n_dot_v: f32) -> Vec3 {
+        let (dielectric, metal) = self.fresnel(n_dot_v);
+        self.mirror_of(dielectric, metal)
+    }
+
+    /// The dielectric's and the metal's Fresnel terms at `n_dot_v`, with
+    /// Schlick's weight (1 - n.v)^5: F_d = f0 + (f90 - f0) w, F_m = base +
+    /// (1 - base) w.
+    fn fresnel(&self, n_dot_v: f32) -> (Vec3, Vec3) {
         let x = (1.0 - n_dot_v.clamp(0.0, 1.0)).max(0.0);
         let w = x * x * x * x * x;
-        let dielectric = self.f0 + (Vec3::splat(self.f90) - self.f0) * w;
-        let metal = self.base + (Vec3::ONE - self.base) * w;
+        (self.f0 + (Vec3::splat(self.f90) - self.f0) * w, self.base + (Vec3::ONE - self.base) * w)
+    }
+
+    /// The mirror's reflectance of Fresnel terms `dielectric` and `metal`,
+    /// mixed by `metallic`.
+    fn mirror_of(&self, dielectric: Vec3, metal: Vec3) -> Vec3 {
         dielectric * (1.0 - self.metallic) + metal * self.metallic
     }
 
@@ -195,7 +207,7 @@ impl Pbr {
             let sin2_t = (1.0 - cos_i * cos_i).max(0.0) / (eta * eta);
             if sin2_t >= 1.0 {
                 // The metal's share as it was; the dielectric's is all.
-                let mirror = self.mirror_reflectance(cos_i) - self.dielectric_part(cos_i) + (1.0 - self.metallic);
+                let mirror = self.mirror_of(Vec3::ONE, self.fresnel(cos_i).1);
                 let mirror = if self.is_smooth() { mirror.min(Vec3::ONE) } else { Vec3::ZERO };
                 return DeltaLobes { mirror, transmission: Vec3::ZERO, transmitted: -wo };
             }
@@ -203,20 +215,10 @@ impl Pbr {
             let d = (-wo / eta + (cos_i / eta - cos_t) * n).normalize_or(-n);
             (d, if inside { cos_t } else { cos_i })
         };
-        let x = 1.0 - cos_air;
-        let w = x * x * x * x * x;
-        let f_d = self.f0 + (Vec3::splat(self.f90) - self.f0) * w;
+        let (f_d, f_m) = self.fresnel(cos_air);
         let transmission = self.base * (self.transmission * (1.0 - self.metallic) * (1.0 - f_d.max_element()));
-        let mirror = if self.is_smooth() { self.mirror_reflectance(cos_air) } else { Vec3::ZERO };
+        let mirror = if self.is_smooth() { self.mirror_of(f_d, f_m) } else { Vec3::ZERO };
         DeltaLobes { mirror, transmission, transmitted }
-    }
-
-    /// The dielectric's share of `mirror_reflectance` at `n_dot_v`: (1 -
-    /// metallic) F_d.
-    fn dielectric_part(&self, n_dot_v: f32) -> Vec3 {
-        let x = (1.0 - n_dot_v.clamp(0.0, 1.0)).max(0.0);
-        let w = x * x * x * x * x;
-        (self.f0 + (Vec3::splat(self.f90) - self.f0) * w) * (1.0 - self.metallic)
     }
 }
 

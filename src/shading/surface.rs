@@ -224,11 +224,9 @@ impl SurfacePoint<'_> {
     /// does (docs/design.md §5.6).
     #[must_use]
     pub fn mirror_ray(&self) -> Ray {
-        let ng = if self.ng.dot(self.wo) < 0.0 { -self.ng } else { self.ng };
+        let ng = self.ng_facing_viewer();
         let lowest = (0.9 * ng.dot(self.wo)).min(0.01);
-        let height = self.r.dot(ng);
-        let direction = if height < lowest { (self.r + (lowest - height) * ng).normalize_or(self.r) } else { self.r };
-        self.ray_towards(direction)
+        self.ray_towards(at_least_above(self.r, ng, lowest))
     }
 
     /// The transmitted ray, leaving from the far side of the surface. A
@@ -238,11 +236,18 @@ impl SurfacePoint<'_> {
     /// mirror ray is lifted (`mirror_ray`).
     #[must_use]
     pub fn transmitted_ray(&self) -> Ray {
-        let ng = if self.ng.dot(self.wo) < 0.0 { -self.ng } else { self.ng };
-        let d = self.transmitted;
-        let depth = -d.dot(ng);
-        let direction = if depth < 0.01 { (d - (0.01 - depth) * ng).normalize_or(-ng) } else { d };
+        let ng = self.ng_facing_viewer();
+        let direction = at_least_above(self.transmitted, -ng, 0.01);
         Ray { origin: self.p - ng * self.epsilon, direction, t_near: 0.0, t_far: f32::INFINITY, time: self.time }
+    }
+
+    /// The geometric normal turned to the viewer's side.
+    fn ng_facing_viewer(&self) -> Vec3 {
+        if self.ng.dot(self.wo) < 0.0 {
+            -self.ng
+        } else {
+            self.ng
+        }
     }
 
     /// An unbounded ray leaving the surface on the viewer's side towards
@@ -263,6 +268,19 @@ impl SurfacePoint<'_> {
     pub fn min_distance_squared(&self) -> f64 {
         // f64: the offset may be as small as 1e-30, whose square underflows f32.
         f64::from(self.min_distance) * f64::from(self.min_distance)
+    }
+}
+
+/// Unit `d`, or, where it rises less than `least` above the plane of unit
+/// `normal` (d . normal), `d` moved along the normal to rise `least` and
+/// made unit again: what keeps a mirror or a transmitted ray on its side
+/// of the surface.
+fn at_least_above(d: Vec3, normal: Vec3, least: f32) -> Vec3 {
+    let height = d.dot(normal);
+    if height < least {
+        (d + (least - height) * normal).normalize_or(d)
+    } else {
+        d
     }
 }
 

@@ -169,6 +169,14 @@ pub fn channel<'a>(image: &'a ExrImage, name: &str) -> &'a [f32] {
     image.channels.get(name).unwrap_or_else(|| panic!("no channel {name}: {:?}", image.channels.keys()))
 }
 
+/// The mean of each of R, G, B over the image.
+pub fn means(image: &ExrImage) -> [f64; 3] {
+    ["R", "G", "B"].map(|c| {
+        let values = channel(image, c);
+        values.iter().map(|&v| f64::from(v)).sum::<f64>() / values.len() as f64
+    })
+}
+
 /// The mean relative error of `test` against `reference`, by `lightcuts
 /// compare` (the figure the README's tables give).
 pub fn mean_error(test: &Path, reference: &Path) -> f64 {

@@ -250,7 +250,7 @@ impl Importer<'_, '_> {
         if roughness > 0.0 {
             self.warn(&at, &format!("roughness {roughness}: transmitted as smooth glass (its reflection stays rough)"));
         }
-        let mut transmission = Transmission { factor, texture, ..Transmission::thin(factor) };
+        let mut transmission = Transmission { texture, ..Transmission::thin(factor) };
         if let Some(volume) = m.volume() {
             let at = format!("{location}.extensions.KHR_materials_volume");
             let (thickness, distance) = (volume.thickness_factor(), volume.attenuation_distance());
