@@ -9,7 +9,7 @@ With OURS.exr (lightcuts' render of glass_peer.toml), BESIDE.png shows it
 on the left of Mitsuba's, both clamped to [0, 1] and sRGB-encoded.
 
 How the two scenes correspond:
-- The environment is turned and repeated as in mitsuba_reference.py.
+- The environment and the camera: mitsuba_courtyard.py.
 - The glass: Mitsuba's `dielectric` (IOR 1.5 inside, 1 outside) uses the
   exact Fresnel equations, lightcuts glTF's Schlick form at the cosine on
   the air's side (docs/design.md §5.8): at IOR 1.5 they agree at normal
@@ -23,46 +23,32 @@ How the two scenes correspond:
   in the TOML.
 """
 import math
-import os
 import sys
-import time
 
 import mitsuba as mi
 import numpy as np
 
+import mitsuba_courtyard as courtyard
+
 variant, spp, out = sys.argv[1], int(sys.argv[2]), sys.argv[3]
 mi.set_variant(variant)
-here = os.path.dirname(os.path.abspath(__file__))
-ours = np.array(mi.Bitmap(os.path.join(here, 'courtyard.exr')), dtype=np.float32)
-theirs = np.roll(ours, -ours.shape[1] // 2, axis=1).repeat(8, axis=0).repeat(8, axis=1)
-
-T = mi.ScalarTransform4f
 colour, distance = [0.2, 0.8, 0.3], 0.5
 sigma_a = [-math.log(c) / distance for c in colour]
 # Mitsuba's RGB inputs are reflectances within [0, 1]: the density is one
 # scaled by its largest channel.
 scale = max(sigma_a)
+glass = {'type': 'dielectric', 'int_ior': 1.5, 'ext_ior': 1.0}
 
-scene = mi.load_dict({
+image = courtyard.render(mi, {
     'type': 'scene',
     'integrator': {'type': 'volpath', 'max_depth': 65},
-    'sensor': {'type': 'perspective', 'fov': 30, 'fov_axis': 'y',
-               'to_world': T().look_at(origin=[0, 1.2, 5], target=[0, 0.6, 0], up=[0, 1, 0]),
-               'sampler': {'type': 'independent', 'sample_count': spp},
-               'film': {'type': 'hdrfilm', 'width': 160, 'height': 120,
-                        'rfilter': {'type': 'box'}, 'pixel_format': 'rgb'}},
-    'environment': {'type': 'envmap', 'bitmap': mi.Bitmap(theirs)},
-    'clear': {'type': 'sphere', 'center': [-0.65, 0.6, 0], 'radius': 0.55,
-              'bsdf': {'type': 'dielectric', 'int_ior': 1.5, 'ext_ior': 1.0}},
-    'green': {'type': 'sphere', 'center': [0.65, 0.6, 0], 'radius': 0.55,
-              'bsdf': {'type': 'dielectric', 'int_ior': 1.5, 'ext_ior': 1.0},
+    'sensor': courtyard.sensor(mi, spp),
+    'environment': courtyard.environment(mi),
+    'clear': {'type': 'sphere', 'center': [-0.65, 0.6, 0], 'radius': 0.55, 'bsdf': glass},
+    'green': {'type': 'sphere', 'center': [0.65, 0.6, 0], 'radius': 0.55, 'bsdf': glass,
               'interior': {'type': 'homogeneous', 'albedo': 0.0, 'scale': scale,
                            'sigma_t': {'type': 'rgb', 'value': [s / scale for s in sigma_a]}}},
-})
-start = time.time()
-image = mi.render(scene)
-mi.Bitmap(image).write(out)
-print(f'{variant}, {spp} spp: {time.time() - start:.2f} s')
+}, variant, spp, out)
 if len(sys.argv) > 5:
     ours = np.array(mi.Bitmap(sys.argv[4]), dtype=np.float32)[:, :, :3]
     both = np.concatenate([ours, np.array(image, dtype=np.float32)], axis=1).clip(0, 1)
