@@ -1176,3 +1176,42 @@ fn primvar_readers_give_each_gprim_its_constant_values_in_any_input() {
         assert!(stderr.contains("/Right") && stderr.contains("'rough'"), "{name}: {stderr}");
     }
 }
+
+/// UsdPreviewSurface's `clearcoat` is a white coat of IOR 1.5 over the
+/// base (docs/design.md §5.10), smooth at the schema's clearcoatRoughness
+/// of 0.01: a quad seen straight on under a uniform dome of radiance L
+/// shows the coat's Fresnel weight F_c = 0.04 of the dome plus 0.96 of the
+/// base it covers, L being what a white mirror shows.
+#[test]
+fn a_clearcoat_reflects_its_fresnel_weight_and_covers_the_rest() {
+    let dir = TempDir::new("usd-clearcoat");
+    let stage = |name: &str, inputs: &str| {
+        dir.write(
+            name,
+            &format!(
+                "#usda 1.0\n(\n    upAxis = \"Y\"\n)\n\
+                 def Mesh \"Quad\"\n{{\n    int[] faceVertexCounts = [4]\n    int[] faceVertexIndices = [0, 1, 2, 3]\n    \
+                 point3f[] points = [(-1, -1, -5), (1, -1, -5), (1, 1, -5), (-1, 1, -5)]\n    \
+                 uniform token subdivisionScheme = \"none\"\n    rel material:binding = </Look>\n}}\n\
+                 def Material \"Look\"\n{{\n    token outputs:surface.connect = </Look/Surface.outputs:surface>\n    \
+                 def Shader \"Surface\"\n    {{\n        uniform token info:id = \"UsdPreviewSurface\"\n        \
+                 {inputs}\n        token outputs:surface\n    }}\n}}\n\
+                 def DomeLight \"Sky\"\n{{\n}}\n\
+                 def Camera \"Camera\"\n{{\n    float focalLength = 50\n    float horizontalAperture = 10\n    \
+                 float verticalAperture = 10\n}}\n"
+            ),
+        )
+    };
+    let mean = |name: &str, inputs: &str| {
+        let path = stage(&format!("{name}.usda"), inputs);
+        means(&render(&path, &dir.path(&format!("{name}.exr")), &["--resolution", "8x8", "--spp", "16"]))[1]
+    };
+    let sky = mean("mirror", "color3f inputs:diffuseColor = (1, 1, 1)\n float inputs:metallic = 1\n float inputs:roughness = 0");
+    let grey = "color3f inputs:diffuseColor = (0.5, 0.5, 0.5)\n float inputs:roughness = 0.7";
+    let bare = mean("bare", grey);
+    let coated = mean("coated", &format!("{grey}\n float inputs:clearcoat = 1"));
+    let expected = 0.04 * sky + 0.96 * bare;
+    eprintln!("dome {sky:.5}, bare {bare:.5}, coated {coated:.5}, expected {expected:.5}");
+    assert!(sky > 0.0 && (coated - expected).abs() < 2e-3 * sky, "coated {coated} vs {expected}");
+    assert!((coated - bare).abs() > 0.01 * sky, "the coat changes nothing: {coated} vs {bare}");
+}

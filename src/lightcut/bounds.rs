@@ -333,6 +333,7 @@ impl PointBounds {
         let specular = if lobes.glossy && lanes.glossy { specular } else { zero };
         let diffuse_fresnel = if lobes.diffuse { ggx.diffuse_fresnel } else { zero };
         let m = lanes.combine(cos_theta, specular, schlick_weight(v_dot_h), diffuse_fresnel);
+        let m = if lanes.is_layered() { lanes.layers_bound(m, cos_theta, n_dot_h, lobes) } else { m };
         let weighted = dot3(&[m[0] * self.luminance[0], m[1] * self.luminance[1], m[2] * self.luminance[2]], intensity);
         (cos_theta.cmp_gt(zero).blend(one, zero), weighted)
     }

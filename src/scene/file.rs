@@ -328,6 +328,14 @@ pub struct MaterialSpec {
     /// after `attenuation_distance` metres inside it (Beer-Lambert).
     pub attenuation_colour: Option<[f32; 3]>,
     pub attenuation_distance: Option<f32>,
+    /// `pbr`: a clear coat's weight, 0..1 (glTF's KHR_materials_clearcoat;
+    /// 0, none, unless given), and its roughness, 0..1 (0 unless given).
+    pub clearcoat: Option<f32>,
+    pub clearcoat_roughness: Option<f32>,
+    /// `pbr`: a sheen's colour, 0..1 (glTF's KHR_materials_sheen; black,
+    /// none, unless given), and its roughness, 0..1 (0 unless given).
+    pub sheen_colour: Option<[f32; 3]>,
+    pub sheen_roughness: Option<f32>,
 }
 
 /// The BRDF of a `[materials.NAME]`.

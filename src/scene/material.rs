@@ -132,6 +132,39 @@ pub struct PbrMaterial {
     /// KHR_materials_transmission (with KHR_materials_volume): None for an
     /// opaque surface.
     pub transmission: Option<Transmission>,
+    /// KHR_materials_clearcoat (UsdPreviewSurface's `clearcoat`): None
+    /// without a coat.
+    pub clearcoat: Option<Clearcoat>,
+    /// KHR_materials_sheen: None without a sheen.
+    pub sheen: Option<Sheen>,
+}
+
+/// A clear coat over the base (KHR_materials_clearcoat; docs/design.md
+/// §5.10): a GGX layer of IOR 1.5 whose Fresnel weight at the view takes
+/// that share of the base away.
+#[derive(Debug, Clone)]
+pub struct Clearcoat {
+    /// `clearcoatFactor`, 0 to 1, times `clearcoatTexture`'s red channel
+    /// (linear; the texture holds it in all three channels).
+    pub factor: f32,
+    pub texture: Option<TextureRef>,
+    /// `clearcoatRoughnessFactor`, 0 to 1, times
+    /// `clearcoatRoughnessTexture`'s green channel (in all three).
+    pub roughness: f32,
+    pub roughness_texture: Option<TextureRef>,
+}
+
+/// A sheen over the base (KHR_materials_sheen; docs/design.md §5.10):
+/// the Charlie microfibre lobe, the base scaled by what it leaves.
+#[derive(Debug, Clone)]
+pub struct Sheen {
+    /// `sheenColorFactor` times `sheenColorTexture` (sRGB decoded).
+    pub colour: Vec3,
+    pub colour_texture: Option<TextureRef>,
+    /// `sheenRoughnessFactor` times `sheenRoughnessTexture`'s alpha
+    /// channel (linear; in all three).
+    pub roughness: f32,
+    pub roughness_texture: Option<TextureRef>,
 }
 
 /// How a metallic-roughness dielectric lets light through
@@ -200,6 +233,8 @@ impl PbrMaterial {
             normal_map: None,
             ior: DEFAULT_IOR,
             transmission: None,
+            clearcoat: None,
+            sheen: None,
         }
     }
 }

@@ -10,6 +10,9 @@
 //!   the distribution (Heitz, "Sampling the GGX Distribution of Visible
 //!   Normals", JCGT 2018), reflected: pdf D(h) G1(wo) / (4 n.wo).
 //! - A fibre (`shading::fibre`): its own sampling, over the whole sphere.
+//! - A rough clear coat (docs/design.md §5.10): GGX's visible normals at
+//!   the coat's alpha, a third lobe; a sheen is drawn with the diffuse
+//!   lobe, its albedo added to that lobe's weight.
 //!
 //! A material with both lobes picks one in proportion to an estimate of its
 //! reflectance and returns the mixture's density (one-sample MIS over the
@@ -28,7 +31,8 @@ use glam::Vec3;
 use super::direct::MaterialLanes;
 use super::fibre::Fibre;
 use super::lobes::Lobes;
-use super::pbr::{Pbr, MIN_COS_VIEW};
+use super::pbr::{Pbr, MIN_ALPHA, MIN_COS_VIEW};
+use super::sheen;
 use super::surface::SurfacePoint;
 use crate::util::color::luminance;
 use crate::util::simd::splat3;
@@ -69,10 +73,14 @@ pub struct Bsdf {
     /// what the glossy lobe samples and its density are computed from.
     wo: Vec3,
     glossy: Glossy,
-    /// Estimates of the diffuse and the glossy lobes' reflectance
-    /// (luminance), which choose between them.
+    /// A rough clear coat's GGX lobe, its alpha (docs/design.md §5.10):
+    /// a second glossy lobe, over the base's.
+    coat: Option<f32>,
+    /// Estimates of the diffuse (with a sheen's), the glossy and the
+    /// coat's lobes' reflectance (luminance), which choose among them.
     diffuse_weight: f32,
     glossy_weight: f32,
+    coat_weight: f32,
 }
 
 impl Bsdf {
@@ -84,11 +92,18 @@ impl Bsdf {
         let local = Vec3::new(sp.wo.dot(t), sp.wo.dot(b), sp.wo.dot(n));
         let wo = Vec3::new(local.x, local.y, local.z.max(MIN_COS_VIEW)).normalize_or(Vec3::Z);
         let m = sp.material;
+        let (mut coat, mut coat_weight) = (None, 0.0);
         let (glossy, diffuse_weight, glossy_weight) = match (&sp.fibre, &sp.pbr) {
             (Some(fibre), _) => (Glossy::Fibre(*fibre), 0.0, fibre.weight()),
             (None, Some(pbr)) => {
                 let glossy = if pbr.is_smooth() { Glossy::None } else { Glossy::Ggx { alpha: pbr.alpha } };
-                (glossy, luminance(sp.kd), ggx_weight(pbr, wo.z))
+                if pbr.clearcoat > 0.0 && !pbr.coat_is_smooth() {
+                    (coat, coat_weight) = (Some(pbr.clearcoat_alpha.max(MIN_ALPHA)), pbr.coat_blend(wo.z));
+                }
+                let under = pbr.base_weight(wo.z);
+                let sheen =
+                    luminance(pbr.sheen) * sheen::albedo(wo.z, pbr.sheen_roughness) * (1.0 - pbr.coat_blend(wo.z));
+                (glossy, luminance(sp.kd) * under + sheen, ggx_weight(pbr, wo.z) * under)
             }
             (None, None) if m.has_specular() => {
                 (Glossy::Phong { exponent: m.exponent, r: sp.r }, luminance(sp.kd), luminance(m.specular))
@@ -96,7 +111,8 @@ impl Bsdf {
             (None, None) => (Glossy::None, luminance(sp.kd), 0.0),
         };
         let glossy_weight = if matches!(glossy, Glossy::None) { 0.0 } else { glossy_weight };
-        Self { material: MaterialLanes::new(sp), t, b, n, wo, glossy, diffuse_weight, glossy_weight }
+        let material = MaterialLanes::new(sp);
+        Self { material, t, b, n, wo, glossy, coat, diffuse_weight, glossy_weight, coat_weight }
     }
 
     /// f cos of `lobes` towards unit `wi` (world space), per channel: the
@@ -108,28 +124,33 @@ impl Bsdf {
         Vec3::new(m[0].to_array()[0], m[1].to_array()[0], m[2].to_array()[0])
     }
 
-    /// The probability of sampling the glossy lobe among `lobes` (the
-    /// rest goes to the diffuse lobe); None when no lobe asked for
-    /// reflects anything.
-    fn glossy_probability(&self, lobes: Lobes) -> Option<f32> {
+    /// The probabilities of sampling the glossy lobe and the coat's among
+    /// `lobes` (the rest goes to the diffuse lobe); None when no lobe asked
+    /// for reflects anything.
+    fn glossy_probability(&self, lobes: Lobes) -> Option<(f32, f32)> {
         let diffuse = if lobes.diffuse { self.diffuse_weight } else { 0.0 };
         let glossy = if lobes.glossy { self.glossy_weight } else { 0.0 };
-        let sum = diffuse + glossy;
-        (sum > 0.0 && sum.is_finite()).then(|| glossy / sum)
+        let coat = if lobes.glossy { self.coat_weight } else { 0.0 };
+        let sum = diffuse + glossy + coat;
+        (sum > 0.0 && sum.is_finite()).then(|| (glossy / sum, coat / sum))
     }
 
     /// The density, per steradian, with which `sample(.., lobes)` draws
     /// unit `wi` (world space).
     #[must_use]
     pub fn pdf(&self, wi: Vec3, lobes: Lobes) -> f32 {
-        let Some(p_glossy) = self.glossy_probability(lobes) else { return 0.0 };
+        let Some((p_glossy, p_coat)) = self.glossy_probability(lobes) else { return 0.0 };
         let local = self.in_frame(wi);
         let mut pdf = 0.0;
-        if p_glossy < 1.0 {
-            pdf += (1.0 - p_glossy) * local.z.max(0.0) / PI;
+        let p_diffuse = 1.0 - p_glossy - p_coat;
+        if p_diffuse > 0.0 {
+            pdf += p_diffuse * local.z.max(0.0) / PI;
         }
         if p_glossy > 0.0 {
             pdf += p_glossy * self.glossy_pdf(wi, local);
+        }
+        if let Some(alpha) = self.coat.filter(|_| p_coat > 0.0) {
+            pdf += p_coat * ggx_pdf(self.wo, local, alpha);
         }
         pdf
     }
@@ -141,12 +162,18 @@ impl Bsdf {
     /// A direction below the surface may be drawn: its f cos is 0.
     #[must_use]
     pub fn sample(&self, u: [f32; 3], lobes: Lobes) -> Option<BsdfSample> {
-        let p_glossy = self.glossy_probability(lobes)?;
+        let (p_glossy, p_coat) = self.glossy_probability(lobes)?;
         if let Glossy::Fibre(fibre) = &self.glossy {
             let (wi, pdf) = fibre.sample(u)?;
             return Some(BsdfSample { wi, f_cos: self.eval(wi, lobes), pdf });
         }
-        let local = if u[0] < p_glossy { self.sample_glossy(u[1], u[2]) } else { cosine_hemisphere(u[1], u[2]) };
+        let local = match self.coat {
+            _ if u[0] < p_glossy => self.sample_glossy(u[1], u[2]),
+            Some(alpha) if u[0] < p_glossy + p_coat => {
+                reflect(self.wo, sample_visible_normal(self.wo, alpha, u[1], u[2]))
+            }
+            _ => cosine_hemisphere(u[1], u[2]),
+        };
         let wi = (self.t * local.x + self.b * local.y + self.n * local.z).normalize();
         let pdf = self.pdf(wi, lobes);
         (pdf > 0.0 && pdf.is_finite()).then(|| BsdfSample { wi, f_cos: self.eval(wi, lobes), pdf })
@@ -157,7 +184,7 @@ impl Bsdf {
     /// one to follow (docs/design.md §6.7).
     #[must_use]
     pub fn reflectance_weight(&self) -> f32 {
-        self.diffuse_weight + self.glossy_weight
+        self.diffuse_weight + self.glossy_weight + self.coat_weight
     }
 
     /// The solid angle its glossy lobe spreads over, steradians (None
@@ -167,12 +194,15 @@ impl Bsdf {
     /// is this times their density (docs/design.md §6.2).
     #[must_use]
     pub fn glossy_solid_angle(&self) -> Option<f32> {
-        match self.glossy {
+        let ggx = |alpha: f32| (4.0 * PI * alpha * alpha).min(2.0 * PI);
+        let base = match self.glossy {
             // A fibre's lobes wrap round it: every light sees them.
             Glossy::None | Glossy::Fibre(_) => None,
             Glossy::Phong { exponent, .. } => Some(2.0 * PI / (exponent + 1.0)),
-            Glossy::Ggx { alpha } => Some((4.0 * PI * alpha * alpha).min(2.0 * PI)),
-        }
+            Glossy::Ggx { alpha } => Some(ggx(alpha)),
+        };
+        // A coat's lobe too: the sharper of the two decides.
+        base.into_iter().chain(self.coat.map(ggx)).reduce(f32::min)
     }
 
     fn in_frame(&self, v: Vec3) -> Vec3 {
@@ -208,16 +238,20 @@ impl Bsdf {
                 let cos_alpha = r.dot(wi).max(0.0);
                 (exponent + 1.0) / (2.0 * PI) * cos_alpha.powf(exponent)
             }
-            Glossy::Ggx { alpha } => {
-                let h = (self.wo + local).normalize_or_zero();
-                if h.z <= 0.0 || self.wo.dot(h) <= 0.0 {
-                    return 0.0;
-                }
-                // pdf(wi) = D_wo(h) / (4 wo.h), D_wo(h) = G1(wo) wo.h D(h) / wo.z.
-                ggx_d(h, alpha) * smith_g1(self.wo.z, alpha) / (4.0 * self.wo.z)
-            }
+            Glossy::Ggx { alpha } => ggx_pdf(self.wo, local, alpha),
         }
     }
+}
+
+/// The density of GGX's visible normals reflected, from the view `wo`
+/// towards `local` (both in the shading frame), for roughness^2 `alpha`:
+/// D_wo(h) / (4 wo.h), D_wo(h) = G1(wo) wo.h D(h) / wo.z.
+fn ggx_pdf(wo: Vec3, local: Vec3, alpha: f32) -> f32 {
+    let h = (wo + local).normalize_or_zero();
+    if h.z <= 0.0 || wo.dot(h) <= 0.0 {
+        return 0.0;
+    }
+    ggx_d(h, alpha) * smith_g1(wo.z, alpha) / (4.0 * wo.z)
 }
 
 /// An estimate of a metallic-roughness specular lobe's reflectance (the

@@ -290,7 +290,7 @@ impl<'s> Geometry<'s> {
             sample: None,
             mirror: match (delta, pbr) {
                 (Some(delta), _) => delta.mirror,
-                (None, Some(p)) if p.is_smooth() => p.mirror_reflectance(n.dot(wo)),
+                (None, Some(p)) => p.mirror(n.dot(wo)),
                 _ => material.mirror,
             },
             transmission: delta.map_or(Vec3::ZERO, |d| d.transmission),

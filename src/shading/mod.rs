@@ -10,6 +10,7 @@ pub mod fibre;
 pub mod geometry;
 pub mod lobes;
 pub mod pbr;
+pub mod sheen;
 pub mod surface;
 
 pub use bsdf::{Bsdf, BsdfSample};

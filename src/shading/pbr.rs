@@ -16,6 +16,7 @@ use glam::Vec3;
 use wide::{f32x4, CmpGt};
 
 use super::lobes::Lobes;
+use super::sheen::{self, MIN_SHEEN_ROUGHNESS};
 use crate::scene::material::{PbrMaterial, TexCoords, DEFAULT_IOR};
 use crate::scene::texture::Texture;
 use crate::util::simd::{dot3, splat3, V3};
@@ -57,7 +58,20 @@ pub struct Pbr {
     /// a delta bounce (`Pbr::delta_lobes`), and taken out of the diffuse
     /// lobe the lights see.
     pub transmission: f32,
+    /// The clear coat's weight (KHR_materials_clearcoat, texture looked
+    /// up; 0 without a coat) and its alpha = roughness^2: below
+    /// [`MIN_ALPHA`] the coat is a perfect mirror (docs/design.md §5.10).
+    pub clearcoat: f32,
+    pub clearcoat_alpha: f32,
+    /// The sheen's colour (KHR_materials_sheen; black without one) and
+    /// roughness, at least `sheen::MIN_SHEEN_ROUGHNESS`.
+    pub sheen: Vec3,
+    pub sheen_roughness: f32,
 }
+
+/// IOR 1.5's reflectance at normal incidence: the clear coat's
+/// (KHR_materials_clearcoat fixes its IOR).
+const COAT_F0: f32 = 0.04;
 
 /// A transmitting dielectric's delta lobes towards one view
 /// (`Pbr::delta_lobes`): the mirror's reflectance, the transmitted
@@ -108,6 +122,10 @@ impl Pbr {
             f90: specular,
             ior,
             transmission: 0.0,
+            clearcoat: 0.0,
+            clearcoat_alpha: 0.0,
+            sheen: Vec3::ZERO,
+            sheen_roughness: 1.0,
         }
     }
 
@@ -135,7 +153,68 @@ impl Pbr {
             let texel = transmission.texture.map_or(1.0, |t| t.lookup(uvs, textures).x);
             pbr.transmission = (transmission.factor * texel).clamp(0.0, 1.0);
         }
+        if let Some(coat) = &material.clearcoat {
+            let weight = coat.texture.map_or(1.0, |t| t.lookup(uvs, textures).x);
+            let roughness = coat.roughness_texture.map_or(1.0, |t| t.lookup(uvs, textures).x);
+            pbr.clearcoat = (coat.factor * weight).clamp(0.0, 1.0);
+            pbr.clearcoat_alpha = (coat.roughness * roughness).clamp(0.0, 1.0).powi(2);
+        }
+        if let Some(sheen) = &material.sheen {
+            let colour = sheen.colour_texture.map_or(Vec3::ONE, |t| t.lookup(uvs, textures));
+            let roughness = sheen.roughness_texture.map_or(1.0, |t| t.lookup(uvs, textures).x);
+            pbr.sheen = (sheen.colour * colour).clamp(Vec3::ZERO, Vec3::ONE);
+            pbr.sheen_roughness = (sheen.roughness * roughness).clamp(MIN_SHEEN_ROUGHNESS, 1.0);
+        }
         pbr
+    }
+
+    /// The clear coat's Fresnel weight at the view, clearcoat x (0.04 +
+    /// 0.96 (1 - n.v)^5): the share of the light the coat reflects, which
+    /// the layers below lose (KHR_materials_clearcoat's fresnel_coat, its
+    /// Fresnel at n.v).
+    #[must_use]
+    pub fn coat_blend(&self, n_dot_v: f32) -> f32 {
+        if self.clearcoat == 0.0 {
+            return 0.0;
+        }
+        let x = 1.0 - n_dot_v.clamp(0.0, 1.0);
+        self.clearcoat * (COAT_F0 + (1.0 - COAT_F0) * (x * x * x * x * x))
+    }
+
+    /// What the sheen leaves the base towards a direction at `cos` to the
+    /// normal: 1 - max(sheen colour) E(cos) (the extension's albedo
+    /// scaling takes the smaller of the view's and the light's).
+    #[must_use]
+    pub fn sheen_scaling(&self, cos: f32) -> f32 {
+        let strongest = self.sheen.max_element();
+        if strongest == 0.0 {
+            return 1.0;
+        }
+        1.0 - strongest * sheen::albedo(cos, self.sheen_roughness)
+    }
+
+    /// What the layers over the base (coat, then sheen) leave of a base
+    /// lobe seen at `n_dot_v` and leaving in a direction at the same
+    /// cosine (the mirror's; a delta lobe's weight).
+    #[must_use]
+    pub fn base_weight(&self, n_dot_v: f32) -> f32 {
+        (1.0 - self.coat_blend(n_dot_v)) * self.sheen_scaling(n_dot_v)
+    }
+
+    /// Whether the clear coat is a perfect mirror (a coat whose alpha is
+    /// below [`MIN_ALPHA`]): traced as a mirror bounce, lit by no light.
+    #[must_use]
+    pub fn coat_is_smooth(&self) -> bool {
+        self.clearcoat > 0.0 && self.clearcoat_alpha < MIN_ALPHA
+    }
+
+    /// The reflectance of its perfect mirror seen at `n_dot_v`: a smooth
+    /// base's Fresnel term under the layers over it, plus a smooth coat's
+    /// weight; 0 where neither is smooth.
+    #[must_use]
+    pub fn mirror(&self, n_dot_v: f32) -> Vec3 {
+        let base = if self.is_smooth() { self.mirror_reflectance(n_dot_v) } else { Vec3::ZERO };
+        self.layered(base, n_dot_v)
     }
 
     /// Whether the specular lobe is a perfect mirror (alpha below
@@ -209,6 +288,7 @@ impl Pbr {
                 // The metal's share as it was; the dielectric's is all.
                 let mirror = self.mirror_of(Vec3::ONE, self.fresnel(cos_i).1);
                 let mirror = if self.is_smooth() { mirror.min(Vec3::ONE) } else { Vec3::ZERO };
+                let mirror = self.layered(mirror, cos_i);
                 return DeltaLobes { mirror, transmission: Vec3::ZERO, transmitted: -wo };
             }
             let cos_t = (1.0 - sin2_t).sqrt();
@@ -218,7 +298,15 @@ impl Pbr {
         let (f_d, f_m) = self.fresnel(cos_air);
         let transmission = self.base * (self.transmission * (1.0 - self.metallic) * (1.0 - f_d.max_element()));
         let mirror = if self.is_smooth() { self.mirror_of(f_d, f_m) } else { Vec3::ZERO };
-        DeltaLobes { mirror, transmission, transmitted }
+        let transmission = transmission * self.base_weight(cos_i);
+        DeltaLobes { mirror: self.layered(mirror, cos_i), transmission, transmitted }
+    }
+
+    /// A base mirror's reflectance `mirror` seen at `n_dot_v` under the
+    /// layers over it, plus a smooth coat's.
+    fn layered(&self, mirror: Vec3, n_dot_v: f32) -> Vec3 {
+        let coat = if self.coat_is_smooth() { self.coat_blend(n_dot_v) } else { 0.0 };
+        mirror * self.base_weight(n_dot_v) + Vec3::splat(coat)
     }
 }
 
@@ -288,6 +376,26 @@ pub struct PbrLanes {
     /// Whether the specular lobe is a lobe (false: a perfect mirror, which
     /// no light lights: its part of f is 0).
     pub glossy: bool,
+    /// What the clear coat leaves the layers below at this view: 1 - its
+    /// Fresnel weight (1 without a coat).
+    pub under_coat: f32x4,
+    /// A rough clear coat's lobe: its Fresnel weight at the view and its
+    /// alpha^2 (None without a coat, or for a smooth one: a mirror).
+    pub coat: Option<(f32x4, f32x4)>,
+    /// A sheen's lobe (None without one).
+    pub sheen: Option<SheenLanes>,
+}
+
+/// What a sheen's lobe needs at one shading point (docs/design.md §5.10).
+#[derive(Clone, Copy)]
+pub struct SheenLanes {
+    pub colour: Vec3,
+    /// max(colour): the albedo scaling's weight.
+    pub strongest: f32,
+    pub roughness: f32,
+    /// Lambda(n.v) and E(n.v).
+    pub lambda_v: f32,
+    pub albedo_v: f32,
 }
 
 impl PbrLanes {
@@ -305,6 +413,21 @@ impl PbrLanes {
             diffuse: splat3(pbr.base * ((1.0 - pbr.metallic) * (1.0 - pbr.transmission) / PI)),
             n_dot_v: n_dot_v.max(MIN_COS_VIEW),
             glossy: !pbr.is_smooth(),
+            under_coat: f32x4::splat(1.0 - pbr.coat_blend(n_dot_v)),
+            coat: (pbr.clearcoat > 0.0 && !pbr.coat_is_smooth()).then(|| {
+                let alpha = pbr.clearcoat_alpha.max(MIN_ALPHA);
+                (f32x4::splat(pbr.coat_blend(n_dot_v)), f32x4::splat(alpha * alpha))
+            }),
+            sheen: (pbr.sheen.max_element() > 0.0).then(|| {
+                let cos_v = n_dot_v.max(MIN_COS_VIEW);
+                SheenLanes {
+                    colour: pbr.sheen,
+                    strongest: pbr.sheen.max_element(),
+                    roughness: pbr.sheen_roughness,
+                    lambda_v: sheen::lambda(cos_v, pbr.sheen_roughness),
+                    albedo_v: sheen::albedo(cos_v, pbr.sheen_roughness),
+                }
+            }),
         }
     }
 
@@ -357,7 +480,91 @@ impl PbrLanes {
         let f_d = [0, 1, 2].map(|k| self.f0[k] + (self.f90 - self.f0[k]) * weight);
         let max_f = f_d[0].fast_max(f_d[1]).fast_max(f_d[2]);
         let diffuse_fresnel = if lobes.diffuse { f32x4::ONE - max_f } else { zero };
-        self.combine(l, specular, weight, diffuse_fresnel)
+        let base = self.combine(l, specular, weight, diffuse_fresnel);
+        if !self.is_layered() {
+            return base;
+        }
+        self.layers(base, l, sin2_h, lobes)
+    }
+
+    /// Whether a clear coat or a sheen lies over the base.
+    #[inline(always)]
+    #[must_use]
+    pub fn is_layered(&self) -> bool {
+        self.coat.is_some() || self.sheen.is_some() || self.under_coat.to_array()[0] != 1.0
+    }
+
+    /// The layers over the base lobes `base` (f cos, per channel), towards
+    /// directions at n.l `l` with half-vectors at sin^2 `sin2_h`
+    /// (KHR_materials_clearcoat over KHR_materials_sheen over the base;
+    /// docs/design.md §5.10):
+    ///
+    ///   f = (1 - c F_c(n.v)) (f_sheen + f_base min(1 - s E(n.v), 1 - s E(n.l)))
+    ///       + c F_c(n.v) D_c V_c
+    ///
+    /// with s = max(sheen colour), f_sheen the Charlie lobe (`sheen`) and
+    /// the coat's D and V GGX's of its own alpha. The sheen is a diffuse
+    /// lobe here (broad; drawn by the cosine), the coat a glossy one.
+    #[inline(never)]
+    fn layers(&self, base: V3, l: f32x4, sin2_h: f32x4, lobes: Lobes) -> V3 {
+        let (l_lanes, sin2_lanes) = (l.to_array(), sin2_h.to_array());
+        let mut scale = self.under_coat;
+        let mut sheen_f = [f32x4::ZERO; 3];
+        if let Some(sheen) = &self.sheen {
+            let per_lane =
+                |f: &dyn Fn(f32, f32) -> f32| f32x4::from([0, 1, 2, 3].map(|k| f(l_lanes[k], sin2_lanes[k])));
+            let scaling =
+                per_lane(&|l, _| 1.0 - sheen.strongest * sheen.albedo_v.max(sheen::albedo(l, sheen.roughness)));
+            scale *= scaling;
+            if lobes.diffuse {
+                let lobe = per_lane(&|l, s| sheen::f_cos(s, l, self.n_dot_v, sheen.lambda_v, sheen.roughness));
+                sheen_f = [0, 1, 2].map(|k| self.under_coat * f32x4::splat(sheen.colour[k]) * lobe);
+            }
+        }
+        let coat = match self.coat.filter(|_| lobes.glossy) {
+            Some((weight, alpha2)) => {
+                weight * distribution_of_sine(sin2_h, alpha2) * visibility_cos(l, self.n_dot_v, alpha2)
+            }
+            None => f32x4::ZERO,
+        };
+        [0, 1, 2].map(|k| base[k] * scale + sheen_f[k] + coat)
+    }
+
+    /// The same layers' bound over directions whose n.l is at most `l`
+    /// and whose half-vectors' n.h is at most `n_dot_h` (the cut's bound,
+    /// docs/design.md §8.3): the base's bound `base` times 1 - c F_c(n.v)
+    /// and 1 - s E(n.v) (the smaller of the scalings is at most it), the
+    /// sheen's peak D over (4 n.v (1 + Lambda(n.v) + Lambda(l))) (Lambda
+    /// falls with the cosine), the coat's D and V at the bounding cosines,
+    /// each a little enlarged for roundings.
+    #[inline(never)]
+    #[must_use]
+    pub fn layers_bound(&self, base: V3, l: f32x4, n_dot_h: f32x4, lobes: Lobes) -> V3 {
+        const SLACK: f32 = 1.0 + 1e-3;
+        let mut scale = self.under_coat * f32x4::splat(SLACK);
+        let mut sheen_f = [f32x4::ZERO; 3];
+        if let Some(sheen) = &self.sheen {
+            scale *= f32x4::splat(1.0 - sheen.strongest * sheen.albedo_v);
+            if lobes.diffuse {
+                let peak = sheen::peak_distribution(sheen.roughness);
+                let lobe = f32x4::from(l.to_array().map(|l| {
+                    let view = 4.0 * self.n_dot_v * (1.0 + sheen.lambda_v + sheen::lambda(l, sheen.roughness));
+                    if l > 0.0 {
+                        SLACK * peak / view
+                    } else {
+                        0.0
+                    }
+                }));
+                sheen_f = [0, 1, 2].map(|k| self.under_coat * f32x4::splat(sheen.colour[k]) * lobe);
+            }
+        }
+        let coat = match self.coat.filter(|_| lobes.glossy) {
+            Some((weight, alpha2)) => {
+                weight * distribution(n_dot_h, alpha2) * visibility_cos(l, self.n_dot_v, alpha2) * f32x4::splat(SLACK)
+            }
+            None => f32x4::ZERO,
+        };
+        [0, 1, 2].map(|k| base[k] * scale + sheen_f[k] + coat)
     }
 }
 
@@ -385,7 +592,41 @@ mod tests {
         let f_m = base + (glam::DVec3::ONE - base) * w;
         let dielectric = base / std::f64::consts::PI * (1.0 - f_d.max_element()) + f_d * d * vis;
         let metal = f_m * d * vis;
-        ((dielectric * (1.0 - m) + metal * m) * nl).to_array()
+        let f_base = dielectric * (1.0 - m) + metal * m;
+        // KHR_materials_sheen's and KHR_materials_clearcoat's layers.
+        let r = p.sheen_roughness;
+        let e = |cos: f64| f64::from(sheen::albedo(cos as f32, r));
+        let s = f64::from(p.sheen.max_element());
+        let scaling = (1.0 - s * e(nv)).min(1.0 - s * e(nl));
+        let charlie = (2.0 + 1.0 / f64::from(r)) * (1.0 - nh * nh).max(0.0).powf(0.5 / f64::from(r))
+            / (2.0 * std::f64::consts::PI);
+        let lambda = |cos: f64| f64::from(sheen::lambda(cos as f32, r));
+        let f_sheen = p.sheen.as_dvec3() * charlie / ((1.0 + lambda(nv) + lambda(nl)) * 4.0 * nv * nl);
+        let blend = f64::from(p.clearcoat) * (0.04 + 0.96 * (1.0 - nv).powi(5));
+        let ac2 = f64::from(p.clearcoat_alpha.max(MIN_ALPHA)).powi(2);
+        let d_coat = ac2 / (std::f64::consts::PI * (nh * nh * (ac2 - 1.0) + 1.0).powi(2));
+        let vis_coat = 0.5 / (nl * (nv * nv * (1.0 - ac2) + ac2).sqrt() + nv * (nl * nl * (1.0 - ac2) + ac2).sqrt());
+        let coat = if p.coat_is_smooth() { 0.0 } else { blend * d_coat * vis_coat };
+        (((f_sheen + f_base * scaling) * (1.0 - blend) + glam::DVec3::splat(coat)) * nl).to_array()
+    }
+
+    /// A base of random parameters with, half the time each, a clear coat
+    /// (rough, at times smooth) and a sheen.
+    fn random_pbr(rng: &mut Rng) -> Pbr {
+        let base = Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32());
+        let metallic = [0.0, 1.0, rng.next_f32()][rng.below(3) as usize];
+        let roughness = rng.range_f32(0.1, 1.0);
+        let specular_colour = Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * 2.0;
+        let mut p = Pbr::new(base, metallic, roughness, rng.next_f32(), specular_colour);
+        if rng.next_f32() < 0.5 {
+            p.clearcoat = rng.next_f32();
+            p.clearcoat_alpha = [0.0, 0.01, rng.range_f32(0.1, 1.0)][rng.below(3) as usize];
+        }
+        if rng.next_f32() < 0.5 {
+            p.sheen = Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32());
+            p.sheen_roughness = rng.range_f32(MIN_SHEEN_ROUGHNESS, 1.0);
+        }
+        p
     }
 
     fn unit(rng: &mut Rng) -> Vec3 {
@@ -402,11 +643,7 @@ mod tests {
         let mut rng = Rng::seeded(5);
         let mut worst = 0.0f64;
         for _ in 0..20_000 {
-            let base = Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32());
-            let metallic = [0.0, 1.0, rng.next_f32()][rng.below(3) as usize];
-            let roughness = rng.range_f32(0.1, 1.0);
-            let specular_colour = Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * 2.0;
-            let p = Pbr::new(base, metallic, roughness, rng.next_f32(), specular_colour);
+            let p = random_pbr(&mut rng);
             let n = unit(&mut rng);
             let (mut wo, mut wi) = (unit(&mut rng), unit(&mut rng));
             if wo.dot(n) < 0.05 {
@@ -436,9 +673,31 @@ mod tests {
     /// 1 - 0.958 ln(1.958 / 0.958) = 0.315, which the integral must find.
     #[test]
     fn the_hemispherical_reflectance_is_at_most_one() {
+        let coated = |metallic: f32, roughness: f32, coat_alpha: f32| Pbr {
+            clearcoat: 1.0,
+            clearcoat_alpha: coat_alpha,
+            ..Pbr::new(Vec3::ONE, metallic, roughness, 1.0, Vec3::ONE)
+        };
+        let sheen = |roughness: f32, sheen_roughness: f32| Pbr {
+            sheen: Vec3::ONE,
+            sheen_roughness,
+            ..Pbr::new(Vec3::ONE, 0.0, roughness, 1.0, Vec3::ONE)
+        };
+        let plain = |metallic: f32, roughness: f32| Pbr::new(Vec3::ONE, metallic, roughness, 1.0, Vec3::ONE);
+        let cases = [
+            (plain(0.0, 0.5), 0.8),
+            (plain(0.0, 1.0), 0.8),
+            (plain(1.0, 0.3), 0.9),
+            (plain(1.0, 1.0), 0.3),
+            (coated(0.0, 0.5, 0.05), 0.8),
+            (coated(1.0, 0.3, 0.3), 0.85),
+            (sheen(0.5, 0.3), 0.8),
+            (sheen(0.5, 1.0), 0.8),
+            (Pbr { clearcoat: 1.0, clearcoat_alpha: 0.1, ..sheen(0.8, MIN_SHEEN_ROUGHNESS) }, 0.8),
+        ];
         let n = Vec3::Z;
-        for (metallic, roughness, least) in [(0.0, 0.5, 0.8), (0.0, 1.0, 0.8), (1.0, 0.3, 0.9), (1.0, 1.0, 0.3)] {
-            let p = Pbr::new(Vec3::ONE, metallic, roughness, 1.0, Vec3::ONE);
+        for (p, least) in cases {
+            let (metallic, roughness) = (p.metallic, p.alpha.sqrt());
             let wo = Vec3::new(0.3, 0.0, 1.0).normalize();
             let lanes = PbrLanes::new(&p, n.dot(wo));
             // Midpoint rule: f cos dw = (f cos) d(cos theta) d(phi).
@@ -455,7 +714,10 @@ mod tests {
                 }
             }
             let albedo = sum / f64::from(steps) * (2.0 * std::f64::consts::PI / f64::from(steps));
-            assert!((least..=1.01).contains(&albedo), "metallic {metallic}, roughness {roughness}: albedo {albedo}");
+            assert!(
+                (least..=1.01).contains(&albedo),
+                "metallic {metallic}, roughness {roughness}, {p:?}: albedo {albedo}"
+            );
         }
     }
 }

@@ -136,10 +136,11 @@ impl SurfacePoint<'_> {
             return 2.0;
         }
         if let Some(pbr) = &self.pbr {
-            if pbr.is_smooth() {
-                return -1.0;
-            }
-            let a = pbr.alpha * pbr.alpha * (ratio.sqrt() - 1.0);
+            // The sharpest of its glossy lobes (the base's, a rough coat's).
+            let base = (!pbr.is_smooth()).then_some(pbr.alpha);
+            let coat = (pbr.clearcoat > 0.0 && !pbr.coat_is_smooth()).then_some(pbr.clearcoat_alpha);
+            let Some(alpha) = base.into_iter().chain(coat).reduce(f32::min) else { return -1.0 };
+            let a = alpha * alpha * (ratio.sqrt() - 1.0);
             return (1.0 - a) / (1.0 + a);
         }
         let material = self.material;

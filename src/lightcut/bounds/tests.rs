@@ -100,14 +100,40 @@ fn pbr_material(rng: &mut Rng) -> Material {
         (factor, Vec3::new(edge(rng, top), edge(rng, top), edge(rng, top)))
     };
     let albedo = Albedo::Constant(Vec3::new(edge(rng, 1.0), edge(rng, 1.0), edge(rng, 1.0)));
+    let (clearcoat, sheen) = layers(roughness, metallic);
     Material {
         pbr: Some(crate::scene::material::PbrMaterial {
             specular,
             specular_colour,
+            clearcoat,
+            sheen,
             ..crate::scene::material::PbrMaterial::untextured(metallic, roughness)
         }),
         ..Material::diffuse("pbr", albedo)
     }
+}
+
+/// A clear coat (smooth or rough, docs/design.md §5.10) on about half the
+/// materials and a sheen on about half, drawn from their own stream (seeded
+/// by the base's draws) so that the other draws stay as they were.
+fn layers(
+    roughness: f32,
+    metallic: f32,
+) -> (Option<crate::scene::material::Clearcoat>, Option<crate::scene::material::Sheen>) {
+    let mut rng = Rng::seeded(u64::from(roughness.to_bits()) << 32 | u64::from(metallic.to_bits()));
+    let clearcoat = (rng.next_f32() < 0.5).then(|| crate::scene::material::Clearcoat {
+        factor: edge(&mut rng, 1.0).max(0.01),
+        texture: None,
+        roughness: [0.0, 0.05, 0.3, 1.0, rng.next_f32()][rng.below(5) as usize],
+        roughness_texture: None,
+    });
+    let sheen = (rng.next_f32() < 0.5).then(|| crate::scene::material::Sheen {
+        colour: Vec3::new(edge(&mut rng, 1.0), edge(&mut rng, 1.0), edge(&mut rng, 1.0)).max(Vec3::splat(0.01)),
+        colour_texture: None,
+        roughness: [0.0, 0.3, 1.0, rng.next_f32()][rng.below(4) as usize],
+        roughness_texture: None,
+    });
+    (clearcoat, sheen)
 }
 
 fn surface<'m>(rng: &mut Rng, material: &'m Material) -> SurfacePoint<'m> {

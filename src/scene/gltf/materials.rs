@@ -9,7 +9,9 @@ use gltf::texture::{MagFilter, WrappingMode};
 
 use super::Importer;
 use crate::scene::image::{Encoding, RgbImage};
-use crate::scene::material::{Albedo, Cutout, Material, NormalMap, PbrMaterial, TextureRef, Transmission, DEFAULT_IOR};
+use crate::scene::material::{
+    Albedo, Clearcoat, Cutout, Material, NormalMap, PbrMaterial, Sheen, TextureRef, Transmission, DEFAULT_IOR,
+};
 use crate::scene::texels::Texels;
 use crate::scene::texture::{Filter, Texture, Wrap};
 use crate::scene::SceneError;
@@ -90,6 +92,8 @@ impl Importer<'_, '_> {
         let cutout = self.cutout(&m, &location, coverage, base.w)?;
         let (emission, emissive_texture) = self.emission(&m, &location)?;
         let (ior, transmission) = self.transmission(&m, &location, roughness)?;
+        let clearcoat = self.clearcoat(&m, &location)?;
+        let sheen = self.sheen(&m, &location)?;
         // KHR_materials_volume: "doubleSided has no effect on volume
         // boundaries": a refracted ray meets the solid's inside.
         let solid = transmission.as_ref().is_some_and(|t| !t.thin_walled);
@@ -111,6 +115,8 @@ impl Importer<'_, '_> {
                 normal_map,
                 ior,
                 transmission,
+                clearcoat,
+                sheen,
             }),
             unlit: m.unlit(),
             culls_back_faces: !m.double_sided() && !solid,
@@ -270,6 +276,105 @@ impl Importer<'_, '_> {
             transmission.attenuation_distance = distance;
         }
         Ok((ior, Some(transmission)))
+    }
+
+    /// KHR_materials_clearcoat's layer (docs/design.md §5.10), None without
+    /// the extension or at a factor of 0 without a texture. The coat
+    /// follows the base's shading normal: its own normal texture is not
+    /// read (warned).
+    fn clearcoat(&mut self, m: &gltf::Material<'_>, location: &str) -> Result<Option<Clearcoat>, SceneError> {
+        const NAME: &str = "KHR_materials_clearcoat";
+        let Some(json) = m.extension_value(NAME) else { return Ok(None) };
+        let at = format!("{location}.extensions.{NAME}");
+        let factor = self.unit_factor(json, &at, "clearcoatFactor", 0.0)?;
+        let roughness = self.unit_factor(json, &at, "clearcoatRoughnessFactor", 0.0)?;
+        // The factors are the textures' red and green channels (linear).
+        let texture =
+            self.extension_texture(json, &at, "clearcoatTexture", Encoding::Linear, |t, _| Vec3::splat(t.x))?;
+        let roughness_texture =
+            self.extension_texture(json, &at, "clearcoatRoughnessTexture", Encoding::Linear, |t, _| Vec3::splat(t.y))?;
+        if json.get("clearcoatNormalTexture").is_some() {
+            self.warn(&format!("{at}.clearcoatNormalTexture"), "not read: the coat follows the base's shading normal");
+        }
+        if factor == 0.0 {
+            return Ok(None);
+        }
+        Ok(Some(Clearcoat { factor, texture, roughness, roughness_texture }))
+    }
+
+    /// KHR_materials_sheen's layer (docs/design.md §5.10), None without the
+    /// extension or with a black colour factor (the extension: "the whole
+    /// sheen layer is disabled").
+    fn sheen(&mut self, m: &gltf::Material<'_>, location: &str) -> Result<Option<Sheen>, SceneError> {
+        const NAME: &str = "KHR_materials_sheen";
+        let Some(json) = m.extension_value(NAME) else { return Ok(None) };
+        let at = format!("{location}.extensions.{NAME}");
+        let colour = match json.get("sheenColorFactor") {
+            None => Vec3::ZERO,
+            Some(value) => match serde_json::from_value::<[f32; 3]>(value.clone()) {
+                Ok(c) if c.iter().all(|c| (0.0..=1.0).contains(c)) => Vec3::from_array(c),
+                _ => return Err(self.error(format!("{at}.sheenColorFactor"), "must be three numbers between 0 and 1")),
+            },
+        };
+        let roughness = self.unit_factor(json, &at, "sheenRoughnessFactor", 0.0)?;
+        let colour_texture = self.extension_texture(json, &at, "sheenColorTexture", Encoding::Srgb, |t, _| t)?;
+        // The roughness is the texture's alpha channel (linear).
+        let roughness_texture =
+            self.extension_texture(json, &at, "sheenRoughnessTexture", Encoding::Linear, |_, a| Vec3::splat(a))?;
+        if colour == Vec3::ZERO {
+            return Ok(None);
+        }
+        Ok(Some(Sheen { colour, colour_texture, roughness, roughness_texture }))
+    }
+
+    /// A factor between 0 and 1 of an extension's JSON (`default` where
+    /// absent), or an error naming the field.
+    fn unit_factor(&self, json: &serde_json::Value, at: &str, field: &str, default: f32) -> Result<f32, SceneError> {
+        match json.get(field) {
+            None => Ok(default),
+            Some(value) => match value.as_f64() {
+                Some(x) if (0.0..=1.0).contains(&x) => Ok(x as f32),
+                _ => Err(self.error(format!("{at}.{field}"), format!("must be a number between 0 and 1, got {value}"))),
+            },
+        }
+    }
+
+    /// A texture info of an extension's JSON (`index`, `texCoord`, and its
+    /// KHR_texture_transform), read as [`Importer::texture`] reads the
+    /// core's; None where absent or unreadable (warned).
+    fn extension_texture(
+        &mut self,
+        json: &serde_json::Value,
+        at: &str,
+        field: &str,
+        encoding: Encoding,
+        map: impl Fn(Vec3, f32) -> Vec3,
+    ) -> Result<Option<TextureRef>, SceneError> {
+        let Some(info) = json.get(field) else { return Ok(None) };
+        let at = format!("{at}.{field}");
+        let index = info.get("index").and_then(serde_json::Value::as_u64);
+        let texture = index.and_then(|i| self.doc.textures().nth(usize::try_from(i).ok()?));
+        let Some(texture) = texture else {
+            return Err(self.error(format!("{at}.index"), "must name one of the file's textures"));
+        };
+        let tex_coord = match info.get("texCoord") {
+            None => 0,
+            Some(value) => match value.as_u64().and_then(|t| u32::try_from(t).ok()) {
+                Some(t) => t,
+                None => return Err(self.error(format!("{at}.texCoord"), "must be a non-negative integer")),
+            },
+        };
+        const KHR: &str = "KHR_texture_transform";
+        let transform = match info.get("extensions").and_then(|e| e.get(KHR)) {
+            None => None,
+            Some(value) => {
+                let t: gltf::json::extensions::texture::TextureTransform = serde_json::from_value(value.clone())
+                    .map_err(|_| self.error(format!("{at}.extensions.{KHR}"), "is malformed"))?;
+                Some(KhrTextureTransform::from(&t))
+            }
+        };
+        let slot = Slot { texture, tex_coord, transform };
+        Ok(self.texture(slot, &at, encoding, map)?.map(|(t, _)| t))
     }
 
     /// The emitted radiance (emissiveFactor x KHR_materials_emissive_strength,

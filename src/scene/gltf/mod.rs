@@ -31,10 +31,12 @@ use super::{MAX_IMPORT_INSTANCES as MAX_INSTANCES, MAX_IMPORT_TRIANGLES as MAX_T
 /// Extensions whose absence from the renderer changes nothing it draws
 /// (when merely used) and which it implements; anything else listed in
 /// `extensionsRequired` is refused by name.
-const IMPLEMENTED: [&str; 10] = [
+const IMPLEMENTED: [&str; 12] = [
     "KHR_lights_punctual",
+    "KHR_materials_clearcoat",
     "KHR_materials_emissive_strength",
     "KHR_materials_ior",
+    "KHR_materials_sheen",
     "KHR_materials_specular",
     "KHR_materials_transmission",
     "KHR_materials_unlit",
@@ -46,9 +48,7 @@ const IMPLEMENTED: [&str; 10] = [
 
 /// Extensions the renderer knows but does not implement, with what a
 /// render of a file that uses them does instead (named once on stderr).
-const IGNORED: [(&str, &str); 12] = [
-    ("KHR_materials_clearcoat", "the base layer alone, no clear coat"),
-    ("KHR_materials_sheen", "no sheen"),
+const IGNORED: [(&str, &str); 10] = [
     ("KHR_materials_iridescence", "no thin-film iridescence"),
     ("KHR_materials_anisotropy", "isotropic roughness"),
     ("KHR_materials_dispersion", "no dispersion"),

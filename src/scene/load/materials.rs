@@ -10,7 +10,7 @@ use glam::{Affine2, Vec2, Vec3};
 use super::Validator;
 use crate::scene::file::{MaterialKind, MaterialSpec, SceneFile};
 use crate::scene::image::{self, Encoding};
-use crate::scene::material::{PbrMaterial, TextureRef, Transmission, DEFAULT_IOR};
+use crate::scene::material::{Clearcoat, PbrMaterial, Sheen, TextureRef, Transmission, DEFAULT_IOR};
 use crate::scene::texture::Texture;
 use crate::scene::{Albedo, Material, SceneError};
 
@@ -64,6 +64,10 @@ pub(super) fn materials(
             ("thin_walled", m.thin_walled),
             ("attenuation_colour", m.attenuation_colour.is_some()),
             ("attenuation_distance", m.attenuation_distance.is_some()),
+            ("clearcoat", m.clearcoat.is_some()),
+            ("clearcoat_roughness", m.clearcoat_roughness.is_some()),
+            ("sheen_colour", m.sheen_colour.is_some()),
+            ("sheen_roughness", m.sheen_roughness.is_some()),
         ] {
             v.check(!given, &field(name), || "only a type = \"pbr\" material has it".to_string())?;
         }
@@ -120,7 +124,53 @@ fn pbr(
     let ior = m.ior.unwrap_or(DEFAULT_IOR);
     v.check(ior.is_finite() && ior >= 1.0, &field("ior"), || format!("must be at least 1, got {ior}"))?;
     let transmission = transmission(v, m, field)?;
-    Ok(PbrMaterial { metallic_roughness, ior, transmission, ..PbrMaterial::untextured(metallic, roughness) })
+    let (clearcoat, sheen) = layers(v, m, field)?;
+    Ok(PbrMaterial {
+        metallic_roughness,
+        ior,
+        transmission,
+        clearcoat,
+        sheen,
+        ..PbrMaterial::untextured(metallic, roughness)
+    })
+}
+
+/// A `type = "pbr"` material's clear coat and sheen (docs/design.md
+/// §5.10), each None unless its weight or colour is given and above 0;
+/// a roughness without its layer refused.
+fn layers(
+    v: &Validator<'_>,
+    m: &MaterialSpec,
+    field: &impl Fn(&str) -> String,
+) -> Result<(Option<Clearcoat>, Option<Sheen>), SceneError> {
+    let unit = |value: Option<f32>, name: &str| -> Result<f32, SceneError> {
+        let value = value.unwrap_or(0.0);
+        v.check(value.is_finite() && (0.0..=1.0).contains(&value), &field(name), || {
+            format!("must be between 0 and 1, got {value}")
+        })?;
+        Ok(value)
+    };
+    let factor = unit(m.clearcoat, "clearcoat")?;
+    let roughness = unit(m.clearcoat_roughness, "clearcoat_roughness")?;
+    v.check(factor > 0.0 || m.clearcoat_roughness.is_none(), &field("clearcoat_roughness"), || {
+        "only a material with clearcoat above 0 has it".into()
+    })?;
+    let colour = match m.sheen_colour {
+        Some(c) => v.unit_rgb(c, &field("sheen_colour"))?,
+        None => Vec3::ZERO,
+    };
+    let sheen_roughness = unit(m.sheen_roughness, "sheen_roughness")?;
+    v.check(colour != Vec3::ZERO || m.sheen_roughness.is_none(), &field("sheen_roughness"), || {
+        "only a material with a sheen_colour above 0 has it".into()
+    })?;
+    let clearcoat = (factor > 0.0).then_some(Clearcoat { factor, texture: None, roughness, roughness_texture: None });
+    let sheen = (colour != Vec3::ZERO).then_some(Sheen {
+        colour,
+        colour_texture: None,
+        roughness: sheen_roughness,
+        roughness_texture: None,
+    });
+    Ok((clearcoat, sheen))
 }
 
 /// A `type = "pbr"` material's transmission (docs/design.md §5.8): None

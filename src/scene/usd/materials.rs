@@ -17,7 +17,7 @@ use super::geometry::Located;
 use super::schema::Reader;
 use super::stage::{Asset, Stage};
 use crate::scene::image::{self, Encoding, RgbImage};
-use crate::scene::material::{Albedo, Cutout, Material, NormalMap, PbrMaterial, TextureRef};
+use crate::scene::material::{Albedo, Clearcoat, Cutout, Material, NormalMap, PbrMaterial, TextureRef};
 use crate::scene::texels::{Coverage, Texels};
 use crate::scene::texture::{Filter, Texture, Wrap};
 
@@ -563,11 +563,7 @@ impl<'s> Materials<'s> {
             pbr.normal_map = Some(NormalMap { texture: r.texture, transform: r.transform, scale: 1.0, set: 0 });
         }
         material.cutout = self.cutout(shader, textures, warnings)?;
-        if matches!(input(self, "clearcoat")?, Source::Texture(_))
-            || matches!(input(self, "clearcoat")?, Source::Value(v) if v.x > 0.0)
-        {
-            warnings.push(format!("{shader}: clearcoat is not implemented: the base layer alone"));
-        }
+        pbr.clearcoat = self.clearcoat(shader, textures)?;
         if matches!(input(self, "displacement")?, Source::Texture(_)) {
             warnings.push(format!("{shader}: displacement is not implemented"));
         }
@@ -578,6 +574,23 @@ impl<'s> Materials<'s> {
             colour_primvar: colour_primvar.map(|(name, fallback)| (name, fallback.truncate().as_vec3())),
             primvars: std::mem::take(&mut self.primvar_reads),
         })
+    }
+
+    /// UsdPreviewSurface's clear coat (`clearcoat`, a white second
+    /// specular lobe, and `clearcoatRoughness`), as KHR_materials_clearcoat's
+    /// layer of IOR 1.5 (docs/design.md §5.10); None at a clearcoat of 0.
+    fn clearcoat(&mut self, shader: &str, textures: &mut Vec<Texture>) -> Result<Option<Clearcoat>, Located> {
+        let input = |this: &mut Self, name: &str| this.input(shader, "UsdPreviewSurface", name);
+        let (factor, texture) = match input(self, "clearcoat")? {
+            Source::Value(v) if v.x <= 0.0 => return Ok(None),
+            Source::Value(v) => (v.x.min(1.0) as f32, None),
+            Source::Texture(t) => (1.0, Some(self.texture(&[&t], false, false, textures)?)),
+        };
+        let (roughness, roughness_texture) = match input(self, "clearcoatRoughness")? {
+            Source::Value(v) => (v.x.clamp(0.0, 1.0) as f32, None),
+            Source::Texture(t) => (1.0, Some(self.texture(&[&t], false, false, textures)?)),
+        };
+        Ok(Some(Clearcoat { factor, texture, roughness, roughness_texture }))
     }
 
     /// The specular layer: UsdPreviewSurface's specularColor as F0 in the

@@ -94,6 +94,7 @@ const FALLBACKS: &[(&str, &str, Fallback)] = {
         ("UsdPreviewSurface", "inputs:metallic", Number(0.0)),
         ("UsdPreviewSurface", "inputs:roughness", Number(0.5)),
         ("UsdPreviewSurface", "inputs:clearcoat", Number(0.0)),
+        ("UsdPreviewSurface", "inputs:clearcoatRoughness", Number(0.01)),
         ("UsdPreviewSurface", "inputs:opacity", Number(1.0)),
         ("UsdPreviewSurface", "inputs:opacityThreshold", Number(0.0)),
         ("UsdPreviewSurface", "inputs:ior", Number(1.5)),

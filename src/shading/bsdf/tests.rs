@@ -239,6 +239,25 @@ fn materials() -> Vec<(String, Material)> {
     }
     list.push(("black dielectric, roughness 0.1".into(), gltf(Vec3::ZERO, 0.0, 0.1)));
     list.push(("half metal, roughness 0.3".into(), gltf(Vec3::new(0.9, 0.6, 0.3), 0.5, 0.3)));
+    for (coat, coat_roughness, sheen, sheen_roughness) in
+        [(1.0, 0.1, 0.0, 0.0), (0.6, 0.4, 0.0, 0.0), (0.0, 0.0, 0.9, 0.3), (0.0, 0.0, 1.0, 1.0), (1.0, 0.2, 0.7, 0.5)]
+    {
+        let mut m = gltf(Vec3::new(0.2, 0.4, 0.8), 0.0, 0.5);
+        let pbr = m.pbr.as_mut().expect("a pbr material");
+        pbr.clearcoat = (coat > 0.0).then_some(crate::scene::material::Clearcoat {
+            factor: coat,
+            texture: None,
+            roughness: coat_roughness,
+            roughness_texture: None,
+        });
+        pbr.sheen = (sheen > 0.0).then_some(crate::scene::material::Sheen {
+            colour: Vec3::new(sheen, 0.5 * sheen, 0.2),
+            colour_texture: None,
+            roughness: sheen_roughness,
+            roughness_texture: None,
+        });
+        list.push((format!("coat {coat} ({coat_roughness}), sheen {sheen} ({sheen_roughness})"), m));
+    }
     list
 }
 
