@@ -1206,7 +1206,10 @@ fn a_clearcoat_reflects_its_fresnel_weight_and_covers_the_rest() {
         let path = stage(&format!("{name}.usda"), inputs);
         means(&render(&path, &dir.path(&format!("{name}.exr")), &["--resolution", "8x8", "--spp", "16"]))[1]
     };
-    let sky = mean("mirror", "color3f inputs:diffuseColor = (1, 1, 1)\n float inputs:metallic = 1\n float inputs:roughness = 0");
+    let sky = mean(
+        "mirror",
+        "color3f inputs:diffuseColor = (1, 1, 1)\n float inputs:metallic = 1\n float inputs:roughness = 0",
+    );
     let grey = "color3f inputs:diffuseColor = (0.5, 0.5, 0.5)\n float inputs:roughness = 0.7";
     let bare = mean("bare", grey);
     let coated = mean("coated", &format!("{grey}\n float inputs:clearcoat = 1"));

@@ -122,6 +122,9 @@ struct GgxBounds {
     back: Frame,
     /// 1 - max(f0): the diffuse part's largest weight (F >= f0).
     diffuse_fresnel: f32x4,
+    /// A rough clear coat's frames around its normal and its mirror
+    /// direction (docs/design.md §5.10), where its lobe is bounded.
+    coat: Option<(Frame, Frame)>,
 }
 
 /// What a gather cluster's bounds know of its points' materials
@@ -208,11 +211,17 @@ impl PointBounds {
             cluster: None,
             normal: Frame::splat(sp.n),
             phong: m.has_specular().then(|| (Frame::splat(sp.r), m.exponent)),
-            ggx: sp.pbr.map(|pbr| GgxBounds {
-                lanes: PbrLanes::new(&pbr, sp.n.dot(sp.wo)),
-                mirror: Frame::splat(sp.r),
-                back: Frame::splat(-sp.wo),
-                diffuse_fresnel: f32x4::splat(1.0 - pbr.f0.max_element()),
+            ggx: sp.pbr.map(|pbr| {
+                let lanes = PbrLanes::new(&pbr, sp.n.dot(sp.wo), sp.coat_n, sp.coat_cos_view());
+                GgxBounds {
+                    lanes,
+                    mirror: Frame::splat(sp.r),
+                    back: Frame::splat(-sp.wo),
+                    diffuse_fresnel: f32x4::splat(1.0 - pbr.f0.max_element()),
+                    coat: lanes.coat.map(|_| {
+                        (Frame::splat(sp.coat_n), Frame::splat(crate::scene::material::reflect(sp.wo, sp.coat_n)))
+                    }),
+                }
             }),
             fibre: sp.fibre.map(|f| {
                 let peak = f.peak();
@@ -333,7 +342,15 @@ impl PointBounds {
         let specular = if lobes.glossy && lanes.glossy { specular } else { zero };
         let diffuse_fresnel = if lobes.diffuse { ggx.diffuse_fresnel } else { zero };
         let m = lanes.combine(cos_theta, specular, schlick_weight(v_dot_h), diffuse_fresnel);
-        let m = if lanes.is_layered() { lanes.layers_bound(m, cos_theta, n_dot_h, lobes) } else { m };
+        let m = if lanes.is_layered() {
+            // The coat's cosines about its own normal, as the base's.
+            let coat = ggx.coat.as_ref().map_or((zero, zero), |(normal, mirror)| {
+                (normal.cos_bound(c, h), slack((f32x4::splat(0.5) * (one + mirror.cos_bound(c, h))).sqrt()))
+            });
+            lanes.layers_bound(m, cos_theta, coat, lobes)
+        } else {
+            m
+        };
         let weighted = dot3(&[m[0] * self.luminance[0], m[1] * self.luminance[1], m[2] * self.luminance[2]], intensity);
         (cos_theta.cmp_gt(zero).blend(one, zero), weighted)
     }

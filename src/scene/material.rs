@@ -152,6 +152,10 @@ pub struct Clearcoat {
     /// `clearcoatRoughnessTexture`'s green channel (in all three).
     pub roughness: f32,
     pub roughness_texture: Option<TextureRef>,
+    /// `clearcoatNormalTexture`: the coat's own normal map. Without one
+    /// the coat is smooth over a normal-mapped base: its normal is the
+    /// interpolated one, as the extension says.
+    pub normal_map: Option<NormalMap>,
 }
 
 /// A sheen over the base (KHR_materials_sheen; docs/design.md §5.10):

@@ -73,9 +73,9 @@ pub struct Bsdf {
     /// what the glossy lobe samples and its density are computed from.
     wo: Vec3,
     glossy: Glossy,
-    /// A rough clear coat's GGX lobe, its alpha (docs/design.md §5.10):
-    /// a second glossy lobe, over the base's.
-    coat: Option<f32>,
+    /// A rough clear coat's GGX lobe (docs/design.md §5.10): a second
+    /// glossy lobe, over the base's, about its own normal.
+    coat: Option<CoatLobe>,
     /// Estimates of the diffuse (with a sheen's), the glossy and the
     /// coat's lobes' reflectance (luminance), which choose among them.
     diffuse_weight: f32,
@@ -97,12 +97,14 @@ impl Bsdf {
             (Some(fibre), _) => (Glossy::Fibre(*fibre), 0.0, fibre.weight()),
             (None, Some(pbr)) => {
                 let glossy = if pbr.is_smooth() { Glossy::None } else { Glossy::Ggx { alpha: pbr.alpha } };
+                let coat_cos = sp.coat_cos_view();
                 if pbr.clearcoat > 0.0 && !pbr.coat_is_smooth() {
-                    (coat, coat_weight) = (Some(pbr.clearcoat_alpha.max(MIN_ALPHA)), pbr.coat_blend(wo.z));
+                    coat = Some(CoatLobe::new(sp, pbr.clearcoat_alpha.max(MIN_ALPHA)));
+                    coat_weight = pbr.coat_blend(coat_cos);
                 }
-                let under = pbr.base_weight(wo.z);
+                let under = pbr.base_weight(wo.z, coat_cos);
                 let sheen =
-                    luminance(pbr.sheen) * sheen::albedo(wo.z, pbr.sheen_roughness) * (1.0 - pbr.coat_blend(wo.z));
+                    luminance(pbr.sheen) * sheen::albedo(wo.z, pbr.sheen_roughness) * (1.0 - pbr.coat_blend(coat_cos));
                 (glossy, luminance(sp.kd) * under + sheen, ggx_weight(pbr, wo.z) * under)
             }
             (None, None) if m.has_specular() => {
@@ -149,8 +151,8 @@ impl Bsdf {
         if p_glossy > 0.0 {
             pdf += p_glossy * self.glossy_pdf(wi, local);
         }
-        if let Some(alpha) = self.coat.filter(|_| p_coat > 0.0) {
-            pdf += p_coat * ggx_pdf(self.wo, local, alpha);
+        if let Some(coat) = self.coat.filter(|_| p_coat > 0.0) {
+            pdf += p_coat * ggx_pdf(coat.wo, coat.in_frame(wi), coat.alpha);
         }
         pdf
     }
@@ -169,8 +171,9 @@ impl Bsdf {
         }
         let local = match self.coat {
             _ if u[0] < p_glossy => self.sample_glossy(u[1], u[2]),
-            Some(alpha) if u[0] < p_glossy + p_coat => {
-                reflect(self.wo, sample_visible_normal(self.wo, alpha, u[1], u[2]))
+            Some(coat) if u[0] < p_glossy + p_coat => {
+                let d = coat.to_world(reflect(coat.wo, sample_visible_normal(coat.wo, coat.alpha, u[1], u[2])));
+                self.in_frame(d.normalize())
             }
             _ => cosine_hemisphere(u[1], u[2]),
         };
@@ -202,7 +205,7 @@ impl Bsdf {
             Glossy::Ggx { alpha } => Some(ggx(alpha)),
         };
         // A coat's lobe too: the sharper of the two decides.
-        base.into_iter().chain(self.coat.map(ggx)).reduce(f32::min)
+        base.into_iter().chain(self.coat.map(|c| ggx(c.alpha))).reduce(f32::min)
     }
 
     fn in_frame(&self, v: Vec3) -> Vec3 {
@@ -240,6 +243,35 @@ impl Bsdf {
             }
             Glossy::Ggx { alpha } => ggx_pdf(self.wo, local, alpha),
         }
+    }
+}
+
+/// A rough clear coat's lobe: GGX of roughness^2 `alpha` in the frame of
+/// the coat's normal (tangent, bitangent, normal), the view in that frame
+/// (its z at least MIN_COS_VIEW).
+#[derive(Debug, Clone, Copy)]
+struct CoatLobe {
+    alpha: f32,
+    t: Vec3,
+    b: Vec3,
+    n: Vec3,
+    wo: Vec3,
+}
+
+impl CoatLobe {
+    fn new(sp: &SurfacePoint<'_>, alpha: f32) -> Self {
+        let n = sp.coat_n;
+        let (t, b) = n.any_orthonormal_pair();
+        let local = Vec3::new(sp.wo.dot(t), sp.wo.dot(b), sp.wo.dot(n).max(MIN_COS_VIEW));
+        Self { alpha, t, b, n, wo: local.normalize_or(Vec3::Z) }
+    }
+
+    fn in_frame(&self, v: Vec3) -> Vec3 {
+        Vec3::new(v.dot(self.t), v.dot(self.b), v.dot(self.n))
+    }
+
+    fn to_world(self, v: Vec3) -> Vec3 {
+        self.t * v.x + self.b * v.y + self.n * v.z
     }
 }
 

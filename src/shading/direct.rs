@@ -155,7 +155,7 @@ impl MaterialLanes {
             ng: splat3(sp.ng),
             r: splat3(sp.r),
             wo: splat3(sp.wo),
-            pbr: sp.pbr.map(|p| PbrLanes::new(&p, sp.n.dot(sp.wo))),
+            pbr: sp.pbr.map(|p| PbrLanes::new(&p, sp.n.dot(sp.wo), sp.coat_n, sp.coat_cos_view())),
             fibre: sp.fibre,
             diffuse: splat3(sp.kd * (1.0 / PI)),
             phong: m.has_specular().then(|| (m.specular, phong_normalisation(m.exponent), m.exponent)),

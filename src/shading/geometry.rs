@@ -174,7 +174,9 @@ impl<'s> Geometry<'s> {
             }
         }
         let material = &self.scene.materials[mesh.material];
-        let mut n = match &mesh.normals {
+        let pbr = material.pbr.as_ref();
+        let coat_map = pbr.and_then(|p| p.clearcoat.as_ref()).and_then(|c| c.normal_map.as_ref());
+        let (mut n, mut coat_n) = match &mesh.normals {
             Some(normals) => {
                 let [n0, n1, n2] = tri.map(|i| normals[i as usize]);
                 let n = w * n0 + u * n1 + v * n2;
@@ -183,8 +185,9 @@ impl<'s> Geometry<'s> {
                 // side (decided on the interpolated normal, so that a
                 // perturbed normal dipping below the surface is not turned).
                 let side = if n.dot(ng) < 0.0 { -1.0 } else { 1.0 };
-                let normal_map = material.pbr.as_ref().and_then(|p| p.normal_map.as_ref());
-                side * match (normal_map, &mesh.tangents) {
+                // The base's normal map, and a clear coat's own (without
+                // one the coat keeps the interpolated normal, docs/design.md §5.10).
+                let mapped = |map: Option<&NormalMap>| match (map, &mesh.tangents) {
                     (Some(map), Some(tangents)) if n != Vec3::ZERO => {
                         let [t0, t1, t2] = tri.map(|i| tangents[i as usize]);
                         let tangent = (w * t0 + u * t1 + v * t2).truncate();
@@ -192,19 +195,23 @@ impl<'s> Geometry<'s> {
                         perturbed(n, tangent, t0.w, map, uvs.uv[map.set.min(1)], &self.scene.textures)
                     }
                     _ => n,
-                }
+                };
+                (side * mapped(pbr.and_then(|p| p.normal_map.as_ref())), side * mapped(coat_map))
             }
-            None => ng,
+            None => (ng, ng),
         };
         if n == Vec3::ZERO || !n.is_finite() {
             n = ng;
+        }
+        if coat_n == Vec3::ZERO || !coat_n.is_finite() || pbr.is_none_or(|p| p.clearcoat.is_none()) {
+            coat_n = if pbr.is_some_and(|p| p.clearcoat.is_some()) { ng } else { n };
         }
         let colour = mesh.colors.as_ref().map(|colors| {
             let [c0, c1, c2] = tri.map(|i| colors[i as usize]);
             w * c0 + u * c1 + v * c2
         });
         let emits = front || material.emits_both_sides;
-        self.shaded(ray, hit, Frame { p, n, ng, wo, uvs, colour, emits, back: !front }, material)
+        self.shaded(ray, hit, Frame { p, n, ng, coat_n, wo, uvs, colour, emits, back: !front }, material)
     }
 
     /// The surface point of a hit on curves or spheres (docs/design.md
@@ -232,7 +239,8 @@ impl<'s> Geometry<'s> {
         }
         let uv = Vec2::new(hit.u, hit.v);
         let colour = mesh.colors.as_ref().map(|colors| strands.interpolate(colors, hit.primitive as usize, hit.u));
-        let frame = Frame { p, n: ng, ng, wo, uvs: TexCoords::at([uv, uv]), colour, emits: false, back: false };
+        let uvs = TexCoords::at([uv, uv]);
+        let frame = Frame { p, n: ng, ng, coat_n: ng, wo, uvs, colour, emits: false, back: false };
         let mut sp = self.shaded(ray, hit, frame, &self.scene.materials[mesh.material]);
         if matches!(strands.kind, StrandKind::Curves { ribbon: false, .. }) && !sp.material.unlit {
             let primitive = hit.primitive as usize;
@@ -248,7 +256,7 @@ impl<'s> Geometry<'s> {
 
     /// The surface point of `frame`, shaded with `material`.
     fn shaded(&self, ray: &Ray, hit: &Hit, frame: Frame, material: &'s Material) -> SurfacePoint<'s> {
-        let Frame { p, n, ng, wo, uvs, colour, emits, back } = frame;
+        let Frame { p, n, ng, coat_n, wo, uvs, colour, emits, back } = frame;
         let mut base = material.albedo_at(&uvs, &self.scene.textures);
         if let Some(colour) = colour {
             base *= colour;
@@ -261,13 +269,15 @@ impl<'s> Geometry<'s> {
         // A transmitting dielectric's delta lobes, and what the ray kept
         // crossing its solid from the inside (docs/design.md §5.8).
         let transmitting = material.pbr.as_ref().and_then(|m| m.transmission.as_ref()).zip(pbr);
-        let delta = transmitting.map(|(t, p)| p.delta_lobes(n, wo, back, t.thin_walled));
+        let coat_cos_view = coat_n.dot(wo);
+        let delta = transmitting.map(|(t, p)| p.delta_lobes(n, wo, back, t.thin_walled, coat_cos_view));
         let interior_transmittance =
             transmitting.filter(|_| back).map_or(Vec3::ONE, |(t, _)| t.interior_transmittance(distance));
         SurfacePoint {
             p,
             n,
             ng,
+            coat_n,
             wo,
             r: reflect(wo, n),
             kd,
@@ -290,7 +300,7 @@ impl<'s> Geometry<'s> {
             sample: None,
             mirror: match (delta, pbr) {
                 (Some(delta), _) => delta.mirror,
-                (None, Some(p)) => p.mirror(n.dot(wo)),
+                (None, Some(p)) => p.mirror(n.dot(wo), coat_cos_view),
                 _ => material.mirror,
             },
             transmission: delta.map_or(Vec3::ZERO, |d| d.transmission),
@@ -346,9 +356,11 @@ fn uv_differentials(p: [Vec3; 3], uv: [Vec2; 3], dp_dxy: [Vec3; 2]) -> [Vec2; 2]
 /// Where a hit is and how it faces: what shading needs of the geometry.
 struct Frame {
     p: Vec3,
-    /// The shading normal and the geometric one, both facing `wo`.
+    /// The shading normal and the geometric one, both facing `wo`, and a
+    /// clear coat's shading normal (`SurfacePoint::coat_n`).
     n: Vec3,
     ng: Vec3,
+    coat_n: Vec3,
     /// Towards the ray's origin, unit length.
     wo: Vec3,
     uvs: TexCoords,

@@ -169,15 +169,15 @@ impl Pbr {
     }
 
     /// The clear coat's Fresnel weight at the view, clearcoat x (0.04 +
-    /// 0.96 (1 - n.v)^5): the share of the light the coat reflects, which
-    /// the layers below lose (KHR_materials_clearcoat's fresnel_coat, its
-    /// Fresnel at n.v).
+    /// 0.96 (1 - n_c.v)^5), n_c the coat's normal: the share of the light
+    /// the coat reflects, which the layers below lose
+    /// (KHR_materials_clearcoat's fresnel_coat, its Fresnel at n_c.v).
     #[must_use]
-    pub fn coat_blend(&self, n_dot_v: f32) -> f32 {
+    pub fn coat_blend(&self, coat_cos_view: f32) -> f32 {
         if self.clearcoat == 0.0 {
             return 0.0;
         }
-        let x = 1.0 - n_dot_v.clamp(0.0, 1.0);
+        let x = 1.0 - coat_cos_view.clamp(0.0, 1.0);
         self.clearcoat * (COAT_F0 + (1.0 - COAT_F0) * (x * x * x * x * x))
     }
 
@@ -194,11 +194,12 @@ impl Pbr {
     }
 
     /// What the layers over the base (coat, then sheen) leave of a base
-    /// lobe seen at `n_dot_v` and leaving in a direction at the same
-    /// cosine (the mirror's; a delta lobe's weight).
+    /// lobe seen at `n_dot_v` (the coat's normal at `coat_cos_view`) and
+    /// leaving in a direction at the same cosine (the mirror's; a delta
+    /// lobe's weight).
     #[must_use]
-    pub fn base_weight(&self, n_dot_v: f32) -> f32 {
-        (1.0 - self.coat_blend(n_dot_v)) * self.sheen_scaling(n_dot_v)
+    pub fn base_weight(&self, n_dot_v: f32, coat_cos_view: f32) -> f32 {
+        (1.0 - self.coat_blend(coat_cos_view)) * self.sheen_scaling(n_dot_v)
     }
 
     /// Whether the clear coat is a perfect mirror (a coat whose alpha is
@@ -208,13 +209,14 @@ impl Pbr {
         self.clearcoat > 0.0 && self.clearcoat_alpha < MIN_ALPHA
     }
 
-    /// The reflectance of its perfect mirror seen at `n_dot_v`: a smooth
-    /// base's Fresnel term under the layers over it, plus a smooth coat's
-    /// weight; 0 where neither is smooth.
+    /// The reflectance of its perfect mirror seen at `n_dot_v` (the
+    /// coat's normal at `coat_cos_view`): a smooth base's Fresnel term
+    /// under the layers over it, plus a smooth coat's weight; 0 where
+    /// neither is smooth.
     #[must_use]
-    pub fn mirror(&self, n_dot_v: f32) -> Vec3 {
+    pub fn mirror(&self, n_dot_v: f32, coat_cos_view: f32) -> Vec3 {
         let base = if self.is_smooth() { self.mirror_reflectance(n_dot_v) } else { Vec3::ZERO };
-        self.layered(base, n_dot_v)
+        self.layered(base, n_dot_v, coat_cos_view)
     }
 
     /// Whether the specular lobe is a perfect mirror (alpha below
@@ -277,7 +279,7 @@ impl Pbr {
     /// transmission sum to 1: it keeps all the light (the glass furnace,
     /// tests/transmission.rs).
     #[must_use]
-    pub fn delta_lobes(&self, n: Vec3, wo: Vec3, inside: bool, thin_walled: bool) -> DeltaLobes {
+    pub fn delta_lobes(&self, n: Vec3, wo: Vec3, inside: bool, thin_walled: bool, coat_cos_view: f32) -> DeltaLobes {
         let cos_i = n.dot(wo).clamp(0.0, 1.0);
         let (transmitted, cos_air) = if thin_walled {
             (-wo, cos_i)
@@ -288,7 +290,7 @@ impl Pbr {
                 // The metal's share as it was; the dielectric's is all.
                 let mirror = self.mirror_of(Vec3::ONE, self.fresnel(cos_i).1);
                 let mirror = if self.is_smooth() { mirror.min(Vec3::ONE) } else { Vec3::ZERO };
-                let mirror = self.layered(mirror, cos_i);
+                let mirror = self.layered(mirror, cos_i, coat_cos_view);
                 return DeltaLobes { mirror, transmission: Vec3::ZERO, transmitted: -wo };
             }
             let cos_t = (1.0 - sin2_t).sqrt();
@@ -298,15 +300,15 @@ impl Pbr {
         let (f_d, f_m) = self.fresnel(cos_air);
         let transmission = self.base * (self.transmission * (1.0 - self.metallic) * (1.0 - f_d.max_element()));
         let mirror = if self.is_smooth() { self.mirror_of(f_d, f_m) } else { Vec3::ZERO };
-        let transmission = transmission * self.base_weight(cos_i);
-        DeltaLobes { mirror: self.layered(mirror, cos_i), transmission, transmitted }
+        let transmission = transmission * self.base_weight(cos_i, coat_cos_view);
+        DeltaLobes { mirror: self.layered(mirror, cos_i, coat_cos_view), transmission, transmitted }
     }
 
     /// A base mirror's reflectance `mirror` seen at `n_dot_v` under the
     /// layers over it, plus a smooth coat's.
-    fn layered(&self, mirror: Vec3, n_dot_v: f32) -> Vec3 {
-        let coat = if self.coat_is_smooth() { self.coat_blend(n_dot_v) } else { 0.0 };
-        mirror * self.base_weight(n_dot_v) + Vec3::splat(coat)
+    fn layered(&self, mirror: Vec3, n_dot_v: f32, coat_cos_view: f32) -> Vec3 {
+        let coat = if self.coat_is_smooth() { self.coat_blend(coat_cos_view) } else { 0.0 };
+        mirror * self.base_weight(n_dot_v, coat_cos_view) + Vec3::splat(coat)
     }
 }
 
@@ -379,11 +381,22 @@ pub struct PbrLanes {
     /// What the clear coat leaves the layers below at this view: 1 - its
     /// Fresnel weight (1 without a coat).
     pub under_coat: f32x4,
-    /// A rough clear coat's lobe: its Fresnel weight at the view and its
-    /// alpha^2 (None without a coat, or for a smooth one: a mirror).
-    pub coat: Option<(f32x4, f32x4)>,
+    /// A rough clear coat's lobe (None without a coat, or for a smooth
+    /// one: a mirror).
+    pub coat: Option<CoatLanes>,
     /// A sheen's lobe (None without one).
     pub sheen: Option<SheenLanes>,
+}
+
+/// What a rough clear coat's lobe needs at one shading point
+/// (docs/design.md §5.10): its Fresnel weight at the view, its alpha^2,
+/// its normal and n_c . wo (at least [`MIN_COS_VIEW`]).
+#[derive(Clone, Copy)]
+pub struct CoatLanes {
+    pub weight: f32x4,
+    pub alpha2: f32x4,
+    pub n: V3,
+    pub n_dot_v: f32,
 }
 
 /// What a sheen's lobe needs at one shading point (docs/design.md §5.10).
@@ -401,7 +414,7 @@ pub struct SheenLanes {
 impl PbrLanes {
     #[inline(always)]
     #[must_use]
-    pub fn new(pbr: &Pbr, n_dot_v: f32) -> Self {
+    pub fn new(pbr: &Pbr, n_dot_v: f32, coat_n: Vec3, coat_cos_view: f32) -> Self {
         Self {
             base: splat3(pbr.base),
             metallic: f32x4::splat(pbr.metallic),
@@ -413,10 +426,15 @@ impl PbrLanes {
             diffuse: splat3(pbr.base * ((1.0 - pbr.metallic) * (1.0 - pbr.transmission) / PI)),
             n_dot_v: n_dot_v.max(MIN_COS_VIEW),
             glossy: !pbr.is_smooth(),
-            under_coat: f32x4::splat(1.0 - pbr.coat_blend(n_dot_v)),
+            under_coat: f32x4::splat(1.0 - pbr.coat_blend(coat_cos_view)),
             coat: (pbr.clearcoat > 0.0 && !pbr.coat_is_smooth()).then(|| {
                 let alpha = pbr.clearcoat_alpha.max(MIN_ALPHA);
-                (f32x4::splat(pbr.coat_blend(n_dot_v)), f32x4::splat(alpha * alpha))
+                CoatLanes {
+                    weight: f32x4::splat(pbr.coat_blend(coat_cos_view)),
+                    alpha2: f32x4::splat(alpha * alpha),
+                    n: splat3(coat_n),
+                    n_dot_v: coat_cos_view.max(MIN_COS_VIEW),
+                }
             }),
             sheen: (pbr.sheen.max_element() > 0.0).then(|| {
                 let cos_v = n_dot_v.max(MIN_COS_VIEW);
@@ -484,7 +502,7 @@ impl PbrLanes {
         if !self.is_layered() {
             return base;
         }
-        self.layers(base, l, sin2_h, lobes)
+        self.layers(base, l, sin2_h, wi, &h, lobes)
     }
 
     /// Whether a clear coat or a sheen lies over the base.
@@ -495,18 +513,19 @@ impl PbrLanes {
     }
 
     /// The layers over the base lobes `base` (f cos, per channel), towards
-    /// directions at n.l `l` with half-vectors at sin^2 `sin2_h`
-    /// (KHR_materials_clearcoat over KHR_materials_sheen over the base;
-    /// docs/design.md §5.10):
+    /// unit directions `wi` at n.l `l` with unit half-vectors `h` at sin^2
+    /// `sin2_h` to n (KHR_materials_clearcoat over KHR_materials_sheen
+    /// over the base; docs/design.md §5.10):
     ///
-    ///   f = (1 - c F_c(n.v)) (f_sheen + f_base min(1 - s E(n.v), 1 - s E(n.l)))
-    ///       + c F_c(n.v) D_c V_c
+    ///   f = (1 - c F_c(n_c.v)) (f_sheen + f_base min(1 - s E(n.v), 1 - s E(n.l)))
+    ///       + c F_c(n_c.v) D_c V_c
     ///
     /// with s = max(sheen colour), f_sheen the Charlie lobe (`sheen`) and
-    /// the coat's D and V GGX's of its own alpha. The sheen is a diffuse
-    /// lobe here (broad; drawn by the cosine), the coat a glossy one.
+    /// the coat's D and V GGX's of its own alpha about its own normal n_c.
+    /// The sheen is a diffuse lobe here (broad; drawn by the cosine), the
+    /// coat a glossy one.
     #[inline(never)]
-    fn layers(&self, base: V3, l: f32x4, sin2_h: f32x4, lobes: Lobes) -> V3 {
+    fn layers(&self, base: V3, l: f32x4, sin2_h: f32x4, wi: &V3, h: &V3, lobes: Lobes) -> V3 {
         let (l_lanes, sin2_lanes) = (l.to_array(), sin2_h.to_array());
         let mut scale = self.under_coat;
         let mut sheen_f = [f32x4::ZERO; 3];
@@ -522,8 +541,13 @@ impl PbrLanes {
             }
         }
         let coat = match self.coat.filter(|_| lobes.glossy) {
-            Some((weight, alpha2)) => {
-                weight * distribution_of_sine(sin2_h, alpha2) * visibility_cos(l, self.n_dot_v, alpha2)
+            Some(c) => {
+                let n = &c.n;
+                let cross = [n[1] * h[2] - n[2] * h[1], n[2] * h[0] - n[0] * h[2], n[0] * h[1] - n[1] * h[0]];
+                let zero = f32x4::ZERO;
+                let sin2 = dot3(n, h).cmp_gt(zero).blend(dot3(&cross, &cross).fast_min(f32x4::ONE), f32x4::ONE);
+                let l_c = dot3(n, wi).fast_max(zero);
+                c.weight * distribution_of_sine(sin2, c.alpha2) * visibility_cos(l_c, c.n_dot_v, c.alpha2)
             }
             None => f32x4::ZERO,
         };
@@ -531,15 +555,16 @@ impl PbrLanes {
     }
 
     /// The same layers' bound over directions whose n.l is at most `l`
-    /// and whose half-vectors' n.h is at most `n_dot_h` (the cut's bound,
-    /// docs/design.md §8.3): the base's bound `base` times 1 - c F_c(n.v)
-    /// and 1 - s E(n.v) (the smaller of the scalings is at most it), the
-    /// sheen's peak D over (4 n.v (1 + Lambda(n.v) + Lambda(l))) (Lambda
-    /// falls with the cosine), the coat's D and V at the bounding cosines,
-    /// each a little enlarged for roundings.
+    /// (n_c.l at most `coat.0`) and whose half-vectors' n_c.h is at most
+    /// `coat.1` (the cut's bound, docs/design.md §8.3): the base's bound
+    /// `base` times 1 - c F_c(n_c.v) and 1 - s E(n.v) (the smaller of the
+    /// scalings is at most it), the sheen's peak D over (4 n.v (1 +
+    /// Lambda(n.v) + Lambda(l))) (Lambda falls with the cosine), the
+    /// coat's D and V at its bounding cosines, each a little enlarged for
+    /// roundings.
     #[inline(never)]
     #[must_use]
-    pub fn layers_bound(&self, base: V3, l: f32x4, n_dot_h: f32x4, lobes: Lobes) -> V3 {
+    pub fn layers_bound(&self, base: V3, l: f32x4, coat: (f32x4, f32x4), lobes: Lobes) -> V3 {
         const SLACK: f32 = 1.0 + 1e-3;
         let mut scale = self.under_coat * f32x4::splat(SLACK);
         let mut sheen_f = [f32x4::ZERO; 3];
@@ -559,8 +584,12 @@ impl PbrLanes {
             }
         }
         let coat = match self.coat.filter(|_| lobes.glossy) {
-            Some((weight, alpha2)) => {
-                weight * distribution(n_dot_h, alpha2) * visibility_cos(l, self.n_dot_v, alpha2) * f32x4::splat(SLACK)
+            Some(c) => {
+                let (l_c, n_dot_h) = coat;
+                c.weight
+                    * distribution(n_dot_h, c.alpha2)
+                    * visibility_cos(l_c, c.n_dot_v, c.alpha2)
+                    * f32x4::splat(SLACK)
             }
             None => f32x4::ZERO,
         };
@@ -576,8 +605,10 @@ mod tests {
     /// The specification's formulas, written out again in f64 from
     /// Appendix B (and KHR_materials_specular's dielectric), one direction
     /// at a time: the lanes must agree to f32 precision.
-    fn reference(p: &Pbr, n: Vec3, wo: Vec3, wi: Vec3) -> [f64; 3] {
+    fn reference(p: &Pbr, n: Vec3, coat_n: Vec3, wo: Vec3, wi: Vec3) -> [f64; 3] {
         let (n, v, l) = (n.as_dvec3(), wo.as_dvec3(), wi.as_dvec3());
+        let n_c = coat_n.as_dvec3();
+        let (nl_c, nv_c, nh_c) = (n_c.dot(l).max(0.0), n_c.dot(v), n_c.dot((v + l).normalize()));
         let h = (v + l).normalize();
         let (nl, nv, nh, vh) = (n.dot(l), n.dot(v).max(f64::from(MIN_COS_VIEW)), n.dot(h), v.dot(h));
         if nl <= 0.0 {
@@ -602,12 +633,15 @@ mod tests {
             / (2.0 * std::f64::consts::PI);
         let lambda = |cos: f64| f64::from(sheen::lambda(cos as f32, r));
         let f_sheen = p.sheen.as_dvec3() * charlie / ((1.0 + lambda(nv) + lambda(nl)) * 4.0 * nv * nl);
-        let blend = f64::from(p.clearcoat) * (0.04 + 0.96 * (1.0 - nv).powi(5));
+        let blend = f64::from(p.clearcoat) * (0.04 + 0.96 * (1.0 - nv_c.clamp(0.0, 1.0)).powi(5));
+        let nv_c = nv_c.max(f64::from(MIN_COS_VIEW));
         let ac2 = f64::from(p.clearcoat_alpha.max(MIN_ALPHA)).powi(2);
-        let d_coat = ac2 / (std::f64::consts::PI * (nh * nh * (ac2 - 1.0) + 1.0).powi(2));
-        let vis_coat = 0.5 / (nl * (nv * nv * (1.0 - ac2) + ac2).sqrt() + nv * (nl * nl * (1.0 - ac2) + ac2).sqrt());
-        let coat = if p.coat_is_smooth() { 0.0 } else { blend * d_coat * vis_coat };
-        (((f_sheen + f_base * scaling) * (1.0 - blend) + glam::DVec3::splat(coat)) * nl).to_array()
+        let nh_c = nh_c.max(0.0);
+        let d_coat = ac2 / (std::f64::consts::PI * (nh_c * nh_c * (ac2 - 1.0) + 1.0).powi(2));
+        let vis_coat = 0.5 * nl_c
+            / (nl_c * (nv_c * nv_c * (1.0 - ac2) + ac2).sqrt() + nv_c * (nl_c * nl_c * (1.0 - ac2) + ac2).sqrt());
+        let coat = if p.coat_is_smooth() || nl_c <= 0.0 { 0.0 } else { blend * d_coat * vis_coat };
+        ((f_sheen + f_base * scaling) * (1.0 - blend) * nl + glam::DVec3::splat(coat)).to_array()
     }
 
     /// A base of random parameters with, half the time each, a clear coat
@@ -652,9 +686,15 @@ mod tests {
             if wi.dot(n) < 0.0 {
                 wi = -wi;
             }
-            let lanes = PbrLanes::new(&p, n.dot(wo));
+            // Half the coats have a normal of their own, tilted from n
+            // (but still facing the view).
+            let mut coat_n = if rng.next_f32() < 0.5 { n } else { (n + 0.4 * unit(&mut rng)).normalize() };
+            if coat_n.dot(wo) < 0.05 {
+                coat_n = n;
+            }
+            let lanes = PbrLanes::new(&p, n.dot(wo), coat_n, coat_n.dot(wo));
             let f = lanes.f_cos(&splat3(n), &splat3(wo), &splat3(wi), f32x4::splat(n.dot(wi)), Lobes::ALL);
-            let expected = reference(&p, n, wo, wi);
+            let expected = reference(&p, n, coat_n, wo, wi);
             for k in 0..3 {
                 let got = f64::from(f[k].to_array()[0]);
                 let error = (got - expected[k]).abs() / expected[k].abs().max(1e-3);
@@ -699,7 +739,7 @@ mod tests {
         for (p, least) in cases {
             let (metallic, roughness) = (p.metallic, p.alpha.sqrt());
             let wo = Vec3::new(0.3, 0.0, 1.0).normalize();
-            let lanes = PbrLanes::new(&p, n.dot(wo));
+            let lanes = PbrLanes::new(&p, n.dot(wo), n, n.dot(wo));
             // Midpoint rule: f cos dw = (f cos) d(cos theta) d(phi).
             let steps = 500;
             let mut sum = 0.0f64;

@@ -18,6 +18,10 @@ pub struct SurfacePoint<'s> {
     pub n: Vec3,
     /// Geometric normal, unit, on the viewer's side.
     pub ng: Vec3,
+    /// A clear coat's shading normal, unit, on the viewer's side: the
+    /// interpolated normal, or its own normal map's (docs/design.md
+    /// §5.10); `n` for a point without a coat.
+    pub coat_n: Vec3,
     /// Unit direction towards the viewer.
     pub wo: Vec3,
     /// Mirror direction of wo about n.
@@ -87,6 +91,7 @@ impl<'m> SurfacePoint<'m> {
             p,
             n,
             ng: n,
+            coat_n: n,
             wo,
             r: crate::scene::material::reflect(wo, n),
             kd,
@@ -227,7 +232,27 @@ impl SurfacePoint<'_> {
     pub fn mirror_ray(&self) -> Ray {
         let ng = self.ng_facing_viewer();
         let lowest = (0.9 * ng.dot(self.wo)).min(0.01);
-        self.ray_towards(at_least_above(self.r, ng, lowest))
+        self.ray_towards(at_least_above(self.mirror_direction(), ng, lowest))
+    }
+
+    /// The direction its perfect mirror reflects towards: `r`, or a
+    /// smooth clear coat's about its own normal (a smooth base under a
+    /// smooth coat of another normal reflects along the coat's too: one
+    /// mirror ray carries both).
+    #[must_use]
+    pub fn mirror_direction(&self) -> Vec3 {
+        match &self.pbr {
+            Some(p) if p.coat_is_smooth() && self.coat_n != self.n => {
+                crate::scene::material::reflect(self.wo, self.coat_n)
+            }
+            _ => self.r,
+        }
+    }
+
+    /// n . wo of the clear coat's normal.
+    #[must_use]
+    pub fn coat_cos_view(&self) -> f32 {
+        self.coat_n.dot(self.wo)
     }
 
     /// The transmitted ray, leaving from the far side of the surface. A

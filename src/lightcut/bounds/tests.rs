@@ -126,6 +126,7 @@ fn layers(
         texture: None,
         roughness: [0.0, 0.05, 0.3, 1.0, rng.next_f32()][rng.below(5) as usize],
         roughness_texture: None,
+        normal_map: None,
     });
     let sheen = (rng.next_f32() < 0.5).then(|| crate::scene::material::Sheen {
         colour: Vec3::new(edge(&mut rng, 1.0), edge(&mut rng, 1.0), edge(&mut rng, 1.0)).max(Vec3::splat(0.01)),
@@ -160,7 +161,12 @@ fn surface<'m>(rng: &mut Rng, material: &'m Material) -> SurfacePoint<'m> {
     // (a glossy lobe too sharp for them), which the bounds must follow.
     let emitter_lobes = if rng.next_f32() < 0.5 { crate::shading::Lobes::DIFFUSE } else { crate::shading::Lobes::ALL };
     let kd = pbr.map_or(base, |p| p.diffuse_albedo());
-    SurfacePoint { ng, pbr, emitter_lobes, ..SurfacePoint::bare(material, p, n, wo, kd) }
+    // A clear coat's own normal, tilted from n half the time (its own
+    // stream, so that the other draws stay as they were).
+    let mut coat_rng = Rng::seeded(u64::from(p.x.to_bits()) << 32 | u64::from(p.y.to_bits()));
+    let tilted = (n + 0.4 * unit(&mut coat_rng)).normalize();
+    let coat_n = if coat_rng.next_f32() < 0.5 && tilted.dot(wo) > 0.05 { tilted } else { n };
+    SurfacePoint { ng, pbr, emitter_lobes, coat_n, ..SurfacePoint::bare(material, p, n, wo, kd) }
 }
 
 #[test]

@@ -279,9 +279,9 @@ impl Importer<'_, '_> {
     }
 
     /// KHR_materials_clearcoat's layer (docs/design.md §5.10), None without
-    /// the extension or at a factor of 0 without a texture. The coat
-    /// follows the base's shading normal: its own normal texture is not
-    /// read (warned).
+    /// the extension or at a factor of 0: its factors, their textures and
+    /// its own normal texture (without one the coat is smooth over a
+    /// normal-mapped base, as the extension says).
     fn clearcoat(&mut self, m: &gltf::Material<'_>, location: &str) -> Result<Option<Clearcoat>, SceneError> {
         const NAME: &str = "KHR_materials_clearcoat";
         let Some(json) = m.extension_value(NAME) else { return Ok(None) };
@@ -293,13 +293,25 @@ impl Importer<'_, '_> {
             self.extension_texture(json, &at, "clearcoatTexture", Encoding::Linear, |t, _| Vec3::splat(t.x))?;
         let roughness_texture =
             self.extension_texture(json, &at, "clearcoatRoughnessTexture", Encoding::Linear, |t, _| Vec3::splat(t.y))?;
-        if json.get("clearcoatNormalTexture").is_some() {
-            self.warn(&format!("{at}.clearcoatNormalTexture"), "not read: the coat follows the base's shading normal");
-        }
+        let normal_map = match json.get("clearcoatNormalTexture") {
+            None => None,
+            Some(info) => {
+                let field = format!("{at}.clearcoatNormalTexture.scale");
+                let scale = match info.get("scale") {
+                    None => 1.0,
+                    Some(v) => match v.as_f64().filter(|s| s.is_finite()) {
+                        Some(s) => s as f32,
+                        None => return Err(self.error(field, "must be a finite number")),
+                    },
+                };
+                self.extension_texture(json, &at, "clearcoatNormalTexture", Encoding::Linear, |t, _| t)?
+                    .map(|t| NormalMap { texture: t.texture, transform: t.transform, scale, set: t.set })
+            }
+        };
         if factor == 0.0 {
             return Ok(None);
         }
-        Ok(Some(Clearcoat { factor, texture, roughness, roughness_texture }))
+        Ok(Some(Clearcoat { factor, texture, roughness, roughness_texture, normal_map }))
     }
 
     /// KHR_materials_sheen's layer (docs/design.md §5.10), None without the

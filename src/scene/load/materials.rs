@@ -163,7 +163,13 @@ fn layers(
     v.check(colour != Vec3::ZERO || m.sheen_roughness.is_none(), &field("sheen_roughness"), || {
         "only a material with a sheen_colour above 0 has it".into()
     })?;
-    let clearcoat = (factor > 0.0).then_some(Clearcoat { factor, texture: None, roughness, roughness_texture: None });
+    let clearcoat = (factor > 0.0).then_some(Clearcoat {
+        factor,
+        texture: None,
+        roughness,
+        roughness_texture: None,
+        normal_map: None,
+    });
     let sheen = (colour != Vec3::ZERO).then_some(Sheen {
         colour,
         colour_texture: None,

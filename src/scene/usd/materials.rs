@@ -590,7 +590,7 @@ impl<'s> Materials<'s> {
             Source::Value(v) => (v.x.clamp(0.0, 1.0) as f32, None),
             Source::Texture(t) => (1.0, Some(self.texture(&[&t], false, false, textures)?)),
         };
-        Ok(Some(Clearcoat { factor, texture, roughness, roughness_texture }))
+        Ok(Some(Clearcoat { factor, texture, roughness, roughness_texture, normal_map: None }))
     }
 
     /// The specular layer: UsdPreviewSurface's specularColor as F0 in the

@@ -22,7 +22,9 @@ fn point(material: &Material, wo: Vec3) -> SurfacePoint<'_> {
     };
     let pbr = material.pbr.as_ref().map(|m| Pbr::of(m, base, &crate::scene::material::TexCoords::default(), &[]));
     let kd = pbr.map_or(base, |p| p.diffuse_albedo());
-    SurfacePoint { pbr, ..SurfacePoint::bare(material, Vec3::ZERO, Vec3::Z, wo, kd) }
+    // A coat of a normal of its own, tilted from the base's.
+    let coat_n = if material.name == "tilted coat" { Vec3::new(0.3, 0.2, 1.0).normalize() } else { Vec3::Z };
+    SurfacePoint { pbr, coat_n, ..SurfacePoint::bare(material, Vec3::ZERO, Vec3::Z, wo, kd) }
 }
 
 fn lambert(albedo: f32) -> Material {
@@ -249,6 +251,7 @@ fn materials() -> Vec<(String, Material)> {
             texture: None,
             roughness: coat_roughness,
             roughness_texture: None,
+            normal_map: None,
         });
         pbr.sheen = (sheen > 0.0).then_some(crate::scene::material::Sheen {
             colour: Vec3::new(sheen, 0.5 * sheen, 0.2),
@@ -256,7 +259,10 @@ fn materials() -> Vec<(String, Material)> {
             roughness: sheen_roughness,
             roughness_texture: None,
         });
-        list.push((format!("coat {coat} ({coat_roughness}), sheen {sheen} ({sheen_roughness})"), m));
+        list.push((format!("coat {coat} ({coat_roughness}), sheen {sheen} ({sheen_roughness})"), m.clone()));
+        if coat == 1.0 && sheen == 0.0 {
+            list.push(("a coat tilted from the base's normal".into(), Material { name: "tilted coat".into(), ..m }));
+        }
     }
     list
 }
