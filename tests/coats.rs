@@ -6,7 +6,7 @@
 
 mod common;
 
-use common::gltf::GltfBuilder;
+use common::gltf::{pane_before_a_red_emitter, GltfBuilder};
 use common::{assert_same_bits_for_any_threads_and_window, channel, lightcuts_fails, means, render, TempDir};
 use serde_json::json;
 
@@ -69,30 +69,19 @@ fn coats_and_sheens_are_the_same_bits_for_any_threads_and_window() {
     }
 }
 
-/// A thin, fully transmitting glTF pane facing the camera, of a white base
-/// and `extensions` besides KHR_materials_transmission, in front of a red
-/// emitter (radiance 1) filling the view, in the dark: what reaches the
-/// camera is the transmitted weight.
+/// A thin, fully transmitting glTF pane of `extensions` besides
+/// KHR_materials_transmission, in front of a red emitter filling the view
+/// (`pane_before_a_red_emitter`): what reaches the camera is the
+/// transmitted weight.
 fn pane(extensions: serde_json::Value) -> GltfBuilder {
-    let mut b = GltfBuilder::new();
     let mut all = json!({ "KHR_materials_transmission": { "transmissionFactor": 1.0 } });
     for (name, value) in extensions.as_object().expect("an object") {
         all[name] = value.clone();
+    }
+    let mut b = pane_before_a_red_emitter(all.clone());
+    for name in all.as_object().expect("an object").keys() {
         b.use_extension(name);
     }
-    b.use_extension("KHR_materials_transmission");
-    let material = b.material(json!({
-        "pbrMetallicRoughness": { "baseColorFactor": [1, 1, 1, 1], "metallicFactor": 0, "roughnessFactor": 0 },
-        "extensions": all,
-    }));
-    let mesh = b.quad([-1.0, -1.0, 0.0], [2.0, 0.0, 0.0], [0.0, 2.0, 0.0], Some(material));
-    b.node(json!({ "mesh": mesh }), true);
-    let red =
-        b.material(json!({ "pbrMetallicRoughness": { "baseColorFactor": [0, 0, 0, 1] }, "emissiveFactor": [1, 0, 0] }));
-    let mesh = b.quad([-3.0, -3.0, -1.0], [6.0, 0.0, 0.0], [0.0, 6.0, 0.0], Some(red));
-    b.node(json!({ "mesh": mesh }), true);
-    let camera = b.camera(json!({ "type": "perspective", "perspective": { "yfov": 0.5, "znear": 0.01 } }));
-    b.node(json!({ "camera": camera, "translation": [0.0, 0.0, 3.0] }), true);
     b
 }
 

@@ -6,7 +6,7 @@
 
 mod common;
 
-use common::gltf::GltfBuilder;
+use common::gltf::{pane_before_a_red_emitter, GltfBuilder};
 use common::{assert_same_bits_for_any_threads_and_window, channel, lightcuts_fails, means, read_exr, render, TempDir};
 use serde_json::json;
 
@@ -106,33 +106,11 @@ fn glass_is_the_same_bits_for_any_threads_and_window() {
     }
 }
 
-/// A glTF pane facing the camera, of a base colour of white and the
-/// material's `extensions`, in front of a red emitter (radiance 1) that
-/// fills the view, in the dark.
-fn gltf_pane(extensions: serde_json::Value) -> GltfBuilder {
-    let mut b = GltfBuilder::new();
-    let material = b.material(json!({
-        "pbrMetallicRoughness": { "baseColorFactor": [1, 1, 1, 1], "metallicFactor": 0, "roughnessFactor": 0 },
-        "extensions": extensions,
-    }));
-    let mesh = b.quad([-1.0, -1.0, 0.0], [2.0, 0.0, 0.0], [0.0, 2.0, 0.0], Some(material));
-    b.node(json!({ "mesh": mesh }), true);
-    let red = b.material(json!({
-        "pbrMetallicRoughness": { "baseColorFactor": [0, 0, 0, 1] },
-        "emissiveFactor": [1, 0, 0],
-    }));
-    let mesh = b.quad([-3.0, -3.0, -1.0], [6.0, 0.0, 0.0], [0.0, 6.0, 0.0], Some(red));
-    b.node(json!({ "mesh": mesh }), true);
-    let camera = b.camera(json!({ "type": "perspective", "perspective": { "yfov": 0.5, "znear": 0.01 } }));
-    b.node(json!({ "camera": camera, "translation": [0.0, 0.0, 3.0] }), true);
-    b
-}
-
 #[test]
 fn gltf_transmission_is_read_as_its_extensions_define_it() {
     let dir = TempDir::new("glass-gltf");
     let render_pane = |extensions: serde_json::Value, used: &[&str]| {
-        let mut b = gltf_pane(extensions);
+        let mut b = pane_before_a_red_emitter(extensions);
         for name in used {
             b.use_extension(name);
         }
@@ -177,7 +155,7 @@ fn gltf_transmission_is_read_as_its_extensions_define_it() {
     );
     assert_eq!(means(&image)[0], 1.0, "IOR 1");
     // Out of range: the file and the field are named.
-    let mut b = gltf_pane(json!({ "KHR_materials_transmission": { "transmissionFactor": 2.0 } }));
+    let mut b = pane_before_a_red_emitter(json!({ "KHR_materials_transmission": { "transmissionFactor": 2.0 } }));
     b.use_extension("KHR_materials_transmission");
     let path = b.write_separate(&dir.path(""), "bad");
     let out = dir.path("bad.exr");

@@ -291,3 +291,25 @@ pub fn floor_and_point_light() -> GltfBuilder {
     g.node(json!({ "camera": camera, "translation": [0.0, 6.0, 0.0], "rotation": [-s, 0.0, 0.0, s] }), true);
     g
 }
+
+/// A glTF pane facing the camera, of a base colour of white and the
+/// material's `extensions`, in front of a red emitter (radiance 1) that
+/// fills the view, in the dark.
+pub fn pane_before_a_red_emitter(extensions: Value) -> GltfBuilder {
+    let mut b = GltfBuilder::new();
+    let material = b.material(json!({
+        "pbrMetallicRoughness": { "baseColorFactor": [1, 1, 1, 1], "metallicFactor": 0, "roughnessFactor": 0 },
+        "extensions": extensions,
+    }));
+    let mesh = b.quad([-1.0, -1.0, 0.0], [2.0, 0.0, 0.0], [0.0, 2.0, 0.0], Some(material));
+    b.node(json!({ "mesh": mesh }), true);
+    let red = b.material(json!({
+        "pbrMetallicRoughness": { "baseColorFactor": [0, 0, 0, 1] },
+        "emissiveFactor": [1, 0, 0],
+    }));
+    let mesh = b.quad([-3.0, -3.0, -1.0], [6.0, 0.0, 0.0], [0.0, 6.0, 0.0], Some(red));
+    b.node(json!({ "mesh": mesh }), true);
+    let camera = b.camera(json!({ "type": "perspective", "perspective": { "yfov": 0.5, "znear": 0.01 } }));
+    b.node(json!({ "camera": camera, "translation": [0.0, 0.0, 3.0] }), true);
+    b
+}

@@ -98,14 +98,8 @@ fn pbr(
     {
         v.check(!given, &field(name), || "a type = \"pbr\" material has no Phong or mirror layer".to_string())?;
     }
-    let unit = |value: Option<f32>, name: &str| -> Result<f32, SceneError> {
-        let value = value.unwrap_or(1.0);
-        v.check(value.is_finite() && (0.0..=1.0).contains(&value), &field(name), || {
-            format!("must be between 0 and 1, got {value}")
-        })?;
-        Ok(value)
-    };
-    let (metallic, roughness) = (unit(m.metallic, "metallic")?, unit(m.roughness, "roughness")?);
+    let (metallic, roughness) =
+        (v.unit(m.metallic, 1.0, &field("metallic"))?, v.unit(m.roughness, 1.0, &field("roughness"))?);
     let metallic_roughness = match &m.metallic_roughness_texture {
         None => None,
         Some(t) => {
@@ -143,15 +137,8 @@ fn layers(
     m: &MaterialSpec,
     field: &impl Fn(&str) -> String,
 ) -> Result<(Option<Clearcoat>, Option<Sheen>), SceneError> {
-    let unit = |value: Option<f32>, name: &str| -> Result<f32, SceneError> {
-        let value = value.unwrap_or(0.0);
-        v.check(value.is_finite() && (0.0..=1.0).contains(&value), &field(name), || {
-            format!("must be between 0 and 1, got {value}")
-        })?;
-        Ok(value)
-    };
-    let factor = unit(m.clearcoat, "clearcoat")?;
-    let roughness = unit(m.clearcoat_roughness, "clearcoat_roughness")?;
+    let factor = v.unit(m.clearcoat, 0.0, &field("clearcoat"))?;
+    let roughness = v.unit(m.clearcoat_roughness, 0.0, &field("clearcoat_roughness"))?;
     v.check(factor > 0.0 || m.clearcoat_roughness.is_none(), &field("clearcoat_roughness"), || {
         "only a material with clearcoat above 0 has it".into()
     })?;
@@ -159,7 +146,7 @@ fn layers(
         Some(c) => v.unit_rgb(c, &field("sheen_colour"))?,
         None => Vec3::ZERO,
     };
-    let sheen_roughness = unit(m.sheen_roughness, "sheen_roughness")?;
+    let sheen_roughness = v.unit(m.sheen_roughness, 0.0, &field("sheen_roughness"))?;
     v.check(colour != Vec3::ZERO || m.sheen_roughness.is_none(), &field("sheen_roughness"), || {
         "only a material with a sheen_colour above 0 has it".into()
     })?;
@@ -187,10 +174,7 @@ fn transmission(
     m: &MaterialSpec,
     field: &impl Fn(&str) -> String,
 ) -> Result<Option<Transmission>, SceneError> {
-    let factor = m.transmission.unwrap_or(0.0);
-    v.check(factor.is_finite() && (0.0..=1.0).contains(&factor), &field("transmission"), || {
-        format!("must be between 0 and 1, got {factor}")
-    })?;
+    let factor = v.unit(m.transmission, 0.0, &field("transmission"))?;
     let attenuation = m.attenuation_colour.is_some() || m.attenuation_distance.is_some();
     for (name, given) in [("thin_walled", m.thin_walled), ("attenuation_colour", attenuation)] {
         v.check(factor > 0.0 || !given, &field(name), || "only a material with transmission above 0 has it".into())?;

@@ -562,6 +562,16 @@ impl Validator<'_> {
         })
     }
 
+    /// A number between 0 and 1 (`default` where absent), or an error
+    /// naming `field`.
+    fn unit(&self, value: Option<f32>, default: f32, field: &str) -> Result<f32, SceneError> {
+        let value = value.unwrap_or(default);
+        self.check(value.is_finite() && (0.0..=1.0).contains(&value), field, || {
+            format!("must be between 0 and 1, got {value}")
+        })?;
+        Ok(value)
+    }
+
     fn unit_rgb(&self, c: [f32; 3], field: &str) -> Result<Vec3, SceneError> {
         let v = Vec3::from(c);
         self.check(v.is_finite() && v.min_element() >= 0.0 && v.max_element() <= 1.0, field, || {
