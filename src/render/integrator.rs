@@ -220,11 +220,13 @@ impl<'a> Integrator<'a> {
 
     /// Where the path goes from `sp`, its `depth`-th vertex: without the
     /// path method, along the mirror or the transmitted ray (if any;
-    /// `delta_bounce`); with it, along either or a direction the BSDF
-    /// draws (all its lobes), chosen in proportion to their reflectance,
-    /// then, past the first vertices, through Russian roulette on the
-    /// path's `throughput` so far (docs/design.md §6.7). `bsdf` is the
-    /// point's BSDF when the caller built it already. None: the path ends.
+    /// `delta_bounce`); with it, and inside a rough solid, where no light
+    /// reaches its reflection (docs/design.md §5.8), along either or a
+    /// direction the BSDF draws (all its lobes), chosen in proportion to
+    /// their reflectance, then, with the path method past the first
+    /// vertices, through Russian roulette on the path's `throughput` so
+    /// far (docs/design.md §6.7). `bsdf` is the point's BSDF when the
+    /// caller built it already. None: the path ends.
     fn bounce(
         &self,
         sp: &SurfacePoint<'_>,
@@ -233,7 +235,7 @@ impl<'a> Integrator<'a> {
         depth: u32,
         throughput: DVec3,
     ) -> Option<Bounce> {
-        if self.path_depth.is_none() {
+        if self.path_depth.is_none() && !sp.inside_rough_solid() {
             return delta_bounce(sp, sample, depth);
         }
         let u = path_numbers(sample, depth);
@@ -248,7 +250,7 @@ impl<'a> Integrator<'a> {
         let mut bounce = if u[0] < p_mirror {
             mirrored(sp, p_mirror)
         } else if u[0] < p_mirror + p_transmission {
-            transmitted(sp, p_transmission)
+            transmitted(sp, p_transmission, [u[1], u[2]])?
         } else {
             let s = bsdf.sample([u[1], u[2], u[3]], Lobes::ALL)?;
             let weight = s.f_cos.as_dvec3() / (f64::from(s.pdf) * f64::from(1.0 - p_mirror - p_transmission));
@@ -261,7 +263,7 @@ impl<'a> Integrator<'a> {
         // path whose throughput has fallen below 1 goes on with
         // probability equal to its largest component and is divided by it
         // when it does, so that its expected value is unchanged.
-        if depth + 1 >= RUSSIAN_ROULETTE_DEPTH {
+        if self.path_depth.is_some() && depth + 1 >= RUSSIAN_ROULETTE_DEPTH {
             let survive = (throughput * bounce.weight).max_element().min(1.0);
             if f64::from(u[4]) >= survive {
                 return None;
@@ -286,10 +288,14 @@ fn mirrored(sp: &SurfacePoint<'_>, p: f32) -> Bounce {
     Bounce { ray: sp.mirror_ray(), weight: sp.mirror.as_dvec3() / f64::from(p), delta: true, transmitted: false }
 }
 
-/// The transmitted bounce, chosen with probability `p`.
-fn transmitted(sp: &SurfacePoint<'_>, p: f32) -> Bounce {
-    let weight = sp.transmission.as_dvec3() / f64::from(p);
-    Bounce { ray: sp.transmitted_ray(), weight, delta: true, transmitted: true }
+/// The transmitted bounce, chosen with probability `p`, a rough
+/// surface's drawn from the uniform numbers `u` (docs/design.md §5.8). It
+/// counts the emission it meets, as a mirror's does: the lights light no
+/// transmission lobe (shadow rays stop at glass). None: the draw went
+/// nowhere.
+fn transmitted(sp: &SurfacePoint<'_>, p: f32, u: [f32; 2]) -> Option<Bounce> {
+    let (ray, weight) = sp.transmit(u)?;
+    Some(Bounce { ray, weight: weight.as_dvec3() / f64::from(p), delta: true, transmitted: true })
 }
 
 /// Without the path method, a camera path follows a vertex's delta lobes
@@ -306,9 +312,10 @@ fn delta_bounce(sp: &SurfacePoint<'_>, sample: SampleKey, depth: u32) -> Option<
     if !p_mirror.is_finite() {
         return None;
     }
-    Some(if path_numbers(sample, depth)[0] < p_mirror {
-        mirrored(sp, p_mirror)
+    let u = path_numbers(sample, depth);
+    if u[0] < p_mirror {
+        Some(mirrored(sp, p_mirror))
     } else {
-        transmitted(sp, 1.0 - p_mirror)
-    })
+        transmitted(sp, 1.0 - p_mirror, [u[1], u[2]])
+    }
 }

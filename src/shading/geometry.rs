@@ -6,7 +6,7 @@ use std::sync::Arc;
 use glam::{Affine3A, Mat3A, Vec2, Vec3, Vec4};
 
 use super::fibre::{self, Fibre};
-use super::pbr::Pbr;
+use super::pbr::{Interface, Pbr};
 use super::surface::SurfacePoint;
 use crate::embree::{self, AlphaMask, Device, EmbreeError, Hit, MeshError, Ray};
 use crate::light::Lights;
@@ -270,7 +270,8 @@ impl<'s> Geometry<'s> {
         // crossing its solid from the inside (docs/design.md §5.8).
         let transmitting = material.pbr.as_ref().and_then(|m| m.transmission.as_ref()).zip(pbr);
         let coat_cos_view = coat_n.dot(wo);
-        let delta = transmitting.map(|(t, p)| p.delta_lobes(n, wo, back, t.thin_walled, coat_cos_view));
+        let interface = transmitting.map(|(t, _)| Interface::of(t.thin_walled, back));
+        let delta = transmitting.zip(interface).map(|((_, p), i)| p.delta_lobes(n, wo, i, coat_cos_view));
         let interior_transmittance =
             transmitting.filter(|_| back).map_or(Vec3::ONE, |(t, _)| t.interior_transmittance(distance));
         SurfacePoint {
@@ -305,6 +306,7 @@ impl<'s> Geometry<'s> {
             },
             transmission: delta.map_or(Vec3::ZERO, |d| d.transmission),
             transmitted: delta.map_or(-wo, |d| d.transmitted),
+            interface,
             interior_transmittance,
         }
     }
@@ -323,6 +325,7 @@ fn make_fibre(sp: &mut SurfacePoint<'_>, tangent: Option<Vec3>, radius: f32) {
     sp.pbr = None;
     sp.mirror = Vec3::ZERO;
     sp.transmission = Vec3::ZERO;
+    sp.interface = None;
     sp.interior_transmittance = Vec3::ONE;
 }
 

@@ -9,7 +9,9 @@ pub mod evaluate;
 pub mod fibre;
 pub mod geometry;
 pub mod lobes;
+pub mod microfacet;
 pub mod pbr;
+pub mod refraction;
 pub mod sheen;
 pub mod surface;
 

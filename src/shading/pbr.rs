@@ -73,6 +73,40 @@ pub struct Pbr {
 /// (KHR_materials_clearcoat fixes its IOR).
 const COAT_F0: f32 = 0.04;
 
+/// How a ray crosses a transmitting dielectric's surface: straight on
+/// through a thin wall, or bent by Snell's law into or out of a solid
+/// (docs/design.md §5.8).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Interface {
+    ThinWall,
+    Entering,
+    Leaving,
+}
+
+impl Interface {
+    /// The interface of a surface `thin_walled` or not, seen from the
+    /// `inside` of its solid or not.
+    #[must_use]
+    pub fn of(thin_walled: bool, inside: bool) -> Self {
+        match (thin_walled, inside) {
+            (true, _) => Self::ThinWall,
+            (false, false) => Self::Entering,
+            (false, true) => Self::Leaving,
+        }
+    }
+
+    /// The relative index of refraction η = n_t / n_i across it, for a
+    /// dielectric of index `ior` in air: 1 for a thin wall.
+    #[must_use]
+    pub fn eta(self, ior: f32) -> f32 {
+        match self {
+            Self::ThinWall => 1.0,
+            Self::Entering => ior,
+            Self::Leaving => 1.0 / ior,
+        }
+    }
+}
+
 /// A transmitting dielectric's delta lobes towards one view
 /// (`Pbr::delta_lobes`): the mirror's reflectance, the transmitted
 /// weight and the transmitted ray's unit direction.
@@ -239,7 +273,7 @@ impl Pbr {
     /// The dielectric's and the metal's Fresnel terms at `n_dot_v`, with
     /// Schlick's weight (1 - n.v)^5: F_d = f0 + (f90 - f0) w, F_m = base +
     /// (1 - base) w.
-    fn fresnel(&self, n_dot_v: f32) -> (Vec3, Vec3) {
+    pub(super) fn fresnel(&self, n_dot_v: f32) -> (Vec3, Vec3) {
         let x = (1.0 - n_dot_v.clamp(0.0, 1.0)).max(0.0);
         let w = x * x * x * x * x;
         (self.f0 + (Vec3::splat(self.f90) - self.f0) * w, self.base + (Vec3::ONE - self.base) * w)
@@ -259,48 +293,55 @@ impl Pbr {
     }
 
     /// The delta lobes of a transmitting dielectric seen from unit `wo`
-    /// through the unit shading normal `n` on the viewer's side, from
-    /// `inside` the solid the surface bounds or from outside, through a
-    /// `thin_walled` surface or a solid's (docs/design.md §5.8):
+    /// through the unit shading normal `n` on the viewer's side, across
+    /// its `interface` (docs/design.md §5.8):
     ///
     /// - a thin wall passes the ray straight on; a solid's boundary bends
     ///   it by Snell's law, eta = ior entering and 1 / ior leaving, and
     ///   reflects all of it past the critical angle (total internal
-    ///   reflection: no transmission, the dielectric's mirror 1);
+    ///   reflection: no transmission, the dielectric's mirror 1; a rough
+    ///   surface's microfacets may still pass some, so its transmission
+    ///   is then its tint, the weight that chooses its draw);
     /// - the Fresnel term is the specification's Schlick form at the
     ///   cosine on the air's side (the view's entering, the transmitted
     ///   ray's leaving), as Fresnel's reflectance is the same both ways;
     /// - the transmitted weight is base x transmission x (1 - metallic) x
     ///   (1 - max F_d), what the diffuse lobe would have had under the
     ///   specular layer, and the mirror is the smooth surface's
-    ///   reflectance (0 for a rough one, whose reflection is its lobe).
+    ///   reflectance (0 for a rough one, whose reflection is its lobe). A
+    ///   rough surface's transmission is drawn instead
+    ///   (`Pbr::sample_rough_transmission`): these are then the weight
+    ///   that chooses the draw and the direction of its smooth mean.
     ///
     /// A white, smooth, fully transmitting dielectric's mirror and
     /// transmission sum to 1: it keeps all the light (the glass furnace,
     /// tests/transmission.rs).
     #[must_use]
-    pub fn delta_lobes(&self, n: Vec3, wo: Vec3, inside: bool, thin_walled: bool, coat_cos_view: f32) -> DeltaLobes {
+    pub fn delta_lobes(&self, n: Vec3, wo: Vec3, interface: Interface, coat_cos_view: f32) -> DeltaLobes {
         let cos_i = n.dot(wo).clamp(0.0, 1.0);
-        let (transmitted, cos_air) = if thin_walled {
+        let (transmitted, cos_air) = if interface == Interface::ThinWall {
             (-wo, cos_i)
         } else {
-            let eta = if inside { 1.0 / self.ior } else { self.ior };
+            let eta = interface.eta(self.ior);
             let sin2_t = (1.0 - cos_i * cos_i).max(0.0) / (eta * eta);
             if sin2_t >= 1.0 {
                 // The metal's share as it was; the dielectric's is all.
                 let mirror = self.mirror_of(Vec3::ONE, self.fresnel(cos_i).1);
                 let mirror = if self.is_smooth() { mirror.min(Vec3::ONE) } else { Vec3::ZERO };
                 let mirror = self.layered(mirror, cos_i, coat_cos_view);
-                return DeltaLobes { mirror, transmission: Vec3::ZERO, transmitted: -wo };
+                // A rough surface's microfacets may still pass some: its
+                // draw's weight, not this, is what the path keeps.
+                let rough = if self.is_smooth() { Vec3::ZERO } else { self.transmission_tint(cos_i, coat_cos_view) };
+                return DeltaLobes { mirror, transmission: rough, transmitted: -wo };
             }
             let cos_t = (1.0 - sin2_t).sqrt();
             let d = (-wo / eta + (cos_i / eta - cos_t) * n).normalize_or(-n);
-            (d, if inside { cos_t } else { cos_i })
+            (d, if interface == Interface::Leaving { cos_t } else { cos_i })
         };
         let (f_d, f_m) = self.fresnel(cos_air);
         let transmission = self.base * (self.transmission * (1.0 - self.metallic) * (1.0 - f_d.max_element()));
-        let mirror = if self.is_smooth() { self.mirror_of(f_d, f_m) } else { Vec3::ZERO };
         let transmission = transmission * self.base_weight(cos_i, coat_cos_view);
+        let mirror = if self.is_smooth() { self.mirror_of(f_d, f_m) } else { Vec3::ZERO };
         DeltaLobes { mirror: self.layered(mirror, cos_i, coat_cos_view), transmission, transmitted }
     }
 

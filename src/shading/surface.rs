@@ -5,7 +5,7 @@ use glam::Vec3;
 
 use super::fibre::Fibre;
 use super::lobes::Lobes;
-use super::pbr::Pbr;
+use super::pbr::{Interface, Pbr};
 use crate::embree::{Ray, ShadowRay};
 use crate::scene::material::Material;
 use crate::util::sampling::PixelSample;
@@ -54,10 +54,14 @@ pub struct SurfacePoint<'s> {
     pub mirror: Vec3,
     /// The weight of its transmitted delta lobe towards `transmitted`
     /// (traced as a delta bounce, as the mirror is): a transmitting
-    /// dielectric's (`Pbr::delta_lobes`); 0 for none.
+    /// dielectric's (`Pbr::delta_lobes`); 0 for none. A rough one's is
+    /// drawn (`SurfacePoint::transmit`), and this weighs the choice of it.
     pub transmission: Vec3,
     /// The transmitted ray's unit direction, on the far side of the surface.
     pub transmitted: Vec3,
+    /// How its transmission crosses the surface (None: it transmits
+    /// nothing).
+    pub interface: Option<Interface>,
     /// What the ray that found the point kept of its light through the
     /// solid it crossed to get here (Beer-Lambert inside a transmitting
     /// material's volume, docs/design.md §5.8): 1 outside any.
@@ -105,6 +109,7 @@ impl<'m> SurfacePoint<'m> {
             mirror: Vec3::ZERO,
             transmission: Vec3::ZERO,
             transmitted: -wo,
+            interface: None,
             interior_transmittance: Vec3::ONE,
             epsilon: 1e-4,
             min_distance: 1e-4,
@@ -262,9 +267,45 @@ impl SurfacePoint<'_> {
     /// mirror ray is lifted (`mirror_ray`).
     #[must_use]
     pub fn transmitted_ray(&self) -> Ray {
+        self.ray_through(self.transmitted)
+    }
+
+    /// A ray leaving from the far side of the surface towards unit
+    /// `direction`, lowered below the surface as `transmitted_ray` says.
+    fn ray_through(&self, direction: Vec3) -> Ray {
         let ng = self.ng_facing_viewer();
-        let direction = at_least_above(self.transmitted, -ng, 0.01);
+        let direction = at_least_above(direction, -ng, 0.01);
         Ray { origin: self.p - ng * self.epsilon, direction, t_near: 0.0, t_far: f32::INFINITY, time: self.time }
+    }
+
+    /// Where its transmission sends a path (docs/design.md §5.8) and what
+    /// the path's throughput is multiplied by, before the choice of the
+    /// event: a smooth surface's transmitted ray with its weight; a rough
+    /// one's drawn from the uniform numbers `u`
+    /// (`Pbr::sample_rough_transmission`), a microfacet's total internal
+    /// reflection leaving on the viewer's side. None: the draw went
+    /// nowhere.
+    #[must_use]
+    pub fn transmit(&self, u: [f32; 2]) -> Option<(Ray, Vec3)> {
+        let rough = self.pbr.filter(|p| !p.is_smooth()).zip(self.interface);
+        let Some((pbr, interface)) = rough else { return Some((self.transmitted_ray(), self.transmission)) };
+        let drawn = pbr.sample_rough_transmission(self.n, self.wo, interface, self.coat_cos_view(), u)?;
+        let ng = self.ng_facing_viewer();
+        let ray = if drawn.crossed {
+            self.ray_through(drawn.direction)
+        } else {
+            self.ray_towards(at_least_above(drawn.direction, ng, 0.01))
+        };
+        Some((ray, drawn.weight))
+    }
+
+    /// Whether it is a rough solid's boundary seen from inside: its
+    /// reflection lobe is lit by no light (shadow rays stop at glass), so
+    /// a camera path follows it by drawing it, even without the path
+    /// method (docs/design.md §5.8).
+    #[must_use]
+    pub fn inside_rough_solid(&self) -> bool {
+        self.interface == Some(Interface::Leaving) && self.pbr.is_some_and(|p| !p.is_smooth())
     }
 
     /// The geometric normal turned to the viewer's side.

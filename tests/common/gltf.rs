@@ -294,11 +294,17 @@ pub fn floor_and_point_light() -> GltfBuilder {
 
 /// A glTF pane facing the camera, of a base colour of white and the
 /// material's `extensions`, in front of a red emitter (radiance 1) that
-/// fills the view, in the dark.
+/// fills the view, in the dark. Smooth: `rough_pane_before_a_red_emitter`
+/// of roughness 0.
 pub fn pane_before_a_red_emitter(extensions: Value) -> GltfBuilder {
+    rough_pane_before_a_red_emitter(extensions, 0.0)
+}
+
+/// The same pane of `roughness`.
+pub fn rough_pane_before_a_red_emitter(extensions: Value, roughness: f32) -> GltfBuilder {
     let mut b = GltfBuilder::new();
     let material = b.material(json!({
-        "pbrMetallicRoughness": { "baseColorFactor": [1, 1, 1, 1], "metallicFactor": 0, "roughnessFactor": 0 },
+        "pbrMetallicRoughness": { "baseColorFactor": [1, 1, 1, 1], "metallicFactor": 0, "roughnessFactor": roughness },
         "extensions": extensions,
     }));
     let mesh = b.quad([-1.0, -1.0, 0.0], [2.0, 0.0, 0.0], [0.0, 2.0, 0.0], Some(material));

@@ -91,7 +91,7 @@ impl Importer<'_, '_> {
         };
         let cutout = self.cutout(&m, &location, coverage, base.w)?;
         let (emission, emissive_texture) = self.emission(&m, &location)?;
-        let (ior, transmission) = self.transmission(&m, &location, roughness)?;
+        let (ior, transmission) = self.transmission(&m, &location)?;
         let clearcoat = self.clearcoat(&m, &location)?;
         let sheen = self.sheen(&m, &location)?;
         // KHR_materials_volume: "doubleSided has no effect on volume
@@ -215,16 +215,14 @@ impl Importer<'_, '_> {
     /// KHR_materials_ior's index of refraction (1.5 without it), and
     /// KHR_materials_transmission's factor and texture with
     /// KHR_materials_volume's thickness and attenuation (docs/design.md
-    /// §5.8). A rough transmitting surface is transmitted as a smooth one
-    /// (its reflection keeps its roughness), with a warning; the thickness
-    /// texture is not read: the geometry is the volume, as in a path
-    /// tracer, and only whether the thickness factor is 0 (thin-walled)
-    /// matters.
+    /// §5.8). A rough transmitting surface's transmission is as rough as
+    /// its reflection (Walter et al. 2007's BTDF); the thickness texture is
+    /// not read: the geometry is the volume, as in a path tracer, and only
+    /// whether the thickness factor is 0 (thin-walled) matters.
     fn transmission(
         &mut self,
         m: &gltf::Material<'_>,
         location: &str,
-        roughness: f32,
     ) -> Result<(f32, Option<Transmission>), SceneError> {
         let ior = m.ior().unwrap_or(DEFAULT_IOR);
         let at = format!("{location}.extensions.KHR_materials_ior.ior");
@@ -252,9 +250,6 @@ impl Importer<'_, '_> {
         };
         if factor == 0.0 && texture.is_none() {
             return Ok((ior, None));
-        }
-        if roughness > 0.0 {
-            self.warn(&at, &format!("roughness {roughness}: transmitted as smooth glass (its reflection stays rough)"));
         }
         let mut transmission = Transmission { texture, ..Transmission::thin(factor) };
         if let Some(volume) = m.volume() {
