@@ -1,19 +1,22 @@
-"""Builds scenes/environment/clearcoat_test/ and sheen_chair/ and Cycles'
-references of them with Blender (the `bpy` module, Blender 5.0.1): the
-Khronos sample models ClearCoatTest (CC BY 4.0) and SheenChair (CC0), each
-imported by Blender's glTF importer (KHR_materials_clearcoat becomes the
-Principled BSDF's coat, KHR_materials_sheen its sheen), framed by a camera,
+"""Builds OUT/clearcoat_test/, sheen_chair/, transmission_test/,
+glass_vase_flowers/ and toy_car/ and Cycles' references of them with
+Blender (the `bpy` module, Blender 5.0.1): the Khronos sample models
+ClearCoatTest (CC BY 4.0), SheenChair, TransmissionTest, GlassVaseFlowers
+and ToyCar (CC0), each imported by Blender's glTF importer
+(KHR_materials_clearcoat becomes the Principled BSDF's coat,
+KHR_materials_sheen its sheen, KHR_materials_transmission its
+transmission, alpha blending its alpha), framed by a camera,
 lit only by Blender's courtyard HDRI (courtyard.exr here, CC0, turned as
 make_cycles.py explains), exported again by Blender's glTF exporter with
-the camera; Cycles renders each with direct light only (max_bounces 0), a
-box filter one pixel wide, no denoising, single-scattering GGX (glTF's
-BRDF has none).
+the camera; Cycles renders each with direct light only (`light_paths`:
+through glass, the paths lightcuts follows by default), a box filter one
+pixel wide, no denoising, single-scattering GGX (glTF's BRDF has none).
 
     python3 -m venv venv && venv/bin/pip install bpy==5.0.1
     venv/bin/python scenes/environment/make_cycles_layers.py SAMPLE_MODELS_DIR
 
-SAMPLE_MODELS_DIR holds `ClearCoatTest/glTF-Binary/ClearCoatTest.glb` and
-`SheenChair/glTF/SheenChair.gltf` of the Khronos glTF sample models.
+SAMPLE_MODELS_DIR holds the Khronos glTF sample models' files named in
+MODELS below. OUT (default: this folder) is where the scenes go.
 Textures are scaled down to 512 x 512 (the repository stays small).
 ONLY=sheen_chair rebuilds one model; SAMPLES sets Cycles' samples.
 """
@@ -30,11 +33,33 @@ SAMPLES = int(os.environ.get("SAMPLES", "4096"))
 OUT = os.environ.get("OUT", HERE)
 
 # name -> (file under SAMPLE_MODELS_DIR, view azimuth and elevation in
-# degrees, width and height in pixels).
+# degrees (for a model without a camera of its own), width and height in
+# pixels, whether it has glass).
 MODELS = {
-    "clearcoat_test": ("ClearCoatTest/glTF-Binary/ClearCoatTest.glb", 0.0, 10.0, 192, 320),
-    "sheen_chair": ("SheenChair/glTF/SheenChair.gltf", 30.0, 20.0, 240, 200),
+    "clearcoat_test": ("ClearCoatTest/glTF-Binary/ClearCoatTest.glb", 0.0, 10.0, 192, 320, False),
+    "sheen_chair": ("SheenChair/glTF/SheenChair.gltf", 30.0, 20.0, 240, 200, False),
+    "transmission_test": ("TransmissionTest/glTF/TransmissionTest.gltf", 0.0, 25.0, 320, 240, True),
+    "glass_vase_flowers": ("GlassVaseFlowers/glTF/GlassVaseFlowers.gltf", 0.0, 10.0, 240, 320, True),
+    "toy_car": ("ToyCar/glTF/ToyCar.gltf", 30.0, 20.0, 320, 240, True),
 }
+
+
+def light_paths(cycles, glass):
+    """Direct light only, as lightcuts renders by default; with glass, the
+    camera paths also follow what lightcuts' default mode follows
+    (docs/design.md §5.8): up to 4 reflections, 12 transmissions, 16
+    alpha-blended layers, and no diffuse bounce (so no caustic)."""
+    if not glass:
+        cycles.max_bounces = 0
+        return
+    cycles.max_bounces = 32
+    cycles.diffuse_bounces = 0
+    cycles.glossy_bounces = 4
+    cycles.transmission_bounces = 12
+    cycles.transparent_max_bounces = 16
+    cycles.volume_bounces = 0
+    cycles.caustics_reflective = False
+    cycles.caustics_refractive = False
 
 
 def prepare_materials():
@@ -77,13 +102,21 @@ def world():
     return w
 
 
-def build(name, path, azimuth, elevation, width, height):
-    bpy.ops.wm.read_factory_settings(use_empty=True)
-    bpy.ops.import_scene.gltf(filepath=path)
-    prepare_materials()
+def own_camera():
+    """The model's own camera (its author's framing; the first by name of
+    several, the others removed so that the export has that one alone),
+    if it has one."""
+    cameras = sorted((obj for obj in bpy.data.objects if obj.type == "CAMERA"), key=lambda c: c.name)
+    for other in cameras[1:]:
+        bpy.data.objects.remove(other)
+    return cameras[0] if cameras else None
+
+
+def frame(azimuth, elevation):
+    """A camera of 30 degrees vertically that frames the model's bounds
+    from `azimuth` and `elevation` (degrees)."""
     lo, hi = bounds()
     centre, radius = (lo + hi) / 2, (hi - lo).length / 2
-    scene = bpy.context.scene
     a, e = math.radians(azimuth), math.radians(elevation)
     direction = Vector((math.sin(a) * math.cos(e), -math.cos(a) * math.cos(e), math.sin(e)))
     camera = bpy.data.objects.new("camera", bpy.data.cameras.new("camera"))
@@ -91,15 +124,23 @@ def build(name, path, azimuth, elevation, width, height):
     camera.data.sensor_fit = "VERTICAL"
     camera.location = centre + direction * (radius / math.sin(math.radians(15.0)))
     camera.rotation_euler = (centre - camera.location).to_track_quat("-Z", "Y").to_euler()
-    scene.collection.objects.link(camera)
-    scene.camera = camera
+    bpy.context.scene.collection.objects.link(camera)
+    return camera
+
+
+def build(name, path, azimuth, elevation, width, height, glass):
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.import_scene.gltf(filepath=path)
+    prepare_materials()
+    scene = bpy.context.scene
+    scene.camera = own_camera() or frame(azimuth, elevation)
     scene.world = world()
     scene.render.engine = "CYCLES"
     scene.cycles.device = "CPU"
     scene.cycles.samples = SAMPLES
     scene.cycles.use_adaptive_sampling = False
     scene.cycles.use_denoising = False
-    scene.cycles.max_bounces = 0
+    light_paths(scene.cycles, glass)
     scene.cycles.pixel_filter_type = "BOX"
     scene.cycles.filter_width = 1.0
     scene.cycles.sample_clamp_direct = 0.0
@@ -126,9 +167,9 @@ def build(name, path, azimuth, elevation, width, height):
 def main():
     root = sys.argv[-1]
     only = os.environ.get("ONLY")
-    for name, (path, azimuth, elevation, width, height) in MODELS.items():
+    for name, (path, *view) in MODELS.items():
         if not only or name == only:
-            build(name, os.path.join(root, path), azimuth, elevation, width, height)
+            build(name, os.path.join(root, path), *view)
 
 
 main()
