@@ -25,6 +25,26 @@ fn small_pbr_scene(lights_per_side: u32) -> String {
         .toml()
 }
 
+/// The same grid over layered and transmitting materials (docs/design.md
+/// §5.8, §5.10): a rough clear coat over red, a white sheen over blue, and
+/// rough glass, whose transmission the camera paths draw.
+fn small_layered_scene(lights_per_side: u32) -> String {
+    use lightcuts::scene::builder::SceneText;
+    let pbr = |extra: &str| format!("type = \"pbr\"\nmetallic = 0\nroughness = 0.5\n{extra}\n");
+    SceneText::new(96, 72)
+        .camera([0.0, 3.0, 6.0], [0.0, 0.5, 0.0], 45.0)
+        .material("floor", [0.7, 0.7, 0.7], &pbr(""))
+        .material("coated", [0.8, 0.1, 0.1], &pbr("clearcoat = 1\nclearcoat_roughness = 0.2"))
+        .material("velvet", [0.1, 0.2, 0.6], &pbr("sheen_colour = [1, 1, 1]\nsheen_roughness = 0.4"))
+        .material("frosted", [1.0, 1.0, 1.0], &pbr("transmission = 1").replace("roughness = 0.5", "roughness = 0.3"))
+        .floor(0.0, 5.0, "floor")
+        .sphere([-1.2, 0.6, 0.0], 0.6, "coated")
+        .sphere([0.1, 0.5, 0.5], 0.5, "frosted")
+        .sphere([1.3, 0.5, -0.2], 0.5, "velvet")
+        .grid([-2.0, 3.0, -2.0], [4.0, 0.0, 0.0], [0.0, 0.0, 4.0], [lights_per_side; 2], [1.0, 0.9, 0.8])
+        .toml()
+}
+
 #[test]
 fn error_zero_reproduces_the_exact_image() {
     // 16 x 16 = 256 lights: above the exhaustive limit, so the cut runs.
@@ -34,6 +54,9 @@ fn error_zero_reproduces_the_exact_image() {
     // environment's lights: its part is sampled, the same in both.
     let environment = "\n[environment]\nradiance = [0.4, 0.5, 0.6]\nsamples = 256\n";
     error_zero_reproduces_the_exact_image_of(&(small_pbr_scene(16) + environment), "error-zero-environment");
+    // Coats, sheens and rough glass: their bounds let no cluster go
+    // unrefined at --error 0 either.
+    error_zero_reproduces_the_exact_image_of(&small_layered_scene(16), "error-zero-layered");
     // Reconstruction cuts assume no visibility at --error 0.
     error_zero_reproduces_the_exact_image_with(&small_scene(16), "error-zero-reconstruct", &["--reconstruct", "2"]);
 }
