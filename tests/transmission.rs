@@ -192,7 +192,7 @@ fn gltf_transmission_is_read_as_its_extensions_define_it() {
     assert_eq!(means(&image)[0], 1.0, "IOR 1");
     // Rough (0.2: GGX alpha 0.04), the thin pane passes each view's
     // reflection about a microfacet mirrored through it, weighted (1 - F)
-    // G2 / G1: 0.958 of the emitter on average (scenes within 14 degrees of
+    // G2 / G1: 0.958 of the emitter on average (views within 14 degrees of
     // the normal; the mean of that weight, by Monte Carlo, over the
     // visible normals), all but 0.3% of it within 60 degrees of the view,
     // where the emitter is. Its roughness is no longer warned.
