@@ -145,25 +145,22 @@ fn glass_is_the_same_bits_for_any_threads_and_window() {
 #[test]
 fn gltf_transmission_is_read_as_its_extensions_define_it() {
     let dir = TempDir::new("glass-gltf");
-    let render_pane = |extensions: serde_json::Value, used: &[&str]| {
-        let mut b = pane_before_a_red_emitter(extensions);
+    // The pane of `roughness` and `extensions` at `spp`: its image and
+    // what the render said on stderr.
+    let render_rough_pane = |extensions: serde_json::Value, used: &[&str], roughness: f32, spp: &str| {
+        let mut b = rough_pane_before_a_red_emitter(extensions, roughness);
         for name in used {
             b.use_extension(name);
         }
         let path = b.write_separate(&dir.path(""), "pane");
         let out = dir.path("pane.exr");
-        let stdout = common::lightcuts_ok(&[
-            "render",
-            common::s(&path),
-            "-o",
-            common::s(&out),
-            "--spp",
-            "64",
-            "--resolution",
-            "16x16",
-        ]);
-        (read_exr(&out).unwrap(), stdout)
+        let args = ["render", common::s(&path), "-o", common::s(&out), "--spp", spp, "--resolution", "16x16"];
+        let run = common::lightcuts(&args);
+        let stderr = String::from_utf8_lossy(&run.stderr).into_owned();
+        assert!(run.status.success(), "lightcuts {args:?} failed:\n{stderr}");
+        (read_exr(&out).unwrap(), stderr)
     };
+    let render_pane = |extensions: serde_json::Value, used: &[&str]| render_rough_pane(extensions, used, 0.0, "64");
     // A thin pane (no KHR_materials_volume) passes 1 - F = 0.96 of the
     // emitter straight through (views within 14 degrees of the normal:
     // Schlick's weight is below 3e-8); the rest is a reflection of the
@@ -196,24 +193,14 @@ fn gltf_transmission_is_read_as_its_extensions_define_it() {
     // the normal; the mean of that weight, by Monte Carlo, over the
     // visible normals), all but 0.3% of it within 60 degrees of the view,
     // where the emitter is. Its roughness is no longer warned.
-    let mut b =
-        rough_pane_before_a_red_emitter(json!({ "KHR_materials_transmission": { "transmissionFactor": 1.0 } }), 0.2);
-    b.use_extension("KHR_materials_transmission");
-    let path = b.write_separate(&dir.path(""), "rough");
-    let out = dir.path("rough.exr");
-    let run = common::lightcuts(&[
-        "render",
-        common::s(&path),
-        "-o",
-        common::s(&out),
-        "--spp",
+    let (image, stderr) = render_rough_pane(
+        json!({ "KHR_materials_transmission": { "transmissionFactor": 1.0 } }),
+        &["KHR_materials_transmission"],
+        0.2,
         "256",
-        "--resolution",
-        "16x16",
-    ]);
-    let stderr = String::from_utf8_lossy(&run.stderr);
-    assert!(run.status.success() && !stderr.contains("warning"), "{stderr}");
-    let red = means(&read_exr(&out).unwrap())[0];
+    );
+    assert!(!stderr.contains("warning"), "{stderr}");
+    let red = means(&image)[0];
     eprintln!("a rough pane: {red:.4}");
     assert!((red - 0.957).abs() < 0.004, "a rough pane: {red}");
     // Out of range: the file and the field are named.

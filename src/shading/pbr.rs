@@ -301,7 +301,8 @@ impl Pbr {
     ///   reflects all of it past the critical angle (total internal
     ///   reflection: no transmission, the dielectric's mirror 1; a rough
     ///   surface's microfacets may still pass some, so its transmission
-    ///   is then its tint, the weight that chooses its draw);
+    ///   is then what it passes before Fresnel, the weight that chooses
+    ///   its draw);
     /// - the Fresnel term is the specification's Schlick form at the
     ///   cosine on the air's side (the view's entering, the transmitted
     ///   ray's leaving), as Fresnel's reflectance is the same both ways;
@@ -331,7 +332,7 @@ impl Pbr {
                 let mirror = self.layered(mirror, cos_i, coat_cos_view);
                 // A rough surface's microfacets may still pass some: its
                 // draw's weight, not this, is what the path keeps.
-                let rough = if self.is_smooth() { Vec3::ZERO } else { self.transmission_tint(cos_i, coat_cos_view) };
+                let rough = if self.is_smooth() { Vec3::ZERO } else { self.transmitted(1.0, cos_i, coat_cos_view) };
                 return DeltaLobes { mirror, transmission: rough, transmitted: -wo };
             }
             let cos_t = (1.0 - sin2_t).sqrt();
@@ -339,10 +340,18 @@ impl Pbr {
             (d, if interface == Interface::Leaving { cos_t } else { cos_i })
         };
         let (f_d, f_m) = self.fresnel(cos_air);
-        let transmission = self.base * (self.transmission * (1.0 - self.metallic) * (1.0 - f_d.max_element()));
-        let transmission = transmission * self.base_weight(cos_i, coat_cos_view);
+        let transmission = self.transmitted(1.0 - f_d.max_element(), cos_i, coat_cos_view);
         let mirror = if self.is_smooth() { self.mirror_of(f_d, f_m) } else { Vec3::ZERO };
         DeltaLobes { mirror: self.layered(mirror, cos_i, coat_cos_view), transmission, transmitted }
+    }
+
+    /// What a transmitting dielectric seen at `n_dot_v` (its coat's normal
+    /// at `coat_cos_view`) passes of the `share` its interface lets through
+    /// (1 − F for a smooth one, docs/design.md §5.8): base · t · (1 −
+    /// metallic) · share under the layers over it.
+    #[must_use]
+    pub fn transmitted(&self, share: f32, n_dot_v: f32, coat_cos_view: f32) -> Vec3 {
+        self.base * (self.transmission * (1.0 - self.metallic) * share) * self.base_weight(n_dot_v, coat_cos_view)
     }
 
     /// A base mirror's reflectance `mirror` seen at `n_dot_v` under the

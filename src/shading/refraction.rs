@@ -5,7 +5,8 @@
 //! Refraction through Rough Surfaces", with Heitz 2018's visible normals):
 //! a microfacet normal m visible from the view, then the view refracted
 //! through m by Snell's law. Weighted by what the BTDF over the density
-//! leaves, (1 − F) G2 / G1, the draw is the whole lobe: the renderer
+//! leaves, (1 − F) G2 / G1 of what the surface transmits
+//! (`Pbr::transmitted`), the draw is the whole lobe: the renderer
 //! follows it as a sampled event of the path (`SurfacePoint::transmit`),
 //! and the lights never evaluate it, as shadow rays stop at glass.
 
@@ -41,14 +42,6 @@ fn shadowing_over_masking(cos_o: f32, cos_i: f32, alpha: f32) -> f32 {
 }
 
 impl Pbr {
-    /// What a transmitting dielectric passes before the Fresnel term, seen
-    /// at `n_dot_v` (its coat's normal at `coat_cos_view`): base · t · (1 −
-    /// metallic) under the layers over it (docs/design.md §5.8).
-    #[must_use]
-    pub fn transmission_tint(&self, n_dot_v: f32, coat_cos_view: f32) -> Vec3 {
-        self.base * (self.transmission * (1.0 - self.metallic) * self.base_weight(n_dot_v, coat_cos_view))
-    }
-
     /// A rough transmission's direction drawn from the uniform numbers
     /// `u`, seen from unit `wo` through the unit shading normal `n` on the
     /// viewer's side (docs/design.md §5.8):
@@ -80,7 +73,6 @@ impl Pbr {
         let local = Vec3::new(wo.dot(t), wo.dot(b), wo.dot(n).max(MIN_COS_VIEW)).normalize_or(Vec3::Z);
         let m = sample_visible_normal(local, self.alpha, u[0], u[1]);
         let cos_m = local.dot(m).max(0.0);
-        let tint = self.transmission_tint(local.z, coat_cos_view);
         let fresnel = |cos: f32| self.fresnel(cos).0.max_element();
         let reflected = 2.0 * cos_m * m - local;
         let (direction, air_cos, crossed) = match interface {
@@ -103,7 +95,8 @@ impl Pbr {
         if cos_i.is_nan() || cos_i <= 0.0 {
             return None;
         }
-        let weight = tint * ((1.0 - fresnel(air_cos)) * shadowing_over_masking(local.z, cos_i, self.alpha));
+        let share = (1.0 - fresnel(air_cos)) * shadowing_over_masking(local.z, cos_i, self.alpha);
+        let weight = self.transmitted(share, local.z, coat_cos_view);
         let direction = (t * direction.x + b * direction.y + n * direction.z).normalize_or_zero();
         Some(Transmitted { direction, weight, crossed })
     }
