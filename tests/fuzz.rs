@@ -302,7 +302,11 @@ fn render_lit(scene: &Scene, lights: &[Lights]) -> Outcome {
     let whole_trees =
         lightcut::build_trees_with(lights, 1, &CutSettings { exhaustive_lights: 0, ..MULTIDIMENSIONAL_DEFAULTS });
     let emission_group = scene.emission_groups();
-    let emitters = lightcuts::render::emitter_sampling::EmitterSampling::of(scene, settings.spp);
+    let emitters = lightcuts::render::emitter_sampling::EmitterSampling::of(
+        scene,
+        settings.spp,
+        lightcuts::light::AreaLeaves::Parts,
+    );
     let methods: [Box<dyn for<'a> DirectLight<'a> + '_>; 4] = [
         Box::new(Exact),
         Box::new(Bounded { trees: &trees, settings: CutSettings::default() }),

@@ -8,6 +8,7 @@
 
 use glam::{Vec2, Vec3};
 
+use super::AreaLeaves;
 use crate::scene::{LightSource, Scene};
 use crate::util::color::luminance;
 
@@ -113,9 +114,10 @@ pub struct AreaEmitters {
 }
 
 impl AreaEmitters {
-    /// The area lights of `scene` that emit and have area.
+    /// The area lights of `scene` that emit and have area, with as many
+    /// stand-in lights per side as `leaves` makes of them.
     #[must_use]
-    pub fn of(scene: &Scene) -> Self {
+    pub fn of(scene: &Scene, leaves: AreaLeaves) -> Self {
         let mut found = Self { emitters: Vec::new(), of_mesh: vec![None; scene.meshes.len()] };
         for (i, source) in scene.lights.iter().enumerate() {
             let LightSource::Area { mesh: m, samples, .. } = *source else { continue };
@@ -137,6 +139,11 @@ impl AreaEmitters {
             if !(total > 0.0 && luminance > 0.0 && total.is_finite()) || samples == 0 {
                 continue;
             }
+            let textured = scene.materials[mesh.material].emissive_texture.is_some();
+            let points = match leaves {
+                AreaLeaves::Triangles if !textured => mesh.triangles.len() as u32,
+                _ => samples,
+            };
             found.of_mesh[m] = Some(found.emitters.len() as u32);
             found.emitters.push(AreaEmitter {
                 mesh: m,
@@ -146,7 +153,7 @@ impl AreaEmitters {
                 lo,
                 hi,
                 luminance,
-                points: samples,
+                points,
                 group: scene.groups.of_light.get(i).copied().unwrap_or(0),
             });
         }
@@ -185,7 +192,7 @@ samples = 16
     #[test]
     fn points_are_uniform_over_the_surface_and_emit_on_the_front_only() {
         let scene = quad_scene();
-        let emitters = AreaEmitters::of(&scene);
+        let emitters = AreaEmitters::of(&scene, AreaLeaves::Parts);
         let [e] = emitters.emitters.as_slice() else { panic!("one emitter") };
         assert!((e.area - 2.0).abs() < 1e-6);
         assert_eq!(emitters.of_mesh(e.mesh), Some(0));

@@ -353,6 +353,24 @@ impl TreeLight {
     }
 }
 
+/// How an untextured area light becomes leaves of the light tree
+/// (docs/design.md §6.1). A textured emitter's leaves are its fixed points
+/// either way: they follow its emitted power.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+pub enum AreaLeaves {
+    /// About its `samples` equal parts: the representatives a cut that
+    /// keeps its lights over a pixel's samples needs to see a soft shadow
+    /// smooth at one sample (the bounded and multidimensional cuts, and
+    /// the exact sum over them).
+    #[default]
+    Parts,
+    /// One leaf per triangle of the emitter (a rectangle is two), its
+    /// point drawn by solid angle: the stochastic cut draws one light per
+    /// cut node and sample, and a whole triangle drawn by solid angle is
+    /// as good a draw as one of its parts, for fewer shadow rays.
+    Triangles,
+}
+
 /// Every light of a scene, by kind.
 #[derive(Debug, Clone, Default)]
 pub struct Lights {
@@ -377,7 +395,7 @@ impl Lights {
     /// emitter samples from its own seeded stream.
     #[must_use]
     pub fn from_scene(scene: &Scene) -> Self {
-        Self::of_group(scene, None)
+        Self::of_group(scene, None, AreaLeaves::Parts)
     }
 
     /// The scene's lights split by light group (`Scene::groups`): one
@@ -385,14 +403,20 @@ impl Lights {
     /// light is sampled the same whichever group it is in.
     #[must_use]
     pub fn by_group(scene: &Scene) -> Vec<Self> {
+        Self::by_group_with(scene, AreaLeaves::Parts)
+    }
+
+    /// [`Lights::by_group`], with area lights as `leaves`.
+    #[must_use]
+    pub fn by_group_with(scene: &Scene, leaves: AreaLeaves) -> Vec<Self> {
         if !scene.groups.named() {
-            return vec![Self::from_scene(scene)];
+            return vec![Self::of_group(scene, None, leaves)];
         }
-        (0..scene.groups.count()).map(|g| Self::of_group(scene, Some(g))).collect()
+        (0..scene.groups.count()).map(|g| Self::of_group(scene, Some(g), leaves)).collect()
     }
 
     /// The lights of group `group`, or of every group.
-    fn of_group(scene: &Scene, group: Option<usize>) -> Self {
+    fn of_group(scene: &Scene, group: Option<usize>, leaves: AreaLeaves) -> Self {
         let wanted = |g: usize| group.is_none_or(|want| want == g);
         let mut lights = Self::default();
         for (i, source) in scene.lights.iter().enumerate() {
@@ -435,7 +459,11 @@ impl Lights {
                         .map(|t| emitters::EmitterTriangle { p: t.map(|i| mesh.positions[i as usize]) })
                         .collect();
                     let front = match &scene.materials[mesh.material].emissive_texture {
-                        None => emitters::sample_area_light(&triangles, radiance, samples as usize, 0.0),
+                        None => {
+                            // One part per triangle: each triangle's share of 1 is 1.
+                            let parts = if leaves == AreaLeaves::Triangles { samples.min(1) } else { samples } as usize;
+                            emitters::sample_area_light(&triangles, radiance, parts, 0.0)
+                        }
                         Some(texture) => emitters::sample_textured_area_light(
                             &triangles,
                             |k, ab| radiance * texture.lookup(&mesh.tex_coords(k, ab.x, ab.y), &scene.textures),

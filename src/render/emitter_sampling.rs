@@ -8,6 +8,7 @@ use glam::Vec3;
 
 use crate::light::area::{AreaEmitters, AreaSample};
 use crate::light::environment::{EnvironmentLight, EnvironmentSample};
+use crate::light::AreaLeaves;
 use crate::scene::Scene;
 use crate::shading::{Bsdf, SurfacePoint};
 
@@ -67,12 +68,12 @@ impl<'a> EmitterSampling<'a> {
     /// that a few samples per pixel, the bounded mode's usual setting, do
     /// not leave a sharp lobe's reflection grainy.
     #[must_use]
-    pub fn of(scene: &'a Scene, spp: u32) -> Option<Self> {
+    pub fn of(scene: &'a Scene, spp: u32, leaves: AreaLeaves) -> Option<Self> {
         let environment = scene.environment.as_ref().and_then(|environment| {
             let light = EnvironmentLight::new(&environment.map)?;
             Some(SampledEnvironment { light, lights: environment.samples, group: scene.groups.environment })
         });
-        let area = AreaEmitters::of(scene);
+        let area = AreaEmitters::of(scene, leaves);
         if environment.is_none() && area.is_empty() {
             return None;
         }
@@ -238,7 +239,7 @@ radiance = [0.2, 0.2, 0.2]
     #[test]
     fn draws_fall_on_each_emitter_as_its_probability_says() {
         let scene = scene();
-        let sampling = EmitterSampling::of(&scene, 64).unwrap();
+        let sampling = EmitterSampling::of(&scene, 64, AreaLeaves::Parts).unwrap();
         assert_eq!(sampling.area.emitters.len(), 2);
         let choose = |p: Vec3, n: Vec3| -> EmitterChoice {
             let mut choice = EmitterChoice::default();

@@ -2,6 +2,7 @@
 //! geometry, with passes in either mode. Shared by `render`, `sweep` and the
 //! benchmarks.
 
+use std::sync::OnceLock;
 use std::time::{Duration, Instant};
 
 use super::direct::DirectLight;
@@ -10,7 +11,7 @@ use super::integrator::Integrator;
 use super::tracer::Tracer;
 use super::{render, thread_pool, vpl, Film, PassProgress, PassSettings, PassStats, TextureFilter};
 use crate::embree::{Device, EmbreeError};
-use crate::light::{LightKind, Lights};
+use crate::light::{AreaLeaves, LightKind, Lights};
 use crate::light_tree::LightTrees;
 use crate::lightcut::CutSettings;
 use crate::scene::{Indirect, Scene};
@@ -31,6 +32,18 @@ pub enum Mode {
 }
 
 impl Mode {
+    /// How area lights become the trees' leaves: whole triangles drawn by
+    /// solid angle for the stochastic cut, which draws a light per cut node
+    /// and sample; their parts for the others, whose lights stay put over a
+    /// pixel's samples (docs/design.md §6.1).
+    #[must_use]
+    pub fn area_leaves(&self) -> AreaLeaves {
+        match self {
+            Self::Stochastic(_) => AreaLeaves::Triangles,
+            Self::Exact | Self::Bounded(_) | Self::Multidimensional(_) => AreaLeaves::Parts,
+        }
+    }
+
     /// The cut's settings, for the three cut modes (bounded, stochastic,
     /// multidimensional).
     #[must_use]
@@ -112,6 +125,9 @@ pub struct Session<'s> {
     /// The scene's lights by light group (one entry when it names no
     /// group), without the VPLs, which each pass traces.
     pub lights: Vec<Lights>,
+    /// The same with area lights as whole triangles (`AreaLeaves::Triangles`,
+    /// the stochastic cut's), built by the first pass that needs them.
+    triangle_lights: OnceLock<Vec<Lights>>,
     pub pool: rayon::ThreadPool,
     pub geometry: Geometry<'s>,
 }
@@ -186,7 +202,18 @@ impl<'s> Session<'s> {
         let device = Device::try_new()?;
         let geometry = Geometry::try_new(&device, scene, &lights)
             .map_err(|source| SessionError::Geometry { file: scene.path.clone(), source })?;
-        Ok(Self { scene, lights, pool, geometry })
+        Ok(Self { scene, lights, triangle_lights: OnceLock::new(), pool, geometry })
+    }
+
+    /// The scene's lights by light group with area lights as `leaves`.
+    #[must_use]
+    pub fn lights_for(&self, leaves: AreaLeaves) -> &[Lights] {
+        match leaves {
+            AreaLeaves::Parts => &self.lights,
+            AreaLeaves::Triangles => self
+                .triangle_lights
+                .get_or_init(|| self.pool.install(|| Lights::by_group_with(self.scene, AreaLeaves::Triangles))),
+        }
     }
 
     /// Renders one pass in `mode` (building the light trees first for the
@@ -204,18 +231,21 @@ impl<'s> Session<'s> {
         let refused_before = crate::embree::refused_rays();
         // Indirect light: VPLs for this seed, added to the oriented lights of
         // the group their path started from.
+        // Area lights as the mode's leaves; the VPLs leave them from their
+        // parts either way (a point uniform on the emitter).
+        let leaves = mode.area_leaves();
         let (mut lights, vpls) = match self.scene.indirect {
             Some(Indirect::Vpl(indirect)) => {
                 let vpls = self.pool.install(|| vpl::trace(&self.geometry, &self.lights, indirect, settings.seed));
                 self.geometry.embree.take_error("tracing the light paths of the VPLs")?;
                 let count = vpls.iter().map(Vec::len).sum();
-                let mut lights = self.lights.clone();
+                let mut lights = self.lights_for(leaves).to_vec();
                 for (group, vpls) in lights.iter_mut().zip(vpls) {
                     group.oriented.extend(vpls);
                 }
                 (std::borrow::Cow::Owned(lights), count)
             }
-            Some(Indirect::Path(_)) | None => (std::borrow::Cow::Borrowed(&self.lights), 0),
+            Some(Indirect::Path(_)) | None => (std::borrow::Cow::Borrowed(self.lights_for(leaves)), 0),
         };
         let split_groups = settings.aovs.groups && self.scene.groups.named();
         if !split_groups && lights.len() > 1 {
@@ -238,7 +268,7 @@ impl<'s> Session<'s> {
         });
         let direct = mode.method(trees.as_ref());
         let emission_group = self.scene.emission_groups();
-        let emitters = super::emitter_sampling::EmitterSampling::of(self.scene, settings.spp);
+        let emitters = super::emitter_sampling::EmitterSampling::of(self.scene, settings.spp, leaves);
         let camera = self.scene.camera(settings.width, settings.height);
         let integrator = Integrator {
             tracer: Tracer {
