@@ -128,11 +128,13 @@ fn a_bright_patch_in_glossy_reflections() {
 /// only, as here) at 16,384 spp, on three white metals (roughness 0.1,
 /// 0.25, 0.45) and a diffuse floor under a real HDR environment (Blender's
 /// courtyard, CC0): scenes/environment/, with the script that rendered the
-/// reference and how the two scenes correspond; at 64 spp in the default
-/// mode and 128 in the bounded one.
+/// reference and how the two scenes correspond; at 128 spp in the default
+/// mode and in the bounded one (the default mode draws the sky as one
+/// light, two rays a vertex: noisier a sample than a cut through its
+/// directions, and 4.7 times faster; 2.3% over 8x8 blocks at 64 spp).
 #[test]
 fn glossy_spheres_under_an_hdr_environment_match_mitsuba() {
-    let flags: &[&[&str]] = &[&["--spp", "64"], &["--spp", "128", "--bounded"]];
+    let flags: &[&[&str]] = &[&["--spp", "128"], &["--spp", "128", "--bounded"]];
     matches_peer("mitsuba", "environment", "spheres.toml", "mitsuba-16384.exr", flags);
 }
 

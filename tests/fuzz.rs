@@ -305,7 +305,7 @@ fn render_lit(scene: &Scene, lights: &[Lights]) -> Outcome {
     let emitters = lightcuts::render::emitter_sampling::EmitterSampling::of(
         scene,
         settings.spp,
-        lightcuts::light::AreaLeaves::Parts,
+        lightcuts::light::EmitterLeaves::Parts,
     );
     let methods: [Box<dyn for<'a> DirectLight<'a> + '_>; 4] = [
         Box::new(Exact),

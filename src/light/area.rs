@@ -8,7 +8,7 @@
 
 use glam::{Vec2, Vec3};
 
-use super::AreaLeaves;
+use super::EmitterLeaves;
 use crate::scene::{LightSource, Scene};
 use crate::util::color::luminance;
 
@@ -117,7 +117,7 @@ impl AreaEmitters {
     /// The area lights of `scene` that emit and have area, with as many
     /// stand-in lights per side as `leaves` makes of them.
     #[must_use]
-    pub fn of(scene: &Scene, leaves: AreaLeaves) -> Self {
+    pub fn of(scene: &Scene, leaves: EmitterLeaves) -> Self {
         let mut found = Self { emitters: Vec::new(), of_mesh: vec![None; scene.meshes.len()] };
         for (i, source) in scene.lights.iter().enumerate() {
             let LightSource::Area { mesh: m, samples, .. } = *source else { continue };
@@ -141,7 +141,7 @@ impl AreaEmitters {
             }
             let textured = scene.materials[mesh.material].emissive_texture.is_some();
             let points = match leaves {
-                AreaLeaves::Triangles if !textured => mesh.triangles.len() as u32,
+                EmitterLeaves::Whole if !textured => mesh.triangles.len() as u32,
                 _ => samples,
             };
             found.of_mesh[m] = Some(found.emitters.len() as u32);
@@ -192,7 +192,7 @@ samples = 16
     #[test]
     fn points_are_uniform_over_the_surface_and_emit_on_the_front_only() {
         let scene = quad_scene();
-        let emitters = AreaEmitters::of(&scene, AreaLeaves::Parts);
+        let emitters = AreaEmitters::of(&scene, EmitterLeaves::Parts);
         let [e] = emitters.emitters.as_slice() else { panic!("one emitter") };
         assert!((e.area - 2.0).abs() < 1e-6);
         assert_eq!(emitters.of_mesh(e.mesh), Some(0));

@@ -353,22 +353,26 @@ impl TreeLight {
     }
 }
 
-/// How an untextured area light becomes leaves of the light tree
-/// (docs/design.md §6.1). A textured emitter's leaves are its fixed points
-/// either way: they follow its emitted power.
+/// How the continuous emitters (untextured area lights, the environment)
+/// become leaves of the light trees (docs/design.md §6.1 and docs/design.md §6.2). A
+/// textured emitter's leaves are its fixed points either way: they follow
+/// its emitted power.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
-pub enum AreaLeaves {
-    /// About its `samples` equal parts: the representatives a cut that
-    /// keeps its lights over a pixel's samples needs to see a soft shadow
-    /// smooth at one sample (the bounded and multidimensional cuts, and
-    /// the exact sum over them).
+pub enum EmitterLeaves {
+    /// An area light as about its `samples` equal parts, the environment
+    /// as its `samples` directions: the representatives a cut that keeps
+    /// its lights over a pixel's samples needs to see a soft shadow smooth
+    /// at one sample (the bounded and multidimensional cuts, and the exact
+    /// sum over them).
     #[default]
     Parts,
-    /// One leaf per triangle of the emitter (a rectangle is two), its
-    /// point drawn by solid angle: the stochastic cut draws one light per
-    /// cut node and sample, and a whole triangle drawn by solid angle is
+    /// An area light as one leaf per triangle (a rectangle is two), its
+    /// point drawn by solid angle, and the environment in no tree: one
+    /// light beside them that every vertex draws a direction from, by
+    /// multiple importance sampling with its BSDF. The stochastic cut draws
+    /// one light per cut node and sample, and a whole emitter drawn well is
     /// as good a draw as one of its parts, for fewer shadow rays.
-    Triangles,
+    Whole,
 }
 
 /// Every light of a scene, by kind.
@@ -395,7 +399,7 @@ impl Lights {
     /// emitter samples from its own seeded stream.
     #[must_use]
     pub fn from_scene(scene: &Scene) -> Self {
-        Self::of_group(scene, None, AreaLeaves::Parts)
+        Self::of_group(scene, None, EmitterLeaves::Parts)
     }
 
     /// The scene's lights split by light group (`Scene::groups`): one
@@ -403,12 +407,12 @@ impl Lights {
     /// light is sampled the same whichever group it is in.
     #[must_use]
     pub fn by_group(scene: &Scene) -> Vec<Self> {
-        Self::by_group_with(scene, AreaLeaves::Parts)
+        Self::by_group_with(scene, EmitterLeaves::Parts)
     }
 
     /// [`Lights::by_group`], with area lights as `leaves`.
     #[must_use]
-    pub fn by_group_with(scene: &Scene, leaves: AreaLeaves) -> Vec<Self> {
+    pub fn by_group_with(scene: &Scene, leaves: EmitterLeaves) -> Vec<Self> {
         if !scene.groups.named() {
             return vec![Self::of_group(scene, None, leaves)];
         }
@@ -416,7 +420,7 @@ impl Lights {
     }
 
     /// The lights of group `group`, or of every group.
-    fn of_group(scene: &Scene, group: Option<usize>, leaves: AreaLeaves) -> Self {
+    fn of_group(scene: &Scene, group: Option<usize>, leaves: EmitterLeaves) -> Self {
         let wanted = |g: usize| group.is_none_or(|want| want == g);
         let mut lights = Self::default();
         for (i, source) in scene.lights.iter().enumerate() {
@@ -461,7 +465,7 @@ impl Lights {
                     let front = match &scene.materials[mesh.material].emissive_texture {
                         None => {
                             // One part per triangle: each triangle's share of 1 is 1.
-                            let parts = if leaves == AreaLeaves::Triangles { samples.min(1) } else { samples } as usize;
+                            let parts = if leaves == EmitterLeaves::Whole { samples.min(1) } else { samples } as usize;
                             emitters::sample_area_light(&triangles, radiance, parts, 0.0)
                         }
                         Some(texture) => emitters::sample_textured_area_light(
@@ -502,7 +506,8 @@ impl Lights {
                 }
             }
         }
-        if let Some(environment) = scene.environment.as_ref().filter(|_| wanted(scene.groups.environment)) {
+        let environment = scene.environment.as_ref().filter(|_| leaves == EmitterLeaves::Parts);
+        if let Some(environment) = environment.filter(|_| wanted(scene.groups.environment)) {
             lights.environment.extend(emitters::sample_environment(
                 &environment.map,
                 environment.samples as usize,

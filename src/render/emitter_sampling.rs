@@ -8,7 +8,7 @@ use glam::Vec3;
 
 use crate::light::area::{AreaEmitters, AreaSample};
 use crate::light::environment::{EnvironmentLight, EnvironmentSample};
-use crate::light::AreaLeaves;
+use crate::light::EmitterLeaves;
 use crate::scene::Scene;
 use crate::shading::{Bsdf, SurfacePoint};
 
@@ -68,10 +68,13 @@ impl<'a> EmitterSampling<'a> {
     /// that a few samples per pixel, the bounded mode's usual setting, do
     /// not leave a sharp lobe's reflection grainy.
     #[must_use]
-    pub fn of(scene: &'a Scene, spp: u32, leaves: AreaLeaves) -> Option<Self> {
+    pub fn of(scene: &'a Scene, spp: u32, leaves: EmitterLeaves) -> Option<Self> {
         let environment = scene.environment.as_ref().and_then(|environment| {
             let light = EnvironmentLight::new(&environment.map)?;
-            Some(SampledEnvironment { light, lights: environment.samples, group: scene.groups.environment })
+            // As one light beside the trees it has no stand-ins: every
+            // glossy lobe is sharp for it.
+            let lights = if leaves == EmitterLeaves::Whole { 0 } else { environment.samples };
+            Some(SampledEnvironment { light, lights, group: scene.groups.environment })
         });
         let area = AreaEmitters::of(scene, leaves);
         if environment.is_none() && area.is_empty() {
@@ -79,6 +82,15 @@ impl<'a> EmitterSampling<'a> {
         }
         let draws = DRAWS_PER_PIXEL.div_ceil(spp.max(1)).clamp(1, MOST_DRAWS_PER_POINT);
         Some(Self { scene, environment, area, draws })
+    }
+
+    /// The environment when it is one light beside the trees
+    /// (`EmitterLeaves::Whole`: no stand-ins in them), which every vertex
+    /// samples for the lobes the sharp lobe's draws leave
+    /// (docs/design.md §6.2, "One light beside the trees").
+    #[must_use]
+    pub fn environment_alone(&self) -> Option<&SampledEnvironment<'a>> {
+        self.environment.as_ref().filter(|e| e.lights == 0)
     }
 
     /// The BSDF at `sp` when its glossy lobe is too sharp for some
@@ -239,7 +251,7 @@ radiance = [0.2, 0.2, 0.2]
     #[test]
     fn draws_fall_on_each_emitter_as_its_probability_says() {
         let scene = scene();
-        let sampling = EmitterSampling::of(&scene, 64, AreaLeaves::Parts).unwrap();
+        let sampling = EmitterSampling::of(&scene, 64, EmitterLeaves::Parts).unwrap();
         assert_eq!(sampling.area.emitters.len(), 2);
         let choose = |p: Vec3, n: Vec3| -> EmitterChoice {
             let mut choice = EmitterChoice::default();

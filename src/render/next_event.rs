@@ -7,7 +7,7 @@
 use glam::{DVec3, Vec3};
 
 use super::direct::{DirectWorker, Vertex};
-use super::emitter_sampling::{EmitterChoice, EmitterDraw, EmitterSampling};
+use super::emitter_sampling::{EmitterChoice, EmitterDraw, EmitterSampling, SampledEnvironment};
 use super::stats::ShadingStats;
 use super::tracer::{SampleKey, SharpLobe, Tracer};
 use crate::shading::{BatchBuffers, Bsdf, LightBatch, Lobes, SurfacePoint};
@@ -78,7 +78,76 @@ pub fn light_vertex<'a>(
             rays += sampled_emitters(tracer, emitters, &scratch.choice, sp, bsdf, u, &mut credit);
         }
     }
+    if let Some((emitters, environment)) = tracer.emitters.and_then(|e| e.environment_alone().map(|env| (e, env))) {
+        // The lobes the sharp lobe's draws leave: the diffuse one beside a
+        // sharp glossy lobe, else every lobe (the glossy one, if any, is
+        // sharp for an environment with no stand-ins).
+        let own;
+        let (bsdf, lobes) = match sharp {
+            Some((_, bsdf)) => (bsdf, Lobes::DIFFUSE),
+            None => {
+                own = Bsdf::new(sp);
+                (&own, Lobes::ALL)
+            }
+        };
+        // As many pairs as the sharp lobe's: at least DRAWS_PER_PIXEL a
+        // pixel at the camera's vertices, one past a sampled bounce.
+        let [seed, x, y, s] = sample;
+        let mut rng = Stream::Environment.rng(&[seed, x, y, u64::from(depth)]);
+        let shift: [f32; 6] = std::array::from_fn(|_| rng.next_f32());
+        let draws = if primary { emitters.draws } else { 1 };
+        let scale = 1.0 / f64::from(draws);
+        let mut credit = |group: usize, value: DVec3| credit(group, scale * value);
+        for j in 0..draws {
+            let index = (s as u32).wrapping_mul(draws).wrapping_add(j);
+            let u = crate::util::sampling::kronecker6(index, shift);
+            rays += environment_alone(tracer, environment, sp, bsdf, lobes, u, &mut credit);
+        }
+    }
     stats.shadow_rays += rays;
+}
+
+/// The environment's light at `sp` through `lobes` of `bsdf` where it is
+/// one light beside the trees (docs/design.md §6.2, "One light beside the
+/// trees"): one direction drawn from the environment and one from the
+/// lobes, each weighted by the power heuristic against the other's
+/// density (Veach and Guibas 1995), as a path tracer lights a vertex. The
+/// environment's direction gets a shadow ray, the lobes' a ray that must
+/// escape. Its light goes to `credit` with the environment's group;
+/// returns the rays cast.
+fn environment_alone(
+    tracer: &Tracer<'_>,
+    environment: &SampledEnvironment<'_>,
+    sp: &SurfacePoint<'_>,
+    bsdf: &Bsdf,
+    lobes: Lobes,
+    u: [f32; 6],
+    credit: &mut impl FnMut(usize, DVec3),
+) -> u64 {
+    let mut rays = 0;
+    let value = |f_cos: Vec3, light: Vec3, pdf: f32, other: f32| {
+        (f_cos * light).as_dvec3() * (power_heuristic(pdf, other) / f64::from(pdf))
+    };
+    if let Some(s) = environment.light.sample([u[0], u[1], u[2]]) {
+        let f_cos = bsdf.eval(s.wi, lobes);
+        if f_cos != Vec3::ZERO && s.radiance != Vec3::ZERO && s.pdf > 0.0 {
+            rays += 1;
+            if !tracer.geometry.embree.occluded(&sp.shadow_ray_towards(s.wi).to_ray()) {
+                credit(environment.group, value(f_cos, s.radiance, s.pdf, bsdf.pdf(s.wi, lobes)));
+            }
+        }
+    }
+    if let Some(s) = bsdf.sample([u[3], u[4], u[5]], lobes) {
+        rays += 1;
+        let mut ray = sp.ray_towards(s.wi);
+        if tracer.first_hit(&mut ray).is_none() {
+            let light = environment.light.radiance(s.wi);
+            if light != Vec3::ZERO {
+                credit(environment.group, value(s.f_cos, light, s.pdf, environment.light.pdf(s.wi)));
+            }
+        }
+    }
+    rays
 }
 
 /// The continuous emitters' light at `sp` through the glossy lobe of

@@ -11,7 +11,7 @@ use super::integrator::Integrator;
 use super::tracer::Tracer;
 use super::{render, thread_pool, vpl, Film, PassProgress, PassSettings, PassStats, TextureFilter};
 use crate::embree::{Device, EmbreeError};
-use crate::light::{AreaLeaves, LightKind, Lights};
+use crate::light::{EmitterLeaves, LightKind, Lights};
 use crate::light_tree::LightTrees;
 use crate::lightcut::CutSettings;
 use crate::scene::{Indirect, Scene};
@@ -37,10 +37,10 @@ impl Mode {
     /// and sample; their parts for the others, whose lights stay put over a
     /// pixel's samples (docs/design.md §6.1).
     #[must_use]
-    pub fn area_leaves(&self) -> AreaLeaves {
+    pub fn emitter_leaves(&self) -> EmitterLeaves {
         match self {
-            Self::Stochastic(_) => AreaLeaves::Triangles,
-            Self::Exact | Self::Bounded(_) | Self::Multidimensional(_) => AreaLeaves::Parts,
+            Self::Stochastic(_) => EmitterLeaves::Whole,
+            Self::Exact | Self::Bounded(_) | Self::Multidimensional(_) => EmitterLeaves::Parts,
         }
     }
 
@@ -125,9 +125,9 @@ pub struct Session<'s> {
     /// The scene's lights by light group (one entry when it names no
     /// group), without the VPLs, which each pass traces.
     pub lights: Vec<Lights>,
-    /// The same with area lights as whole triangles (`AreaLeaves::Triangles`,
+    /// The same with area lights as whole triangles (`EmitterLeaves::Whole`,
     /// the stochastic cut's), built by the first pass that needs them.
-    triangle_lights: OnceLock<Vec<Lights>>,
+    whole_lights: OnceLock<Vec<Lights>>,
     pub pool: rayon::ThreadPool,
     pub geometry: Geometry<'s>,
 }
@@ -202,17 +202,17 @@ impl<'s> Session<'s> {
         let device = Device::try_new()?;
         let geometry = Geometry::try_new(&device, scene, &lights)
             .map_err(|source| SessionError::Geometry { file: scene.path.clone(), source })?;
-        Ok(Self { scene, lights, triangle_lights: OnceLock::new(), pool, geometry })
+        Ok(Self { scene, lights, whole_lights: OnceLock::new(), pool, geometry })
     }
 
     /// The scene's lights by light group with area lights as `leaves`.
     #[must_use]
-    pub fn lights_for(&self, leaves: AreaLeaves) -> &[Lights] {
+    pub fn lights_for(&self, leaves: EmitterLeaves) -> &[Lights] {
         match leaves {
-            AreaLeaves::Parts => &self.lights,
-            AreaLeaves::Triangles => self
-                .triangle_lights
-                .get_or_init(|| self.pool.install(|| Lights::by_group_with(self.scene, AreaLeaves::Triangles))),
+            EmitterLeaves::Parts => &self.lights,
+            EmitterLeaves::Whole => self
+                .whole_lights
+                .get_or_init(|| self.pool.install(|| Lights::by_group_with(self.scene, EmitterLeaves::Whole))),
         }
     }
 
@@ -233,7 +233,7 @@ impl<'s> Session<'s> {
         // the group their path started from.
         // Area lights as the mode's leaves; the VPLs leave them from their
         // parts either way (a point uniform on the emitter).
-        let leaves = mode.area_leaves();
+        let leaves = mode.emitter_leaves();
         let (mut lights, vpls) = match self.scene.indirect {
             Some(Indirect::Vpl(indirect)) => {
                 let vpls = self.pool.install(|| vpl::trace(&self.geometry, &self.lights, indirect, settings.seed));

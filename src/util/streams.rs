@@ -63,6 +63,10 @@ pub enum Stream {
     /// (seed, x, y, bounce): the rotation of the continuous emitters'
     /// draws over the pixel's samples, six floats.
     Emitter,
+    /// (seed, x, y, bounce): the rotation of the environment's draws over
+    /// the pixel's samples where it is one light beside the trees, six
+    /// floats.
+    Environment,
     /// (seed, x, y, sample, bounce): the path's choice of lobe, its
     /// direction and Russian roulette, five floats; without the path
     /// method, the first of them alone, at glass: its mirror or its
@@ -77,7 +81,7 @@ pub enum Stream {
 
 impl Stream {
     /// Every stream, for the test that no two can share a key.
-    pub const ALL: [Self; 11] = [
+    pub const ALL: [Self; 12] = [
         Self::CameraJitter,
         Self::Lens,
         Self::Shutter,
@@ -86,6 +90,7 @@ impl Stream {
         Self::ReuseBlock,
         Self::Sun,
         Self::Emitter,
+        Self::Environment,
         Self::Path,
         Self::Gather,
         Self::Vpl,
@@ -104,6 +109,7 @@ impl Stream {
             Self::ReuseBlock => &[Any, COUNT, COUNT, COUNT, Tag(0x4e05_e0b1)],
             Self::Sun => &[Any, COUNT, COUNT, COUNT, Tag(0x50d1_5c00), COUNT, COUNT],
             Self::Emitter => &[Any, COUNT, COUNT, COUNT, Tag(0xe4f1_5a3b)],
+            Self::Environment => &[Any, COUNT, COUNT, COUNT, Tag(0xe4f1_5a3c)],
             Self::Path => &[Any, COUNT, COUNT, COUNT, COUNT, Tag(0xba7_4ce5)],
             Self::Gather => &[Any, COUNT, COUNT, Tag(0x6a7b_e412_0d05_c3e1)],
             Self::Vpl => &[Any, Tag(0x1b5a), COUNT],
