@@ -353,7 +353,7 @@ fn sampled_emitters_compose_with_groups_threads_and_windows() {
 /// 1,024 triangle lights a panel, so that both cuts walk real trees (at
 /// 32 they are summed light by light, and both modes give the same image).
 #[test]
-fn whole_lights_compose_with_instances_motion_groups_cryptomatte_and_tiles() {
+fn triangle_lights_compose_with_instances_motion_groups_cryptomatte_and_tiles() {
     use common::gltf::{diffuse, GltfBuilder};
     use serde_json::json;
     let dir = TempDir::new("area-production");

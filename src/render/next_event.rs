@@ -61,20 +61,11 @@ pub fn light_vertex<'a>(
         rays += sun_light(tracer, sp, sample, depth, primary, &mut scratch.batch, &mut credit);
     }
     if let Some((emitters, bsdf)) = sharp {
-        // The pixel's samples (and each sample's draws) take
-        // consecutive points of one rotated Kronecker sequence
-        // (`kronecker6`): stratified across them, so the sampled
-        // lobe's noise falls faster.
-        let [seed, x, y, s] = sample;
-        let mut rng = Stream::Emitter.rng(&[seed, x, y, u64::from(depth)]);
-        let shift: [f32; 6] = std::array::from_fn(|_| rng.next_f32());
         let draws = if primary { emitters.draws } else { 1 };
         emitters.weigh(sp, &mut scratch.choice);
         let scale = 1.0 / f64::from(draws);
         let mut credit = |group: usize, value: DVec3| credit(group, scale * value);
-        for j in 0..draws {
-            let index = (s as u32).wrapping_mul(draws).wrapping_add(j);
-            let u = crate::util::sampling::kronecker6(index, shift);
+        for u in pair_numbers(Stream::Emitter, sample, depth, draws) {
             rays += sampled_emitters(tracer, emitters, &scratch.choice, sp, bsdf, u, &mut credit);
         }
     }
@@ -92,19 +83,31 @@ pub fn light_vertex<'a>(
         };
         // As many pairs as the sharp lobe's: at least DRAWS_PER_PIXEL a
         // pixel at the camera's vertices, one past a sampled bounce.
-        let [seed, x, y, s] = sample;
-        let mut rng = Stream::Environment.rng(&[seed, x, y, u64::from(depth)]);
-        let shift: [f32; 6] = std::array::from_fn(|_| rng.next_f32());
         let draws = if primary { emitters.draws } else { 1 };
         let scale = 1.0 / f64::from(draws);
         let mut credit = |group: usize, value: DVec3| credit(group, scale * value);
-        for j in 0..draws {
-            let index = (s as u32).wrapping_mul(draws).wrapping_add(j);
-            let u = crate::util::sampling::kronecker6(index, shift);
+        for u in pair_numbers(Stream::Environment, sample, depth, draws) {
             rays += environment_alone(tracer, environment, sp, bsdf, lobes, u, &mut credit);
         }
     }
     stats.shadow_rays += rays;
+}
+
+/// The six numbers of each of a vertex's `draws` pairs of draws (one from
+/// the emitters, one from the lobes), from `stream`: the pixel's samples
+/// (and each sample's draws) take consecutive points of one Kronecker
+/// sequence (`kronecker6`) rotated per pixel and bounce, stratified across
+/// them, so the sampled lobe's noise falls faster.
+fn pair_numbers(stream: Stream, [seed, x, y, s]: SampleKey, depth: u32, draws: u32) -> impl Iterator<Item = [f32; 6]> {
+    let mut rng = stream.rng(&[seed, x, y, u64::from(depth)]);
+    let shift: [f32; 6] = std::array::from_fn(|_| rng.next_f32());
+    (0..draws).map(move |j| crate::util::sampling::kronecker6((s as u32).wrapping_mul(draws).wrapping_add(j), shift))
+}
+
+/// A drawn direction's share of the estimate, f cos * L / pdf weighted by
+/// the power heuristic against the other strategy's density `other`.
+fn weighted(f_cos: Vec3, light: Vec3, pdf: f32, other: f32) -> DVec3 {
+    (f_cos * light).as_dvec3() * (power_heuristic(pdf, other) / f64::from(pdf))
 }
 
 /// The environment's light at `sp` through `lobes` of `bsdf` where it is
@@ -125,15 +128,12 @@ fn environment_alone(
     credit: &mut impl FnMut(usize, DVec3),
 ) -> u64 {
     let mut rays = 0;
-    let value = |f_cos: Vec3, light: Vec3, pdf: f32, other: f32| {
-        (f_cos * light).as_dvec3() * (power_heuristic(pdf, other) / f64::from(pdf))
-    };
     if let Some(s) = environment.light.sample([u[0], u[1], u[2]]) {
         let f_cos = bsdf.eval(s.wi, lobes);
         if f_cos != Vec3::ZERO && s.radiance != Vec3::ZERO && s.pdf > 0.0 {
             rays += 1;
             if !tracer.geometry.embree.occluded(&sp.shadow_ray_towards(s.wi).to_ray()) {
-                credit(environment.group, value(f_cos, s.radiance, s.pdf, bsdf.pdf(s.wi, lobes)));
+                credit(environment.group, weighted(f_cos, s.radiance, s.pdf, bsdf.pdf(s.wi, lobes)));
             }
         }
     }
@@ -143,7 +143,7 @@ fn environment_alone(
         if tracer.first_hit(&mut ray).is_none() {
             let light = environment.light.radiance(s.wi);
             if light != Vec3::ZERO {
-                credit(environment.group, value(s.f_cos, light, s.pdf, environment.light.pdf(s.wi)));
+                credit(environment.group, weighted(s.f_cos, light, s.pdf, environment.light.pdf(s.wi)));
             }
         }
     }
@@ -173,9 +173,6 @@ fn sampled_emitters(
     let embree = &tracer.geometry.embree;
     let mut rays = 0;
     // f cos * L * weight / pdf, for a path found unblocked.
-    let value = |f_cos: Vec3, light: Vec3, pdf: f32, other: f32| {
-        (f_cos * light).as_dvec3() * (power_heuristic(pdf, other) / f64::from(pdf))
-    };
     match emitters.draw(choice, [u[0], u[1], u[2]]) {
         Some((EmitterDraw::Environment(s), probability)) => {
             let f_cos = bsdf.eval(s.wi, lobes);
@@ -183,7 +180,7 @@ fn sampled_emitters(
                 rays += 1;
                 if !embree.occluded(&sp.shadow_ray_towards(s.wi).to_ray()) {
                     let group = emitters.environment.as_ref().map_or(0, |e| e.group);
-                    credit(group, value(f_cos, s.radiance, probability * s.pdf, bsdf.pdf(s.wi, lobes)));
+                    credit(group, weighted(f_cos, s.radiance, probability * s.pdf, bsdf.pdf(s.wi, lobes)));
                 }
             }
         }
@@ -199,7 +196,7 @@ fn sampled_emitters(
                 if let Some(ray) = sp.shadow_ray_to(sample.point) {
                     rays += 1;
                     if !embree.occluded(&ray.to_ray()) {
-                        credit(e.group, value(f_cos, light, pdf, bsdf.pdf(wi, lobes)));
+                        credit(e.group, weighted(f_cos, light, pdf, bsdf.pdf(wi, lobes)));
                     }
                 }
             }
@@ -213,7 +210,7 @@ fn sampled_emitters(
             None => {
                 if let Some((light, pdf, group)) = emitters.escaped(choice, s.wi) {
                     if light != Vec3::ZERO {
-                        credit(group, value(s.f_cos, light, s.pdf, pdf));
+                        credit(group, weighted(s.f_cos, light, s.pdf, pdf));
                     }
                 }
             }
@@ -224,7 +221,7 @@ fn sampled_emitters(
                         let d2 = seen.distance * seen.distance;
                         let pdf = emitters.area_pdf(choice, emitter, d2, seen.ng.dot(s.wi));
                         let group = emitters.area.emitters[emitter].group;
-                        credit(group, value(s.f_cos, seen.emitted, s.pdf, pdf));
+                        credit(group, weighted(s.f_cos, seen.emitted, s.pdf, pdf));
                     }
                 }
             }

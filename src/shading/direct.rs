@@ -446,7 +446,7 @@ mod tests {
 
     /// A 1 m square of unit radiance 0.1 m above the floor (z = 0), facing
     /// it, as its 18 triangle lights (0.33 m across), and its corners.
-    fn square_of_whole_lights() -> (Vec<AreaLight>, [DVec3; 4]) {
+    fn square_of_triangle_lights() -> (Vec<AreaLight>, [DVec3; 4]) {
         let corners = [Vec3::new(-0.5, -0.5, 0.1), Vec3::new(-0.5, 0.5, 0.1), Vec3::new(0.5, 0.5, 0.1)];
         let quad = [
             EmitterTriangle { p: [corners[0], corners[1], corners[2]] },
@@ -473,8 +473,8 @@ mod tests {
     /// before) are off by over 20% there: the floor sees each point as a
     /// spike.
     #[test]
-    fn whole_lights_close_to_a_surface_give_the_polygons_irradiance() {
-        let (triangles, square) = square_of_whole_lights();
+    fn triangle_lights_close_to_a_surface_give_the_polygons_irradiance() {
+        let (triangles, square) = square_of_triangle_lights();
         assert_eq!(triangles.len(), 18);
         assert!(triangles.iter().all(|t| t.normal.z < -0.99), "the square faces the floor");
         let points: Vec<AreaLight> = triangles.iter().map(|t| AreaLight { edges: [Vec3::ZERO; 2], ..*t }).collect();
@@ -519,8 +519,8 @@ mod tests {
     /// equal if the strata were dropped: 0.061 of it (0.41 when the points
     /// were drawn by area; the draw by solid angle keeps the strata).
     #[test]
-    fn points_on_whole_lights_are_stratified_over_a_pixels_samples() {
-        let (triangles, square) = square_of_whole_lights();
+    fn points_on_triangle_lights_are_stratified_over_a_pixels_samples() {
+        let (triangles, square) = square_of_triangle_lights();
         let material = Material::diffuse("white", Albedo::Constant(Vec3::ONE));
         const PIXELS: u64 = 4096;
         const SPP: u32 = 16;

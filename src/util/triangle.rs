@@ -50,6 +50,11 @@ pub struct SolidAngleDraw {
 #[must_use]
 pub fn solid_angle(p: DVec3, corners: [DVec3; 3]) -> f64 {
     let [a, b, c] = corners.map(|q| (q - p).normalize_or_zero());
+    solid_angle_of_directions(a, b, c)
+}
+
+/// [`solid_angle`] from the unit directions to the corners.
+fn solid_angle_of_directions(a: DVec3, b: DVec3, c: DVec3) -> f64 {
     (2.0 * a.dot(b.cross(c)).atan2(1.0 + a.dot(b) + a.dot(c) + b.dot(c))).abs()
 }
 
@@ -64,11 +69,11 @@ pub fn solid_angle(p: DVec3, corners: [DVec3; 3]) -> f64 {
 /// [`SOLID_ANGLE_DRAWN`] or the triangle is seen edge-on.
 #[must_use]
 pub fn sample_spherical_triangle(p: DVec3, corners: [DVec3; 3], u: [f64; 2]) -> Option<SolidAngleDraw> {
-    let solid_angle = solid_angle(p, corners);
+    let [a, b, c] = corners.map(|q| (q - p).normalize_or_zero());
+    let solid_angle = solid_angle_of_directions(a, b, c);
     if !SOLID_ANGLE_DRAWN.contains(&solid_angle) {
         return None;
     }
-    let [a, b, c] = corners.map(|q| (q - p).normalize());
     let n_ab = a.cross(b).try_normalize()?;
     let n_ca = c.cross(a).try_normalize()?;
     // The spherical triangle's angle alpha at a, between the planes of its
